@@ -1,0 +1,82 @@
+"""AHCON (Fig. 3.2), the adaptive heuristic critic with a V-net and a policy net, and AHCON-R/-T (3.5, 3.7)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
+from connrl.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
+from connrl.nets import OAON, NetConfig
+from connrl.replay import Lesson, ReplayParams, replay_ahc
+
+
+@dataclass(frozen=True)
+class AHCONConfig:
+    """AHCON and its options; ``replay=None`` gives plain AHCON."""
+
+    v_net: NetConfig  # evaluation network V(x) (3.3)
+    policy_net: NetConfig  # policy network, one per action, outputs action merits (3.3)
+    temperature: TemperatureSchedule  # Boltzmann temperature over trials on the merits (Eq. 3.4)
+    gamma: float = 0.9  # discount factor (4.2.7)
+    lam: float = 0.0  # TD(lambda) recency factor for replay (5.1)
+    online: bool = True  # learn from each step as it happens (Fig. 3.2 steps 5-6)
+    replay: ReplayConfig | None = None  # experience replay (3.5); Ch. 4 uses P_t = 0.2 for AHC agents
+    target_clip: float | None = None  # truncate V targets above this value (4.2.4: 1)
+    stuck: StuckConfig | None = None  # raise T when stuck (4.2.6)
+
+    def __post_init__(self):
+        if not 0 <= self.gamma <= 1:
+            raise ValueError(f"gamma must be in [0, 1], got {self.gamma}")
+        if not 0 <= self.lam <= 1:
+            raise ValueError(f"lam must be in [0, 1], got {self.lam}")
+        if self.v_net.n_inputs != self.policy_net.n_inputs:
+            raise ValueError("v_net and policy_net must have the same number of inputs")
+
+
+class AHCON(LessonAgent):
+    """Adaptive heuristic critic (Fig. 3.2) with optional backward replay (Fig. 5.1b) and teaching."""
+
+    def __init__(self, config: AHCONConfig, n_actions: int, rng: np.random.Generator):
+        self.config = config
+        self.n_actions = n_actions
+        self.rng = rng
+        self.v = OAON(config.v_net, 1, rng)
+        self.policy = OAON(config.policy_net, n_actions, rng)
+        self.explore = Exploration(config.temperature, config.stuck)
+        self.book = LessonBook(config.replay)
+        self.trial = 0
+        self.learning = True
+        self._x: np.ndarray | None = None
+        self.last_probabilities: np.ndarray | None = None
+
+
+
+    def act(self, obs, info=None, *, greedy: bool = False) -> int:
+        x = self._x if self._x is not None else self.encode(obs)
+        t = 0.0 if greedy else self.explore.temperature(info)
+        a, self.last_probabilities = boltzmann_select(self.policy.values(x), t, self.rng)
+        return a
+
+    def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
+        x, y = self._x, self.encode(next_obs)
+        if self.config.online:
+            u = 0.0 if terminated else self.v.value(y, 0)
+            target = reward + self.config.gamma * u  # Fig. 3.2 step 4
+            if self.config.target_clip is not None:
+                target = min(target, self.config.target_clip)
+            e = self.v.update(x, 0, target)  # step 5
+            self.policy.update_error(x, action, target - e)  # step 6
+        self.book.recorder.add(x, action, reward, y)
+        self.book.ended = (bool(terminated), bool(truncated))
+        self._x = y
+
+
+
+    def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
+        r = self.config.replay
+        params = ReplayParams(gamma=self.config.gamma, lam=self.config.lam, temperature=self.explore.base,
+                              p_threshold=p_threshold, batch=r.batch, clip=self.config.target_clip)
+        replay_ahc(self.v, self.policy, lesson, params)
+

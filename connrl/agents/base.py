@@ -1,0 +1,183 @@
+"""The agent protocol and the pieces QCON and AHCON share (replay settings, schedules, lesson bookkeeping).
+
+A run drives an agent like this (see ``connrl.experiments.runner.run_trial``)::
+
+    agent.begin_trial(obs, info, trial=k, learning=True)
+    while not done:
+        a = agent.act(obs, info, greedy=not learning)
+        obs, r, terminated, truncated, info = env.step(a)
+        if learning:
+            agent.observe(a, r, obs, terminated, truncated, info)
+    agent.end_trial()          # files the lesson (learning trials only)
+    agent.learn()              # experience replay after the trial (3.5), if configured
+
+``observe`` does the on-line update of Figs. 3.2/3.4; ``learn`` replays lessons (Fig. 5.1).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from connrl.exploration import StuckConfig, StuckDetector
+from connrl.replay import Lesson, LessonMemory, LessonRecorder
+
+
+class Agent(Protocol):
+    n_actions: int
+
+    def begin_trial(self, obs, info: dict | None = None, *, trial: int = 0, learning: bool = True) -> None: ...
+
+    def act(self, obs, info: dict | None = None, *, greedy: bool = False) -> int: ...
+
+    def observe(self, action: int, reward: float, next_obs, terminated: bool, truncated: bool,
+                info: dict | None = None) -> None: ...
+
+    def end_trial(self) -> None: ...
+
+    def learn(self) -> None: ...
+
+
+@dataclass(frozen=True)
+class LinearSchedule:
+    """A value moving linearly from ``start`` to ``end`` over ``over`` trials (e.g. lessons per play 12 -> 4)."""
+
+    start: float  # value at trial 0
+    end: float  # value from trial over-1 on
+    over: int = 1  # trials of the ramp
+
+    def __call__(self, trial: int) -> float:
+        frac = min(max(trial, 0) / max(self.over - 1, 1), 1.0)
+        return self.start + (self.end - self.start) * frac
+
+
+@dataclass(frozen=True)
+class ReplayConfig:
+    """Experience replay settings (3.5, 5.1, App. A.2)."""
+
+    capacity: int = 100  # latest lessons kept for replay (App. A.2: 100; 7.5: 70)
+    lessons_per_trial: LinearSchedule = LinearSchedule(12, 4, 300)  # lessons replayed after a trial (4.2.7)
+    p_threshold: float = 0.01  # P_t: non-policy threshold for the latest lesson (3.5.1; Ch. 4: 0.2 AHC, 0.01 Q)
+    p_threshold_oldest: float | None = None  # if set, P_t moves log-linearly to it for the oldest lesson (App. B)
+    batch: bool = False  # batch-mode replay (5.1.2; recurrent nets, 7.5)
+    taught_probability: LinearSchedule = LinearSchedule(1.0, 1.0)  # chance a taught lesson is replayed (4.2.7)
+    taught_p_threshold: float = 0.0  # P_t for taught lessons (3.7: 0 for near-optimal teachers)
+
+    def __post_init__(self):
+        if self.capacity < 1:
+            raise ValueError(f"replay capacity must be >= 1 lesson, got {self.capacity}")
+        for name in ("p_threshold", "taught_p_threshold"):
+            v = getattr(self, name)
+            if not 0 <= v < 1:
+                raise ValueError(f"{name} must be in [0, 1), got {v}")
+
+    def threshold_for_age(self, age: int) -> float:
+        """P_t for a lesson ``age`` trials old (0 = the latest)."""
+        if self.p_threshold_oldest is None or self.capacity == 1:
+            return self.p_threshold
+        frac = min(age / (self.capacity - 1), 1.0)
+        lo, hi = math.log(self.p_threshold), math.log(self.p_threshold_oldest)
+        return math.exp(lo + (hi - lo) * frac)
+
+
+class LessonBook:
+    """Records the current trial and keeps experienced and taught lessons for replay."""
+
+    def __init__(self, replay: ReplayConfig | None):
+        self.recorder = LessonRecorder()
+        self.memory = LessonMemory(replay.capacity) if replay is not None else None
+        self.taught: list[Lesson] = []
+        self.ended: tuple[bool, bool] = (False, False)
+
+    def close_trial(self) -> Lesson | None:
+        lesson = self.recorder.finish(*self.ended)
+        if lesson is not None and self.memory is not None:
+            self.memory.add(lesson)
+        self.ended = (False, False)
+        return lesson
+
+
+def position_of(info: dict | None):
+    """Where the agent is, for stuck detection: ``info['position']`` or the x-y of ``info['pose']``."""
+    if not info:
+        return None
+    if "position" in info:
+        return info["position"]
+    if "pose" in info:
+        return np.asarray(info["pose"])[:2]
+    return None
+
+
+class Exploration:
+    """Temperature of the current trial, optionally raised by stuck detection (4.2.6, 5.3.4)."""
+
+    def __init__(self, schedule, stuck: StuckConfig | None):
+        self.schedule = schedule
+        self.detector = StuckDetector(stuck) if stuck is not None else None
+        self.base = schedule(0)
+
+    def begin(self, trial: int) -> None:
+        self.base = self.schedule(trial)
+        if self.detector is not None:
+            self.detector.reset()
+
+    def temperature(self, info: dict | None) -> float:
+        if self.detector is None:
+            return self.base
+        pos = position_of(info)
+        return self.base * (self.detector.factor(pos) if pos is not None else 1.0)
+
+
+class LessonAgent:
+    """What QCON and AHCON share: input encoding, lesson filing, and the replay schedule of ``learn``.
+
+    Subclasses set ``config`` (with ``replay``), ``rng``, ``explore`` and ``book`` and implement
+    ``replay_lesson(lesson, p_threshold)``.
+    """
+
+    config: object
+    rng: np.random.Generator
+    explore: Exploration
+    book: LessonBook
+
+    def encode(self, obs) -> np.ndarray:
+        """Network input for an observation; memoryless agents feed the observation as it is."""
+        return np.asarray(obs, dtype=np.float64).ravel()
+
+    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
+        self.trial, self.learning = trial, learning
+        self.explore.begin(trial)
+        self._x = self.encode(obs)
+
+    def end_trial(self) -> None:
+        if self.learning:
+            self.book.close_trial()
+        else:
+            self.book.recorder.finish(False, False)
+
+    def add_taught_lessons(self, lessons: list[Lesson]) -> None:
+        """Teaching (3.7): taught lessons are replayed like experienced ones, with P_t = 0 by default."""
+        for lesson in lessons:
+            lesson.taught = True
+            self.book.taught.append(lesson)
+
+    def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
+        raise NotImplementedError
+
+    def learn(self) -> None:
+        """After a trial: replay n experienced lessons chosen by App. A.2, then the taught lessons (3.5, 3.7)."""
+        r = self.config.replay
+        if r is None or not self.learning:
+            return
+        mem = self.book.memory
+        if len(mem):
+            for _ in range(int(round(r.lessons_per_trial(self.trial)))):
+                age, lesson = mem.sample(self.rng)
+                self.replay_lesson(lesson, r.threshold_for_age(age))
+        p_taught = r.taught_probability(self.trial)
+        for lesson in self.book.taught:
+            if p_taught >= 1 or self.rng.random() < p_taught:
+                self.replay_lesson(lesson, r.taught_p_threshold)

@@ -1,0 +1,88 @@
+"""QCON (Fig. 3.4) and its replay / teaching extensions: QCON-R (3.5) and QCON-T (3.7).
+
+The Q-function is any object with ``values(x)`` and ``update(x, a, target)`` (``connrl.replay.QFunction``);
+by default one network per action (OAON, 3.4). Ch. 4's "global" agents pass a single rotated net instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
+from connrl.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
+from connrl.nets import OAON, NetConfig
+from connrl.replay import Lesson, QFunction, ReplayParams, replay_q
+
+
+@dataclass(frozen=True)
+class QCONConfig:
+    """QCON and its options; ``replay=None`` gives plain QCON, with replay QCON-R, with taught lessons QCON-T."""
+
+    net: NetConfig  # the Q-nets, one per action (3.4)
+    temperature: TemperatureSchedule  # Boltzmann temperature over trials (3.4, Table 4.1, 5.3.4)
+    gamma: float = 0.9  # discount factor (4.2.7, 5.3.3, App. B)
+    lam: float = 0.0  # TD(lambda) recency factor for replay (5.1; Ch. 4 uses 0)
+    online: bool = True  # learn from each step as it happens (Fig. 3.4 step 5)
+    replay: ReplayConfig | None = None  # experience replay after each trial (3.5); None = plain QCON
+    target_clip: float | None = None  # truncate Q targets above this value (4.2.4: 1)
+    stuck: StuckConfig | None = None  # raise T when stuck (4.2.6, 5.3.4)
+    extra: dict = field(default_factory=dict, compare=False)  # free-form notes recorded with results
+
+    def __post_init__(self):
+        if not 0 <= self.gamma <= 1:
+            raise ValueError(f"gamma must be in [0, 1], got {self.gamma}")
+        if not 0 <= self.lam <= 1:
+            raise ValueError(f"lam must be in [0, 1], got {self.lam}")
+
+
+class QCON(LessonAgent):
+    """Connectionist Q-learning (Fig. 3.4), optionally with backward TD(lambda) replay and teaching."""
+
+    def __init__(self, config: QCONConfig, n_actions: int, rng: np.random.Generator,
+                 q: QFunction | None = None):
+        self.config = config
+        self.n_actions = n_actions
+        self.rng = rng
+        self.q = q if q is not None else OAON(config.net, n_actions, rng)
+        self.explore = Exploration(config.temperature, config.stuck)
+        self.book = LessonBook(config.replay)
+        self.trial = 0
+        self.learning = True
+        self._x: np.ndarray | None = None
+        self._q_x: np.ndarray | None = None
+        self.last_probabilities: np.ndarray | None = None
+
+
+
+    def act(self, obs, info=None, *, greedy: bool = False) -> int:
+        x = self._x if self._x is not None else self.encode(obs)
+        q = self.q.values(x)
+        self._q_x = q
+        t = 0.0 if greedy else self.explore.temperature(info)
+        a, self.last_probabilities = boltzmann_select(q, t, self.rng)
+        return a
+
+    def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
+        x, y = self._x, self.encode(next_obs)
+        if self.config.online:
+            u = 0.0 if terminated else float(self.q.values(y).max())
+            target = reward + self.config.gamma * u  # Fig. 3.4 step 4
+            if self.config.target_clip is not None:
+                target = min(target, self.config.target_clip)
+            self.q.update(x, action, target)
+        self.book.recorder.add(x, action, reward, y)
+        self.book.ended = (bool(terminated), bool(truncated))
+        self._x = y
+
+
+
+    def replay_params(self, p_threshold: float) -> ReplayParams:
+        r = self.config.replay
+        return ReplayParams(gamma=self.config.gamma, lam=self.config.lam, temperature=self.explore.base,
+                            p_threshold=p_threshold, batch=r.batch, clip=self.config.target_clip)
+
+    def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
+        replay_q(self.q, lesson, self.replay_params(p_threshold))
+

@@ -1,0 +1,19 @@
+"""Gymnasium environments of the thesis, registered under the ``connrl/`` namespace on import."""
+
+from gymnasium.envs.registration import register, registry
+
+_ENVS = {
+    # id: (entry point, default kwargs)
+    "connrl/PoleBalancing-v0": ("connrl.envs.pole:PoleBalancingEnv", {}),
+    "connrl/PoleBalancingXTheta-v0": ("connrl.envs.pole:PoleBalancingEnv", {"observe": "x_theta"}),
+    "connrl/Survival-v0": ("connrl.envs.survival:SurvivalEnv", {}),
+    "connrl/CupCollection-v0": ("connrl.envs.cup:CupCollectionEnv", {}),
+    "connrl/Robot-DK-v0": ("connrl.envs.robot_tasks:RobotTaskEnv", {"task": "DK"}),
+    "connrl/Robot-DP-v0": ("connrl.envs.robot_tasks:RobotTaskEnv", {"task": "DP"}),
+    "connrl/Robot-WFL-v0": ("connrl.envs.robot_tasks:RobotTaskEnv", {"task": "WFL"}),
+    "connrl/Robot-WFR-v0": ("connrl.envs.robot_tasks:RobotTaskEnv", {"task": "WFR"}),
+}
+
+for _id, (_entry, _kwargs) in _ENVS.items():
+    if _id not in registry:
+        register(id=_id, entry_point=_entry, kwargs=_kwargs)

@@ -1,0 +1,227 @@
+"""Symmetric-sigmoid MLPs and the OAON container (one network per action), with hand-written backprop.
+
+Every unit (hidden and output) uses ``f(x) = 1/(1+e^-x) - 0.5`` (thesis 2.4, 4.2, 7.4), so an output lies in
+(-0.5, 0.5); it is scaled by ``2 * value_range`` to cover the task's value range (Ch. 4: +-1, Ch. 5: +-100).
+Errors are divided by the same factor before back-propagation, so learning rates mean the same thing
+whatever the range. ``n_hidden = 0`` gives a single-layer perceptron (5.4.4, App. B).
+
+The thesis trains per sample (one experience at a time), so the work per call is tiny (a 145-30-1 net is
+about 9k multiply-adds) and interpreter/dispatch overhead dominates; the kernels are therefore Numba-compiled
+loops over preallocated arrays (see benchmarks/bench_nets.py and docs/PERFORMANCE.md).
+
+Weights of all action nets are stacked: ``w1[a]`` is net a's hidden layer (H, I+1) and ``w2[a]`` its output
+layer (H+1,); the last column/entry is the bias. For a perceptron ``w2[a]`` has shape (I+1,) and ``w1`` is
+empty.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+
+def symmetric_sigmoid(x):
+    """``f(x) = 1/(1+exp(-x)) - 0.5`` (thesis 2.4): the unit used everywhere in the thesis."""
+    return 1.0 / (1.0 + np.exp(-x)) - 0.5
+
+
+@dataclass(frozen=True)
+class NetConfig:
+    """Shape and training constants of one family of action networks."""
+
+    n_inputs: int  # input units (e.g. 145 in Ch. 4, 52/36 in Ch. 5)
+    n_hidden: int = 30  # hidden units; 0 = single-layer perceptron (5.4.4, App. B)
+    value_range: float = 1.0  # outputs span +-value_range (4.2.4: +-1; 5.3.1: +-100)
+    init_range: float = 0.1  # initial weights uniform in +-init_range (4.2.7: 0.1; Ch. 5, 7: 0.5)
+    lr: float = 0.1  # back-propagation learning rate (Table 4.1, 5.3.3, Table B.1)
+    momentum: float = 0.9  # momentum factor (4.2.7, 5.3.3, App. B)
+
+    def __post_init__(self):
+        if self.n_inputs < 1:
+            raise ValueError(f"n_inputs must be >= 1, got {self.n_inputs}")
+        if self.n_hidden < 0:
+            raise ValueError(f"n_hidden must be >= 0 (0 = perceptron), got {self.n_hidden}")
+        for name in ("value_range", "init_range"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        if not self.lr > 0:
+            raise ValueError(f"learning rate lr must be > 0, got {self.lr}")
+        if not 0 <= self.momentum < 1:
+            raise ValueError(f"momentum must be in [0, 1), got {self.momentum}")
+
+
+# --------------------------------------------------------------------------------------------- kernels
+# Each kernel works on one action net (index a) or loops over all of them; arrays are float64, C-contiguous.
+
+@numba.njit(cache=True, fastmath=True)
+def _mlp_forward(w1, w2, a, x, h):
+    """Forward pass of net a; fills h (H,) with hidden activations and returns the raw output f(net)."""
+    n_h, n_in1 = w1.shape[1], w1.shape[2]
+    n_in = n_in1 - 1
+    out = w2[a, n_h]
+    for j in range(n_h):
+        s = w1[a, j, n_in]
+        for i in range(n_in):
+            s += w1[a, j, i] * x[i]
+        hj = 1.0 / (1.0 + math.exp(-s)) - 0.5
+        h[j] = hj
+        out += w2[a, j] * hj
+    return 1.0 / (1.0 + math.exp(-out)) - 0.5
+
+
+@numba.njit(cache=True, fastmath=True)
+def _mlp_values(w1, w2, x, h, scale, q):
+    for a in range(w1.shape[0]):
+        q[a] = scale * _mlp_forward(w1, w2, a, x, h)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _mlp_update(w1, w2, d1, d2, a, x, h, target, is_error, scale, lr, momentum):
+    """One momentum-SGD step of net a toward ``target`` (or by the error ``target`` when ``is_error``);
+    returns the output before the step."""
+    n_h, n_in1 = w1.shape[1], w1.shape[2]
+    n_in = n_in1 - 1
+    y = _mlp_forward(w1, w2, a, x, h)
+    err = target if is_error else target - scale * y
+    # error in the net's own output units (see module docstring), times f'(net) = 0.25 - f^2
+    delta = err / scale * (0.25 - y * y)
+    for j in range(n_h):
+        # hidden delta uses the output weight before it is changed (plain backprop)
+        dh = delta * w2[a, j] * (0.25 - h[j] * h[j])
+        step = lr * delta * h[j] + momentum * d2[a, j]
+        d2[a, j] = step
+        w2[a, j] += step
+        if dh != 0.0 or momentum != 0.0:
+            for i in range(n_in):
+                s = lr * dh * x[i] + momentum * d1[a, j, i]
+                d1[a, j, i] = s
+                w1[a, j, i] += s
+            s = lr * dh + momentum * d1[a, j, n_in]
+            d1[a, j, n_in] = s
+            w1[a, j, n_in] += s
+    step = lr * delta + momentum * d2[a, n_h]
+    d2[a, n_h] = step
+    w2[a, n_h] += step
+    return scale * y
+
+
+@numba.njit(cache=True, fastmath=True)
+def _perceptron_forward(w2, a, x):
+    n_in = w2.shape[1] - 1
+    s = w2[a, n_in]
+    for i in range(n_in):
+        s += w2[a, i] * x[i]
+    return 1.0 / (1.0 + math.exp(-s)) - 0.5
+
+
+@numba.njit(cache=True, fastmath=True)
+def _perceptron_values(w2, x, scale, q):
+    for a in range(w2.shape[0]):
+        q[a] = scale * _perceptron_forward(w2, a, x)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _perceptron_update(w2, d2, a, x, target, is_error, scale, lr, momentum):
+    n_in = w2.shape[1] - 1
+    y = _perceptron_forward(w2, a, x)
+    err = target if is_error else target - scale * y
+    delta = err / scale * (0.25 - y * y)
+    for i in range(n_in):
+        s = lr * delta * x[i] + momentum * d2[a, i]
+        d2[a, i] = s
+        w2[a, i] += s
+    s = lr * delta + momentum * d2[a, n_in]
+    d2[a, n_in] = s
+    w2[a, n_in] += s
+    return scale * y
+
+
+# ------------------------------------------------------------------------------------------------ OAON
+
+class OAON:
+    """One network per action (thesis 3.4, 7.4), all evaluated in one call.
+
+    ``values(x)`` returns the (n_nets,) outputs; ``update(x, a, target)`` back-propagates
+    ``target - output_a`` through net a only (Fig. 3.4 step 5) with momentum, and returns the output
+    before the step. A single net (``n_nets=1``) is the V-net of AHCON or a Ch. 4 "global" Q-net.
+    """
+
+    def __init__(self, config: NetConfig, n_nets: int, rng: np.random.Generator):
+        if n_nets < 1:
+            raise ValueError(f"n_nets must be >= 1, got {n_nets}")
+        self.config = config
+        self.n_nets = n_nets
+        c = config
+        self.scale = 2.0 * c.value_range
+        lo, hi = -c.init_range, c.init_range
+        if c.n_hidden > 0:
+            self.w1 = rng.uniform(lo, hi, (n_nets, c.n_hidden, c.n_inputs + 1))
+            self.w2 = rng.uniform(lo, hi, (n_nets, c.n_hidden + 1))
+        else:
+            self.w1 = np.zeros((n_nets, 0, c.n_inputs + 1))
+            self.w2 = rng.uniform(lo, hi, (n_nets, c.n_inputs + 1))
+        self.d1 = np.zeros_like(self.w1)
+        self.d2 = np.zeros_like(self.w2)
+        self._h = np.zeros(max(c.n_hidden, 1))
+        self.lr = c.lr  # mutable: an experiment may rescale it (Study 2 doubles it)
+
+    def values(self, x: np.ndarray) -> np.ndarray:
+        q = np.empty(self.n_nets)
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        if self.config.n_hidden > 0:
+            _mlp_values(self.w1, self.w2, x, self._h, self.scale, q)
+        else:
+            _perceptron_values(self.w2, x, self.scale, q)
+        return q
+
+    def value(self, x: np.ndarray, a: int) -> float:
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        if self.config.n_hidden > 0:
+            return self.scale * _mlp_forward(self.w1, self.w2, a, x, self._h)
+        return self.scale * _perceptron_forward(self.w2, a, x)
+
+    def update(self, x: np.ndarray, a: int, target: float) -> float:
+        """Back-propagate ``target - output_a`` through net a; returns output_a before the step."""
+        return self._step(x, a, float(target), False)
+
+    def update_error(self, x: np.ndarray, a: int, error: float) -> float:
+        """Back-propagate a given error through net a (AHCON's policy net, Fig. 3.2 step 6)."""
+        return self._step(x, a, float(error), True)
+
+    def _step(self, x, a, value, is_error):
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        c = self.config
+        if c.n_hidden > 0:
+            return _mlp_update(self.w1, self.w2, self.d1, self.d2, a, x, self._h, value, is_error,
+                               self.scale, self.lr, c.momentum)
+        return _perceptron_update(self.w2, self.d2, a, x, value, is_error, self.scale, self.lr, c.momentum)
+
+    def loss_gradients(self, x: np.ndarray, a: int, target: float) -> tuple[np.ndarray, np.ndarray]:
+        """Gradients of ``0.5 * ((target - y_a) / scale)^2`` w.r.t. (w1[a], w2[a]) (NumPy; for tests)."""
+        x = np.asarray(x, dtype=np.float64)
+        if self.config.n_hidden == 0:
+            xb = np.append(x, 1.0)
+            y = symmetric_sigmoid(self.w2[a] @ xb)
+            delta = (target - self.scale * y) / self.scale * (0.25 - y * y)
+            return np.zeros((0, xb.size)), -delta * xb
+        xb = np.append(x, 1.0)
+        h = symmetric_sigmoid(self.w1[a] @ xb)
+        hb = np.append(h, 1.0)
+        y = symmetric_sigmoid(self.w2[a] @ hb)
+        delta = (target - self.scale * y) / self.scale * (0.25 - y * y)
+        dh = delta * self.w2[a, :-1] * (0.25 - h * h)
+        return -np.outer(dh, xb), -delta * hb
+
+    # -- plain-format persistence (NPZ, no pickle)
+    def state_dict(self) -> dict[str, np.ndarray]:
+        return {"w1": self.w1.copy(), "w2": self.w2.copy(), "d1": self.d1.copy(), "d2": self.d2.copy()}
+
+    def load_state_dict(self, state: dict[str, np.ndarray]) -> None:
+        for k in ("w1", "w2", "d1", "d2"):
+            arr = np.asarray(state[k], dtype=np.float64)
+            if arr.shape != getattr(self, k).shape:
+                raise ValueError(f"{k}: expected shape {getattr(self, k).shape}, got {arr.shape}")
+            getattr(self, k)[...] = arr
