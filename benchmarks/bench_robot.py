@@ -52,7 +52,8 @@ def main() -> None:
     for task in ("DK", "DP", "WFL", "WFR"):
         raw = bench_env(RobotTaskEnv(task), args.steps)
         made = bench_env(gym.make(f"connrl/Robot-{task}-v0"), args.steps)
-        print(f"{task:>3} env.step (incl. resets): {raw:>10,.0f} steps/s   via gym.make: {made:>10,.0f} steps/s")
+        print(f"{task:>3} env.step (incl. resets): {raw:>10,.0f} steps/s   "
+              f"via gym.make: {made:>10,.0f} steps/s")
 
 
 if __name__ == "__main__":

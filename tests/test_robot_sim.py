@@ -201,7 +201,8 @@ def test_grazing_corner_sets_side_bit():
     assert m.collided and m.side == LEFT
     assert m.contact_angle == pytest.approx(math.degrees(math.atan2(11, math.sqrt(23))))
     assert not exact_sim(L, (80, 100, 0)).apply(MOVE_FORWARD).collided  # ends at x=92, 17.8 in away
-    assert exact_sim(box_layout(obstacles=[[106, 60, 130, 89]]), (95, 100, 0)).apply(MOVE_FORWARD).side == RIGHT
+    right = box_layout(obstacles=[[106, 60, 130, 89]])
+    assert exact_sim(right, (95, 100, 0)).apply(MOVE_FORWARD).side == RIGHT
 
 
 def test_swept_disc_catches_contact_between_start_and_end():

@@ -43,7 +43,8 @@ def test_check_env(task):
 
 
 def test_encode_sonar_5_3_2():
-    assert encode_sonar(np.array([0, 32, 64, 95.5, 127, 200])).tolist() == [1.0, 0.5, 0.0, -0.125, -0.25, -0.25]
+    enc = encode_sonar(np.array([0, 32, 64, 95.5, 127, 200]))
+    assert enc.tolist() == [1.0, 0.5, 0.0, -0.125, -0.25, -0.25]
 
 
 def test_observation_layouts_and_binary_low():
@@ -147,9 +148,11 @@ def test_dk_other_contacts_are_collisions():
     env.reset(seed=0, options={"start": (30, 30, 45)})
     _, r, term, _, info = env.step(MOVE_BACKWARD)  # backs into the charger
     assert (r, term, info["success"], info["collision_side"]) == (-10.0, False, False, "back")
-    env.reset(seed=0, options={"start": (30, 30, 225 + 60)})
-    _, r, term, _, _ = env.step(MOVE_FORWARD)  # 60 deg off: slides... into the wall or misses
-    assert not term
+    # Driving south at x=27 the charger corner (18, 18) touches the body 48.7 deg right of the heading:
+    # a forward bump into the charger, but not head-on (> 30 deg), so a collision.
+    env.reset(seed=0, options={"start": (27, 35, 270)})
+    _, r, term, _, info = env.step(MOVE_FORWARD)
+    assert (r, term, info["success"], info["collision_side"]) == (-10.0, False, False, "right")
 
 
 def test_dp_success_after_clearing_the_door():
@@ -262,3 +265,25 @@ def test_render_modes():
         human = RobotTaskEnv("DP", render_mode="human")
         human.reset(seed=0)
     human.close()
+
+
+def test_compiled_observation_matches_reference_encoding():
+    for task in TASKS:
+        env = RobotTaskEnv(task)
+        env.reset(seed=4)
+        for a in np.random.default_rng(2).integers(0, 6, 40):
+            obs, *_ = env.step(int(a))
+            rd = env._reading
+            assert np.allclose(obs[:24], encode_sonar(rd.sonar), atol=1e-6)
+            if task in ("WFL", "WFR"):
+                for j, side in enumerate(("left", "right")):
+                    par = 0.5 * np.clip(side_alignment(rd.sonar, side) / 45, -1, 1)
+                    assert obs[28 + j] == pytest.approx(par, abs=1e-6)
+                    c = side_clearance(rd.sonar, side)
+                    assert obs[30 + 3 * j: 33 + 3 * j].tolist() == [0.5 if b else -0.5 for b in
+                                                                     (c < 14, 14 <= c <= 32, c > 32)]
+            else:
+                bits = rd.light if task == "DK" else rd.door_edge
+                assert np.array_equal(obs[24:48] > 0, bits.astype(bool))
+            if env._steps >= 30:
+                env.reset()

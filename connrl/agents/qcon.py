@@ -57,7 +57,10 @@ class QCON(LessonAgent):
 
 
     def act(self, obs, info=None, *, greedy: bool = False) -> int:
-        x = self._x if self._x is not None else self.encode(obs)
+        if not self.learning or self._x is None:
+            # test trials never call observe(), so the input must come from obs, not the cached _x
+            self._x = self.encode(obs)
+        x = self._x
         q = self.q.values(x)
         self._q_x = q
         t = 0.0 if greedy else self.explore.temperature(info)

@@ -60,8 +60,8 @@ import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import NamedTuple
 from pathlib import Path
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -525,7 +525,8 @@ class RobotSim:
     def apply(self, action: int) -> Motion:
         """Execute one primitive action (see ACTION_NAMES)."""
         if not (0 <= int(action) < N_ACTIONS) or int(action) != action:
-            raise ValueError(f"action must be an integer in 0..{N_ACTIONS - 1} {ACTION_NAMES}, got {action!r}")
+            raise ValueError(f"action must be an integer in 0..{N_ACTIONS - 1} {ACTION_NAMES}, "
+                             f"got {action!r}")
         action = int(action)
         u = self.rng.random()  # drawn unconditionally: noise on/off keeps the stream aligned
         scale = 1.0 - CONTROL_ERROR + 2.0 * CONTROL_ERROR * u if self.control_noise else 1.0
@@ -672,7 +673,8 @@ def render_frame(layout: Layout, pose, *, reading: Reading | None = None, rays: 
 
 def render_paths(layout: Layout, paths: Sequence[Sequence[Sequence[float]]], *,
                  labels: Sequence[str] | None = None, title: str | None = None, file=None,
-                 robots: bool = True, dpi: int = 100, scale: float = 1.5, locations: bool = False) -> np.ndarray:
+                 robots: bool = True, dpi: int = 100, scale: float = 1.5,
+                 locations: bool = False) -> np.ndarray:
     """Draw several trajectories (each a sequence of (x, y[, heading]) poses) on the layout.
 
     The start of each path is marked "S" (as in Fig. 5.7) and, with ``robots``, the robot disc is drawn

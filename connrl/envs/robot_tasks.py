@@ -91,7 +91,6 @@ from connrl.envs.robot import (
     MOVE_BACKWARD,
     MOVE_FORWARD,
     N_ACTIONS,
-    N_RAYS,
     ROBOT_RADIUS,
     SEG_CHARGER,
     SONAR_MAX,
@@ -284,7 +283,8 @@ class RobotTaskEnv(gym.Env):
                  max_steps: int = 30, render_mode: str | None = None, noise: bool = True,
                  sensor_noise: bool | None = None, control_noise: bool | None = None,
                  start_sampler: Callable[[np.random.Generator, Layout], tuple] | None = None,
-                 dk_radius: float = 96.0, dp_offset: float = 48.0, dp_depth: tuple[float, float] = (24.0, 72.0),
+                 dk_radius: float = 96.0, dp_offset: float = 48.0,
+                 dp_depth: tuple[float, float] = (24.0, 72.0),
                  dock_tolerance: float = 30.0, pass_depth: float = 24.0, render_rays: bool = False):
         if task not in TASKS:
             raise ValueError(f"task must be one of {TASKS}, got {task!r}")

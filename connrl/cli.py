@@ -1,0 +1,197 @@
+"""Command line: ``connrl list | run | plot | teach | results``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from connrl.experiments.spec import PROFILES
+
+
+def _experiments():
+    from connrl.experiments.registry import all_experiments
+
+    return all_experiments()
+
+
+def _get(name: str):
+    specs = _experiments()
+    if name not in specs:
+        raise SystemExit(f"connrl: unknown experiment {name!r}.\nAvailable: {', '.join(sorted(specs))}\n"
+                         f"(`connrl list` describes them)")
+    return specs[name]
+
+
+def cmd_list(args) -> int:
+    specs = _experiments()
+    width = max(len(n) for n in specs)
+    for name, spec in sorted(specs.items()):
+        runs = {p: spec.profiles[p]["runs"] for p in PROFILES}
+        print(f"{name:<{width}}  {spec.title}  [thesis {spec.section}; runs quick/full: "
+              f"{runs['quick']}/{runs['full']}]")
+    return 0
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {v}")
+    return v
+
+
+def _seed(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {v}")
+    return v
+
+
+def cmd_run(args) -> int:
+    from connrl.experiments.runner import run_experiment
+
+    spec = _get(args.name)
+    try:
+        spec.resolve(args.profile, args.runs)
+    except ValueError as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+    try:
+        outcome = run_experiment(spec, profile=args.profile, runs=args.runs, seed=args.seed, out=Path(args.out),
+                                 workers=args.workers, show_progress=not args.quiet)
+    except KeyboardInterrupt:
+        print("\ninterrupted: finished runs are saved; run the same command again to resume.", file=sys.stderr)
+        return 130
+    _print_summary(outcome.summary)
+    print(f"\n{outcome.ran} run(s) executed, {outcome.reused} reused from earlier; "
+          f"{outcome.summary['timing']['wall_time_s']:.1f} s")
+    print(f"summary: {outcome.summary_path}")
+    for p in outcome.plots:
+        print(f"plot:    {p}")
+    return 0
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def _print_summary(summary: dict) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=f"{summary['experiment']} ({summary['profile']} profile, {summary['runs_per_variant']} "
+                  f"run(s) per variant, seeds from {summary['base_seed']})")
+    for col in ("variant", "quantity", "ours: mean", "per run", "thesis", "meets thesis"):
+        table.add_column(col)
+    for label, v in summary["variants"].items():
+        for name, q in v["quantities"].items():
+            per_run = ", ".join(_fmt(x) for x in q["per_run"])
+            meets = {True: "yes", False: "no", None: "-"}[q.get("meets_thesis")]
+            table.add_row(label, name, _fmt(q["mean"]), per_run, _fmt(q["thesis"]), meets)
+    Console().print(table)
+
+
+def cmd_plot(args) -> int:
+    from connrl.experiments.plots import plot_from_disk
+
+    spec = _get(args.name)
+    try:
+        paths = plot_from_disk(spec, Path(args.out))
+    except FileNotFoundError as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+    for p in paths:
+        print(p)
+    return 0
+
+
+def cmd_show(args) -> int:
+    spec = _get(args.name)
+    p = Path(args.out) / spec.name / "summary.json"
+    if not p.exists():
+        raise SystemExit(f"connrl: {p} not found: run `connrl run {spec.name}` first")
+    _print_summary(json.loads(p.read_text()))
+    return 0
+
+
+def cmd_teach(args) -> int:
+    from connrl.teach import TEACH_TARGETS, teach
+
+    if args.target not in TEACH_TARGETS:
+        raise SystemExit(f"connrl: unknown teach target {args.target!r}; available: {', '.join(TEACH_TARGETS)}")
+    return teach(args.target, out=Path(args.out) if args.out else None, seed=args.seed)
+
+
+def cmd_results(args) -> int:
+    from connrl.experiments.results import write_results
+
+    path = write_results(Path(args.out), Path(args.doc))
+    print(path)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="connrl", description="Reproduce Lin (1993), Reinforcement Learning for "
+                                "Robots Using Neural Networks, and use its techniques on Gymnasium tasks.")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    s = sub.add_parser("list", help="list the experiments", description="List every experiment with its "
+                       "thesis section and run counts.")
+    s.set_defaults(func=cmd_list)
+
+    s = sub.add_parser("run", help="run an experiment", description="Run an experiment's independent runs in "
+                       "parallel, write OUT/NAME/summary.json and a learning-curve plot. Finished runs are "
+                       "kept: re-running the same command resumes after Ctrl-C.")
+    s.add_argument("name", help="experiment name (see `connrl list`)")
+    s.add_argument("--profile", choices=PROFILES, default="quick",
+                   help="quick: minutes, a first look (default); full: the thesis's protocol; tiny: a smoke test")
+    s.add_argument("--runs", type=_positive_int, default=None, help="runs per variant (overrides the profile)")
+    s.add_argument("--seed", type=_seed, default=0, help="base seed; run i uses seed+i (default 0)")
+    s.add_argument("--out", default="runs", help="output directory (default ./runs)")
+    s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")
+    s.add_argument("--quiet", action="store_true", help="no live progress display")
+    s.set_defaults(func=cmd_run)
+
+    s = sub.add_parser("plot", help="redraw an experiment's plot", description="Redraw OUT/NAME/curve.png and "
+                       ".svg from the stored runs of the latest `connrl run NAME`.")
+    s.add_argument("name", help="experiment name")
+    s.add_argument("--out", default="runs", help="output directory of the run (default ./runs)")
+    s.set_defaults(func=cmd_plot)
+
+    s = sub.add_parser("show", help="print an experiment's summary table", description="Print the table of "
+                       "OUT/NAME/summary.json: our numbers beside the thesis's.")
+    s.add_argument("name", help="experiment name")
+    s.add_argument("--out", default="runs", help="output directory of the run (default ./runs)")
+    s.set_defaults(func=cmd_show)
+
+    s = sub.add_parser("teach", help="record a taught lesson by playing", description="Play a task from the "
+                       "keyboard and save the trial as a taught lesson (JSON lesson file, see connrl.replay).")
+    s.add_argument("target", help="what to teach (e.g. survival, robot-dp)")
+    s.add_argument("--out", default=None, help="lesson file to write (default: lessons/TARGET-<time>.json)")
+    s.add_argument("--seed", type=_seed, default=0, help="environment seed (default 0)")
+    s.set_defaults(func=cmd_teach)
+
+    s = sub.add_parser("results", help="write docs/RESULTS.md from stored summaries",
+                       description="Collect every OUT/*/summary.json into a Markdown results page.")
+    s.add_argument("--out", default="runs", help="directory holding the experiments' outputs (default ./runs)")
+    s.add_argument("--doc", default="docs/RESULTS.md", help="Markdown file to write (default docs/RESULTS.md)")
+    s.set_defaults(func=cmd_results)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
