@@ -23,6 +23,7 @@ from typing import Protocol
 import numpy as np
 
 from connrl.exploration import boltzmann_probabilities
+from connrl.nets.mlp import OAON, replay_lesson_q
 from connrl.storage import atomic_write_text
 
 LESSON_FORMAT = "connrl-lesson"
@@ -194,6 +195,9 @@ def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams) -> int:
     """Fig. 5.1(a): replay a lesson backward into a Q-function; returns how many experiences were used."""
     x, acts, rews = lesson.inputs, lesson.actions, lesson.rewards
     n = len(lesson)
+    if type(q) is OAON and not params.batch:  # the same loop, compiled (see benchmarks/bench_core.py)
+        return replay_lesson_q(q, x, acts, rews, lesson.terminated, params.gamma, params.lam, params.temperature,
+                               params.p_threshold, params.clip)
     if params.batch:
         vals = [q.values(x[t]) for t in range(n + 1)]
         policy = np.array([_is_policy(vals[t], int(acts[t]), params) for t in range(n)])

@@ -225,3 +225,76 @@ class OAON:
             if arr.shape != getattr(self, k).shape:
                 raise ValueError(f"{k}: expected shape {getattr(self, k).shape}, got {arr.shape}")
             getattr(self, k)[...] = arr
+
+
+# ------------------------------------------------------------------------------- whole-lesson replay kernel
+
+@numba.njit(cache=True, fastmath=True)
+def _values_any(w1, w2, x, h, scale, q):
+    if w1.shape[1] > 0:
+        _mlp_values(w1, w2, x, h, scale, q)
+    else:
+        _perceptron_values(w2, x, scale, q)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _policy_probability(q, a, temperature):
+    """Eq. 3.6 probability of action a (greedy, ties shared, at T = 0)."""
+    m = q.max()
+    if temperature == 0.0:
+        if q[a] < m:
+            return 0.0
+        n = 0
+        for k in range(q.size):
+            if q[k] == m:
+                n += 1
+        return 1.0 / n
+    s = 0.0
+    for k in range(q.size):
+        s += math.exp((q[k] - m) / temperature)
+    return math.exp((q[a] - m) / temperature) / s
+
+
+@numba.njit(cache=True, fastmath=True)
+def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, gamma, lam, temperature,
+                     p_threshold, clip, has_clip, scale, lr, momentum):
+    """Fig. 5.1(a) in incremental mode over a whole lesson; same arithmetic as ``connrl.replay.replay_q``."""
+    n = actions.shape[0]
+    used = 0
+    e_next = 0.0
+    next_policy = False
+    for t in range(n - 1, -1, -1):
+        if t == n - 1 and terminated:
+            u = 0.0
+        else:
+            _values_any(w1, w2, inputs[t + 1], h, scale, q)
+            u = q.max()
+        lam_t = lam if (t < n - 1 and next_policy) else 0.0
+        e = rewards[t] + gamma * ((1.0 - lam_t) * u + lam_t * e_next)
+        if has_clip and e > clip:
+            e = clip
+        a = actions[t]
+        if p_threshold > 0.0:
+            _values_any(w1, w2, inputs[t], h, scale, q)
+            next_policy = _policy_probability(q, a, temperature) >= p_threshold
+        else:
+            next_policy = True
+        if next_policy:
+            if w1.shape[1] > 0:
+                _mlp_update(w1, w2, d1, d2, a, inputs[t], h, e, False, scale, lr, momentum)
+            else:
+                _perceptron_update(w2, d2, a, inputs[t], e, False, scale, lr, momentum)
+            used += 1
+        e_next = e
+    return used
+
+
+def replay_lesson_q(net: OAON, inputs, actions, rewards, terminated: bool, gamma: float, lam: float,
+                    temperature: float, p_threshold: float, clip: float | None) -> int:
+    """Compiled incremental backward replay of one lesson into an OAON Q-function (see connrl.replay)."""
+    return int(_replay_q_kernel(net.w1, net.w2, net.d1, net.d2, net._h, np.empty(net.n_nets),
+                                np.ascontiguousarray(inputs, dtype=np.float64), np.ascontiguousarray(actions),
+                                np.ascontiguousarray(rewards, dtype=np.float64), bool(terminated), float(gamma),
+                                float(lam), float(temperature), float(p_threshold),
+                                0.0 if clip is None else float(clip), clip is not None, net.scale, net.lr,
+                                net.config.momentum))

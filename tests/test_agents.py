@@ -1,0 +1,115 @@
+"""QCON and AHCON: the on-line updates of Figs. 3.2/3.4, the protocol, replay wiring, any Gymnasium task."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
+from connrl.experiments.loop import run_trial
+from connrl.exploration import TemperatureSchedule
+from connrl.nets import NetConfig
+from connrl.replay import Lesson
+
+TEMP = TemperatureSchedule.inverse(10, 30, 50)
+
+
+def qcon(n_inputs=4, n_actions=2, replay=None, seed=0, **kw):
+    cfg = QCONConfig(net=NetConfig(n_inputs, 5, lr=0.2, init_range=0.5), temperature=TEMP, replay=replay, **kw)
+    return QCON(cfg, n_actions, np.random.default_rng(seed))
+
+
+def test_qcon_online_update_is_fig_3_4():
+    agent = qcon(online=True)
+    x, y = np.array([0.5, -0.5, 0.2, 0.1]), np.array([0.1, 0.2, -0.3, 0.4])
+    agent.begin_trial(x)
+    a = agent.act(x)
+    q_before = agent.q.values(x)
+    expected = 0.3 + 0.9 * agent.q.values(y).max()  # u' = r + gamma max_k Q(y, k)
+    twin = qcon(online=True)
+    twin.q.update(x, a, expected)
+    agent.observe(a, 0.3, y, False, False)
+    np.testing.assert_allclose(agent.q.values(x), twin.q.values(x))
+    assert agent.q.values(x)[1 - a] == q_before[1 - a]
+
+
+def test_terminal_step_has_no_future_and_targets_are_clipped():
+    agent = qcon(target_clip=1.0)
+    twin = qcon(target_clip=1.0)
+    x, y = np.ones(4) * 0.5, -np.ones(4) * 0.5
+    agent.begin_trial(x)
+    a = agent.act(x)
+    agent.observe(a, 3.0, y, True, False)
+    twin.q.update(x, a, 1.0)  # r = 3 -> clipped to 1, no bootstrap
+    np.testing.assert_allclose(agent.q.values(x), twin.q.values(x))
+
+
+def test_ahcon_online_update_is_fig_3_2():
+    cfg = AHCONConfig(v_net=NetConfig(4, 3, lr=0.3), policy_net=NetConfig(4, 3, lr=0.3), temperature=TEMP)
+    agent = AHCON(cfg, 2, np.random.default_rng(0))
+    x, y = np.array([0.5, -0.5, 0.2, 0.1]), np.array([0.1, 0.2, -0.3, 0.4])
+    agent.begin_trial(x)
+    a = agent.act(x)
+    e, ep = agent.v.value(x, 0), 0.2 + 0.9 * agent.v.value(y, 0)
+    merit = agent.policy.value(x, a)
+    agent.observe(a, 0.2, y, False, False)
+    assert (agent.v.value(x, 0) - e) * (ep - e) > 0  # V moved toward e'
+    assert (agent.policy.value(x, a) - merit) * (ep - e) > 0  # merit of a moved with the TD error
+
+
+def test_lessons_are_filed_only_for_learning_trials_and_replayed():
+    env = gym.make("CartPole-v1")
+    replay = ReplayConfig(capacity=3, lessons_per_trial=LinearSchedule(2, 2), p_threshold=0.0)
+    agent = qcon(replay=replay)
+    calls = []
+    agent.replay_lesson = lambda lesson, p: calls.append((len(lesson), p))
+    for k in range(4):
+        run_trial(env, agent, trial=k, learning=True, seed=k)
+    assert len(agent.book.memory) == 3 and len(calls) == 8
+    run_trial(env, agent, trial=4, learning=False, seed=9)
+    assert len(agent.book.memory) == 3 and len(calls) == 8
+
+
+def test_taught_lessons_are_replayed_with_their_threshold():
+    replay = ReplayConfig(capacity=5, lessons_per_trial=LinearSchedule(0, 0), taught_p_threshold=0.0)
+    agent = qcon(replay=replay)
+    calls = []
+    agent.replay_lesson = lambda lesson, p: calls.append((lesson.taught, p))
+    agent.add_taught_lessons([Lesson(np.zeros((2, 4)), [1], [1.0], terminated=True)])
+    agent.begin_trial(np.zeros(4))
+    agent.learn()
+    assert calls == [(True, 0.0)]
+
+
+@pytest.mark.parametrize("kind", ["qcon", "ahcon"])
+def test_works_on_gymnasium_cartpole_and_is_deterministic(kind):
+    def run(seed):
+        env = gym.make("CartPole-v1")
+        net = NetConfig(4, 6, lr=0.1, init_range=0.5)
+        replay = ReplayConfig(capacity=20, lessons_per_trial=LinearSchedule(3, 3), p_threshold=0.01)
+        if kind == "qcon":
+            agent = QCON(QCONConfig(net=net, temperature=TEMP, lam=0.7, replay=replay), 2, np.random.default_rng(seed))
+        else:
+            agent = AHCON(AHCONConfig(v_net=net, policy_net=net, temperature=TEMP, replay=replay), 2,
+                          np.random.default_rng(seed))
+        return [run_trial(env, agent, trial=k, learning=True, seed=seed * 100 + k).steps for k in range(8)]
+
+    a, b = run(3), run(3)
+    assert a == b and all(s > 0 for s in a)
+
+
+def test_bad_config_is_rejected():
+    with pytest.raises(ValueError, match="gamma"):
+        QCONConfig(net=NetConfig(2), temperature=TEMP, gamma=1.5)
+    with pytest.raises(ValueError, match="lam"):
+        QCONConfig(net=NetConfig(2), temperature=TEMP, lam=-0.1)
+    with pytest.raises(ValueError, match="p_threshold"):
+        ReplayConfig(p_threshold=1.5)
+    with pytest.raises(ValueError, match="capacity"):
+        ReplayConfig(capacity=0)
+
+
+def test_p_threshold_moves_with_lesson_age():
+    r = ReplayConfig(capacity=70, p_threshold=1e-4, p_threshold_oldest=1e-7)
+    assert r.threshold_for_age(0) == pytest.approx(1e-4)
+    assert r.threshold_for_age(69) == pytest.approx(1e-7)
+    assert 1e-7 < r.threshold_for_age(35) < 1e-4

@@ -1,0 +1,57 @@
+"""Boltzmann selection (Eq. 3.4/3.6), temperature schedules, stuck detection."""
+
+import numpy as np
+import pytest
+
+from connrl.exploration import (
+    StuckConfig,
+    StuckDetector,
+    TemperatureSchedule,
+    boltzmann_probabilities,
+    boltzmann_select,
+)
+
+
+def test_boltzmann_by_hand():
+    p = boltzmann_probabilities(np.array([0.0, np.log(3.0)]), 1.0)
+    np.testing.assert_allclose(p, [0.25, 0.75])
+    p = boltzmann_probabilities(np.array([1.0, 2.0, 3.0]), 0.5)
+    e = np.exp(np.array([2.0, 4.0, 6.0]))
+    np.testing.assert_allclose(p, e / e.sum())
+
+
+def test_zero_temperature_is_greedy():
+    a, p = boltzmann_select(np.array([0.1, 0.7, 0.3]), 0.0, np.random.default_rng(0))
+    assert a == 1 and p[1] == 1.0
+
+
+def test_large_merits_do_not_overflow():
+    p = boltzmann_probabilities(np.array([1000.0, 999.0]), 0.01)
+    assert np.isfinite(p).all() and p[0] > 0.99
+
+
+def test_sampling_frequencies():
+    rng = np.random.default_rng(0)
+    m = np.array([0.0, np.log(3.0)])
+    picks = [boltzmann_select(m, 1.0, rng)[0] for _ in range(20000)]
+    assert np.mean(picks) == pytest.approx(0.75, abs=0.01)
+
+
+def test_schedules_both_ways():
+    inv = TemperatureSchedule.inverse(10, 30, 3)  # 1/T: 10 -> 30 over 3 trials
+    assert [inv(t) for t in (0, 1, 2, 9)] == pytest.approx([0.1, 0.05, 1 / 30, 1 / 30])
+    direct = TemperatureSchedule.direct(0.05, 0.02, 4)  # T: 0.05 -> 0.02
+    assert [direct(t) for t in (0, 3, 100)] == pytest.approx([0.05, 0.02, 0.02])
+    with pytest.raises(ValueError, match="kind"):
+        TemperatureSchedule(1, 2, 3, "log")
+    with pytest.raises(ValueError, match="> 0"):
+        TemperatureSchedule.inverse(0, 2, 3)
+    with pytest.raises(ValueError, match="temperature"):
+        boltzmann_probabilities(np.zeros(2), -1.0)
+
+
+def test_stuck_detection_raises_temperature_only_when_stuck():
+    d = StuckDetector(StuckConfig(window=4, radius=1.0, boost=3.0))
+    assert [d.factor((0, 0)) for _ in range(4)] == [1, 1, 1, 3.0]  # staying put
+    d.reset()
+    assert [d.factor((i * 2, 0)) for i in range(6)][-1] == 1.0  # moving on
