@@ -1,0 +1,259 @@
+"""QCON-T for the robot tasks of Ch. 5: fast backward TD(lambda) replay and the *lower* / *raise* repairs (5.4.3).
+
+``TeachingQCON`` is QCON (Fig. 3.4) with experience replay (Fig. 5.1a) and teaching (3.7), plus three things
+Ch. 5 needs:
+
+- **Repairs (5.4.3).** Each time a taught lesson is replayed, the agent checks, for every taught experience
+  ``(x, a1)``, the condition ``Q(x, a1) >= Q(x, a_i)`` for all ``i`` (Eq. 5.6). On a violation the *lower*
+  repair back-propagates ``Q(x, a1) - Q(x, a_i)`` through net ``a_i`` (every violating ``a_i``); the *raise*
+  repair back-propagates ``Q(x, a_max) - Q(x, a1)`` through net ``a1``, where ``a_max`` is the most
+  over-valued other action. The check is made right after the TD update of that experience (the thesis does
+  not say when within the replay; we do it in the same backward pass, with the net as it is then).
+- **Temperature on the +-1 scale.** The Boltzmann selector sees ``Q / merit_scale`` (Q / 100 for the robot):
+  with Q in +-100 (5.3.1) a temperature of 0.05 (5.3.4) only makes sense relative to +-1, the range Ch. 4
+  uses with similar temperatures (Table 4.1). The non-policy test of replay (P_l = 2 %, 5.3.5) uses the same
+  probabilities.
+- **Speed.** When the Q-function is an :class:`~connrl.nets.OAON`, a whole lesson is replayed by one Numba
+  kernel (``replay_lesson_kernel``) that does exactly what :func:`connrl.replay.replay_q` does (incremental
+  mode) followed by the repairs; any other Q-function uses ``replay_q`` and :func:`repair_step`.
+
+"Fewer lessons were replayed in the beginning when there were not many lessons available" (5.3.5 fn. 1):
+``learn`` replays ``min(lessons_per_trial, lessons in memory)`` experienced lessons.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from connrl.agents.qcon import QCON, QCONConfig
+from connrl.exploration import boltzmann_select
+from connrl.nets import OAON
+from connrl.nets.mlp import _mlp_forward, _mlp_update, _perceptron_forward, _perceptron_update
+from connrl.replay import Lesson, ReplayParams, replay_q
+
+REPAIRS = ("none", "lower", "raise")  # 5.4.3; "none" = plain teaching
+
+
+def repair_step(q, x: np.ndarray, a: int, mode: str) -> int:
+    """One 5.4.3 repair of the taught action ``a`` at input ``x`` for any Q-function; returns nets changed.
+
+    ``lower``: every other action valued above ``a`` is moved toward ``Q(x, a)``.
+    ``raise``: ``a`` is moved toward the largest other value when that exceeds ``Q(x, a)``.
+    """
+    if mode not in REPAIRS:
+        raise ValueError(f"repair must be one of {REPAIRS}, got {mode!r}")
+    if mode == "none":
+        return 0
+    v = np.asarray(q.values(x), dtype=np.float64)
+    others = np.delete(np.arange(v.size), a)
+    if mode == "lower":
+        changed = 0
+        for i in others:
+            if v[i] > v[a]:
+                q.update(x, int(i), float(v[a]))
+                changed += 1
+        return changed
+    best = int(others[np.argmax(v[others])])
+    if v[best] > v[a]:
+        q.update(x, a, float(v[best]))
+        return 1
+    return 0
+
+
+# ------------------------------------------------------------------------------------------ the kernel
+
+@numba.njit(cache=True, fastmath=True)
+def _values(w1, w2, x, h, scale, q):
+    if w1.shape[1] > 0:
+        for a in range(w2.shape[0]):
+            q[a] = scale * _mlp_forward(w1, w2, a, x, h)
+    else:
+        for a in range(w2.shape[0]):
+            q[a] = scale * _perceptron_forward(w2, a, x)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _update(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum):
+    if w1.shape[1] > 0:
+        return _mlp_update(w1, w2, d1, d2, a, x, h, target, False, scale, lr, momentum)
+    return _perceptron_update(w2, d2, a, x, target, False, scale, lr, momentum)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _probability(q, a, temperature):
+    """Boltzmann probability of action a (Eq. 3.4); temperature 0 = greedy with ties sharing."""
+    m = q[0]
+    for i in range(1, q.shape[0]):
+        m = max(m, q[i])
+    if temperature <= 0.0:
+        if q[a] < m:
+            return 0.0
+        k = 0
+        for i in range(q.shape[0]):
+            if q[i] == m:
+                k += 1
+        return 1.0 / k
+    s = 0.0
+    for i in range(q.shape[0]):
+        s += math.exp((q[i] - m) / temperature)
+    return math.exp((q[a] - m) / temperature) / s
+
+
+@numba.njit(cache=True)
+def replay_lesson_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, gamma, lam, temperature,
+                         p_threshold, clip, scale, lr, momentum, repair):
+    """Fig. 5.1(a), incremental mode, on an OAON (``w1``/``w2`` as in connrl.nets.mlp), then 5.4.3 repairs.
+
+    ``temperature`` is on the raw Q scale; ``clip`` is +inf for none; ``repair`` 0 none, 1 lower, 2 raise.
+    Returns the number of experiences replayed.
+    """
+    n = actions.shape[0]
+    used = 0
+    e_next = 0.0
+    next_policy = False
+    for t in range(n - 1, -1, -1):
+        if t == n - 1 and terminated:
+            u = 0.0
+        else:
+            _values(w1, w2, inputs[t + 1], h, scale, q)
+            u = q[0]
+            for i in range(1, q.shape[0]):
+                u = max(u, q[i])
+        lam_t = lam if (t < n - 1 and next_policy) else 0.0
+        e = rewards[t] + gamma * ((1.0 - lam_t) * u + lam_t * e_next)
+        if e > clip:
+            e = clip
+        a = actions[t]
+        x = inputs[t]
+        if p_threshold <= 0.0:
+            next_policy = True
+        else:
+            _values(w1, w2, x, h, scale, q)
+            next_policy = _probability(q, a, temperature) >= p_threshold
+        if next_policy:
+            _update(w1, w2, d1, d2, a, x, h, e, scale, lr, momentum)
+            used += 1
+        if repair != 0:
+            _values(w1, w2, x, h, scale, q)
+            qa = q[a]
+            if repair == 1:
+                for i in range(q.shape[0]):
+                    if i != a and q[i] > qa:
+                        _update(w1, w2, d1, d2, i, x, h, qa, scale, lr, momentum)
+            else:
+                best = -np.inf
+                for i in range(q.shape[0]):
+                    if i != a and q[i] > best:
+                        best = q[i]
+                if best > qa:
+                    _update(w1, w2, d1, d2, a, x, h, best, scale, lr, momentum)
+        e_next = e
+    return used
+
+
+def replay_oaon(net: OAON, lesson: Lesson, params: ReplayParams, repair: str = "none") -> int:
+    """Replay one lesson into an OAON with the kernel (same result as ``replay_q`` + ``repair_step``)."""
+    if params.batch:
+        raise ValueError("the fast kernel does incremental replay only (5.1.2); use connrl.replay.replay_q")
+    c = net.config
+    q = np.empty(net.n_nets)
+    return int(replay_lesson_kernel(net.w1, net.w2, net.d1, net.d2, net._h, q,
+                                    np.ascontiguousarray(lesson.inputs), lesson.actions, lesson.rewards,
+                                    bool(lesson.terminated), params.gamma, params.lam, params.temperature,
+                                    params.p_threshold, np.inf if params.clip is None else params.clip,
+                                    net.scale, net.lr, c.momentum, REPAIRS.index(repair)))
+
+
+# ------------------------------------------------------------------------------------------- the agent
+
+@dataclass(frozen=True)
+class TeachingConfig:
+    """What ``TeachingQCON`` adds to QCONConfig (5.3.4, 5.4.3)."""
+
+    repair: str = "none"  # "none" | "lower" | "raise" repairs on taught lessons (5.4.3)
+    merit_scale: float = 100.0  # Boltzmann sees Q / merit_scale: Q in +-100 (5.3.1), T on the +-1 scale (R)
+    fast: bool = True  # use the Numba lesson kernel when the Q-function is an OAON
+
+    def __post_init__(self):
+        if self.repair not in REPAIRS:
+            raise ValueError(f"repair must be one of {REPAIRS}, got {self.repair!r}")
+        if not self.merit_scale > 0:
+            raise ValueError(f"merit_scale must be > 0, got {self.merit_scale}")
+
+
+class TeachingQCON(QCON):
+    """QCON-T of Ch. 5 with the 5.4.3 repairs; see the module docstring."""
+
+    def __init__(self, config: QCONConfig, n_actions: int, rng: np.random.Generator,
+                 teaching: TeachingConfig | None = None, q=None):
+        super().__init__(config, n_actions, rng, q=q)
+        self.teaching = teaching or TeachingConfig()
+        self._fast = self.teaching.fast and isinstance(self.q, OAON) and not (config.replay and config.replay.batch)
+
+    def act(self, obs, info=None, *, greedy: bool = False) -> int:
+        if not self.learning or self._x is None:
+            self._x = self.encode(obs)
+        q = self.q.values(self._x)
+        self._q_x = q
+        t = 0.0 if greedy else self.explore.temperature(info) * self.teaching.merit_scale
+        a, self.last_probabilities = boltzmann_select(q, t, self.rng)
+        return a
+
+    def replay_params(self, p_threshold: float) -> ReplayParams:
+        p = super().replay_params(p_threshold)
+        return ReplayParams(gamma=p.gamma, lam=p.lam, temperature=p.temperature * self.teaching.merit_scale,
+                            p_threshold=p.p_threshold, batch=p.batch, clip=p.clip)
+
+    def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
+        params = self.replay_params(p_threshold)
+        repair = self.teaching.repair if lesson.taught else "none"
+        if self._fast:
+            replay_oaon(self.q, lesson, params, repair)
+            return
+        if repair == "none":
+            replay_q(self.q, lesson, params)
+            return
+        # the reference path: the same backward pass, with the repair right after each TD update
+        _replay_q_with_repairs(self.q, lesson, params, repair)
+
+    def learn(self) -> None:
+        """Replay min(n, available) experienced lessons (App. A.2 choice), then every taught lesson (5.3.5)."""
+        r = self.config.replay
+        if r is None or not self.learning:
+            return
+        mem = self.book.memory
+        for _ in range(min(int(round(r.lessons_per_trial(self.trial))), len(mem))):
+            age, lesson = mem.sample(self.rng)
+            self.replay_lesson(lesson, r.threshold_for_age(age))
+        p_taught = r.taught_probability(self.trial)
+        for lesson in self.book.taught:
+            if p_taught >= 1 or self.rng.random() < p_taught:
+                self.replay_lesson(lesson, r.taught_p_threshold)
+
+
+def _replay_q_with_repairs(q, lesson: Lesson, params: ReplayParams, repair: str) -> int:
+    """Pure-Python twin of ``replay_lesson_kernel`` (for Q-functions that are not OAONs, and for tests)."""
+    from connrl.exploration import boltzmann_probabilities
+
+    x, acts, rews = lesson.inputs, lesson.actions, lesson.rewards
+    n = len(lesson)
+    used, e_next, next_policy = 0, 0.0, False
+    for t in range(n - 1, -1, -1):
+        u = 0.0 if (t == n - 1 and lesson.terminated) else float(q.values(x[t + 1]).max())
+        lam_t = params.lam if (t < n - 1 and next_policy) else 0.0
+        e = rews[t] + params.gamma * ((1.0 - lam_t) * u + lam_t * e_next)
+        if params.clip is not None and e > params.clip:
+            e = params.clip
+        a = int(acts[t])
+        next_policy = params.p_threshold <= 0 or bool(
+            boltzmann_probabilities(q.values(x[t]), params.temperature)[a] >= params.p_threshold)
+        if next_policy:
+            q.update(x[t], a, e)
+            used += 1
+        repair_step(q, x[t], a, repair)
+        e_next = e
+    return used

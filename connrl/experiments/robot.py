@@ -1,0 +1,430 @@
+"""Ch. 5: learning the elementary robot skills DP, DK and WFL with QCON-T (Figs. 5.4-5.10, the tables of 5.6).
+
+Protocol (5.4): each run trains a fresh agent for 300 trials; a trial starts from a random pose of the
+task's start region and ends at the goal or after 30 steps. Before the first trial and after every 10
+trials the greedy policy (T = 0, learning off) is tested on 50 start poses drawn once per run; the
+performance is the total reinforcement over the 50 tests divided by the steps they took. Each test task
+also has a fixed simulator seed, so the sensing and control noise of a test is the same at every test
+(less noise in the curve; the thesis does not say how it handled this).
+
+Agent (5.3): ``connrl.agents.repairs.TeachingQCON``: six OAON Q-nets (hidden = round(0.3 x inputs):
+16 for DP/DK, 11 for WF), lr 0.05, momentum 0.9, init +-0.5, Q in +-100, gamma 0.9, lambda 0.7 (set to 0
+at the end of a lesson and after non-policy actions), T 0.05 -> 0.02 over 300 trials on Q/100, stuck
+detection, on-line Q-learning during the trial and, after it, 60 lessons chosen by App. A.2 from the
+latest 100 (fewer while fewer exist) plus every taught lesson, non-policy actions (P < 2 %) not replayed.
+
+Taught lessons (3.7, 5.4) come from the scripted teachers of ``connrl.envs.robot_tasks`` (not a person):
+``python -m connrl.experiments.robot make-lessons`` rewrites ``connrl/data/lessons/robot-{dp,dk,wfl}.json``
+deterministically; 3 (DP, DK) or 2 (WFL) taught lessons are the first ones of the file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents.repairs import TeachingConfig, TeachingQCON
+from connrl.envs.robot_tasks import OBS_SIZE, RobotTaskEnv, teach
+from connrl.experiments.loop import run_trial
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
+from connrl.exploration import StuckConfig, TemperatureSchedule
+from connrl.nets import NetConfig
+from connrl.replay import Lesson, load_lessons, save_lessons
+
+LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
+TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5}  # lessons shipped per task (5.4.1)
+
+ROBOT_PARAMS = {
+    "task": "DP",  # "DP" | "DK" | "WFL" (5.4)
+    "lessons": 10,  # taught lessons given to the agent (5.4.1: 0/3/10 DP, DK; 0/2/5 WFL)
+    "hidden_fraction": 0.3,  # hidden units ~ 30 % of inputs (5.3.3); 0 = single-layer (5.4.4)
+    "lr": 0.05,  # back-propagation learning rate (5.3.3; 5.4.4: 0.04 DP/DK, 0.03 WFL)
+    "momentum": 0.9,  # (5.3.3; 5.4.4: 0)
+    "init_range": 0.5,  # initial weights in +-0.5 (5.3.3)
+    "value_range": 100.0,  # Q in +-100 (5.3.1)
+    "binary_low": -0.5,  # binary inputs +-0.5 (5.3.2); 0 -> 0/1 (5.4.4)
+    "gamma": 0.9,  # (5.3.1)
+    "lam": 0.7,  # (5.4.1)
+    "t_start": 0.05,  # T: 0.05 -> 0.02 over the run (5.3.4), on Q / value_range
+    "t_end": 0.02,
+    "online": True,  # Q-learning on each step as well as replay (Fig. 3.4, R)
+    "capacity": 100,  # latest lessons kept for replay (App. A.2, R for Ch. 5)
+    "lessons_per_trial": 60,  # experienced lessons replayed after each trial (5.3.5)
+    "p_threshold": 0.02,  # P_l: non-policy threshold (5.3.5)
+    "repair": "none",  # "none" | "lower" | "raise" (5.4.3)
+    "stuck_window": 8,  # stuck detection (5.3.4, R): last 8 positions ...
+    "stuck_radius": 12.0,  # ... within 12 in (one move) of their mean ...
+    "stuck_boost": 5.0,  # ... multiply T by 5
+    "trials": 300,  # trials per run (5.4)
+    "max_steps": 30,  # steps per trial and per test (5.4)
+    "test_every": 10,  # test after every 10 trials (5.4)
+    "test_tasks": 50,  # fixed test tasks per run (5.4)
+    "paths": 0,  # greedy solution paths recorded at the end of the run (Figs. 5.5-5.7)
+}
+
+THRESHOLDS = (2.5, 5.0)  # the two performance levels of the tables in 5.6
+
+
+def quantity_name(level: float) -> str:
+    return f"trials_to_{level:g}"
+
+
+# ------------------------------------------------------------------------------------------- lessons
+
+def lesson_path(task: str) -> Path:
+    return LESSON_DIR / f"robot-{task.lower()}.json"
+
+
+def make_taught_lessons(task: str, n: int | None = None, seed: int = 0, max_tries: int = 200) -> list[Lesson]:
+    """Demonstrations by the scripted teacher of ``task`` from start poses drawn with ``seed``.
+
+    DP and DK keep only demonstrations that reach the goal (the thesis's "positive examples", 5.4.1);
+    WFL keeps every 30-step demonstration. Deterministic given ``seed``.
+    """
+    n = TAUGHT_COUNTS[task] if n is None else n
+    env = RobotTaskEnv(task)
+    rng = np.random.default_rng(seed)
+    out: list[Lesson] = []
+    for i in range(max_tries):
+        if len(out) == n:
+            break
+        start = env.sample_task(rng)
+        play_seed = int(rng.integers(2**31))
+        steps = teach(env, start, seed=play_seed)
+        success = bool(steps[-1][4])
+        if task in ("DP", "DK") and not success:
+            continue
+        reward = float(sum(s[2] for s in steps))
+        out.append(Lesson.from_steps(steps, taught=True, meta={
+            "teacher": f"connrl.envs.robot_tasks.teach ({task})", "start": [round(v, 3) for v in start],
+            "play_seed": play_seed, "attempt": i, "steps": len(steps), "success": success, "reward": reward}))
+    if len(out) < n:
+        raise RuntimeError(f"the {task} teacher succeeded only {len(out)} times in {max_tries} tries")
+    return out
+
+
+def write_taught_lessons(seed: int = 0) -> list[Path]:
+    """Regenerate connrl/data/lessons/robot-{dp,dk,wfl}.json (``python -m connrl.experiments.robot make-lessons``)."""
+    paths = []
+    for task in TAUGHT_COUNTS:
+        lessons = make_taught_lessons(task, seed=seed)
+        p = lesson_path(task)
+        save_lessons(p, lessons, env_id=f"connrl/Robot-{task}-v0", env_kwargs={},
+                     source=f"connrl.experiments.robot.make_taught_lessons({task!r}, n={len(lessons)}, "
+                            f"seed={seed}): scripted teacher, not a person")
+        paths.append(p)
+    return paths
+
+
+def binary_columns(task: str) -> np.ndarray:
+    """Indices of the binary inputs of a task's observation (see connrl.envs.robot_tasks)."""
+    if task in ("DK", "DP"):
+        return np.arange(24, 52)
+    return np.r_[24:28, 30:36]
+
+
+def taught_lessons(task: str, n: int, binary_low: float = -0.5) -> list[Lesson]:
+    """The first ``n`` shipped lessons of ``task``, re-encoded for ``binary_low`` (files use -0.5/+0.5)."""
+    if n == 0:
+        return []
+    lessons = load_lessons(lesson_path(task), env_id=f"connrl/Robot-{task}-v0", input_dim=OBS_SIZE[task],
+                           n_actions=6)
+    if n > len(lessons):
+        raise ValueError(f"{task}: {n} taught lessons asked for, the file has {len(lessons)}")
+    out = []
+    for lesson in lessons[:n]:
+        x = lesson.inputs.copy()
+        x[:, binary_columns(task)] += binary_low + 0.5
+        out.append(Lesson(x, lesson.actions, lesson.rewards, lesson.terminated, lesson.truncated, True,
+                          dict(lesson.meta)))
+    return out
+
+
+# --------------------------------------------------------------------------------------------- agent
+
+def make_agent(p: dict, rng: np.random.Generator) -> TeachingQCON:
+    n_in = OBS_SIZE[p["task"]]
+    hidden = int(round(p["hidden_fraction"] * n_in))
+    net = NetConfig(n_in, hidden, value_range=p["value_range"], init_range=p["init_range"], lr=p["lr"],
+                    momentum=p["momentum"])
+    replay = ReplayConfig(capacity=p["capacity"],
+                          lessons_per_trial=LinearSchedule(p["lessons_per_trial"], p["lessons_per_trial"]),
+                          p_threshold=p["p_threshold"])
+    cfg = QCONConfig(net=net, temperature=TemperatureSchedule.direct(p["t_start"], p["t_end"], p["trials"]),
+                     gamma=p["gamma"], lam=p["lam"], online=p["online"], replay=replay,
+                     stuck=StuckConfig(p["stuck_window"], p["stuck_radius"], p["stuck_boost"]))
+    agent = TeachingQCON(cfg, 6, rng, TeachingConfig(repair=p["repair"], merit_scale=p["value_range"]))
+    agent.add_taught_lessons(taught_lessons(p["task"], p["lessons"], p["binary_low"]))
+    return agent
+
+
+# ----------------------------------------------------------------------------------------------- run
+
+def evaluate(env: RobotTaskEnv, agent, tasks, seeds, max_steps: int, paths: list | None = None) -> float:
+    """Greedy test on fixed tasks: total reinforcement / total steps (5.4)."""
+    total, steps = 0.0, 0
+    for i, (start, s) in enumerate(zip(tasks, seeds, strict=True)):
+        stats = run_trial(env, agent, trial=0, learning=False, seed=int(s), options={"start": start},
+                          max_steps=max_steps)
+        total += stats.total_reward
+        steps += stats.steps
+        if paths is not None and i < len(paths):
+            paths[i] = {"poses": [[round(v, 2) for v in pose] for pose in env.trace],
+                        "success": bool(stats.info.get("success")), "reward": stats.total_reward}
+    return total / max(steps, 1)
+
+
+def first_reaching(xs, ys, level: float):
+    """First trial count whose test performance is >= level (None if never)."""
+    for x, y in zip(xs, ys, strict=True):
+        if y >= level:
+            return x
+    return None
+
+
+def run_robot(p: dict, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
+    task = p["task"]
+    env = RobotTaskEnv(task, binary_low=p["binary_low"], max_steps=p["max_steps"])
+    test_env = RobotTaskEnv(task, binary_low=p["binary_low"], max_steps=p["max_steps"])
+    task_rng = np.random.default_rng(rng.integers(2**63))
+    tests = [test_env.sample_task(task_rng) for _ in range(p["test_tasks"])]
+    test_seeds = task_rng.integers(2**31, size=p["test_tasks"])
+    agent = make_agent(p, rng)
+    env.reset(seed=int(rng.integers(2**31)))
+    xs, ys, rows = [], [], []
+
+    def test(k):
+        perf = evaluate(test_env, agent, tests, test_seeds, p["max_steps"])
+        xs.append(k)
+        ys.append(perf)
+        rows.append({"trials": k, "performance": perf})
+
+    test(0)
+    successes = 0
+    for k in range(p["trials"]):
+        stats = run_trial(env, agent, trial=k, learning=True)
+        successes += bool(stats.info.get("success"))
+        if (k + 1) % p["test_every"] == 0 or k + 1 == p["trials"]:
+            test(k + 1)
+            rows[-1]["train_successes"] = successes
+        progress(k + 1, p["trials"])
+    extra = {}
+    if p["paths"]:
+        recorded: list = [None] * min(p["paths"], len(tests))
+        evaluate(test_env, agent, tests[:len(recorded)], test_seeds[:len(recorded)], p["max_steps"], recorded)
+        extra["paths"] = recorded
+    metrics = {quantity_name(level): first_reaching(xs, ys, level) for level in THRESHOLDS}
+    tail = ys[-3:]
+    metrics["final_performance"] = float(np.mean(tail))
+    metrics["mean_performance"] = float(np.mean(ys))
+    return RunResult(xs, ys, metrics, rows, extra)
+
+
+# --------------------------------------------------------------------------------------------- specs
+
+def _q_reach(level: float, section: str = "5.6") -> Quantity:
+    return Quantity(quantity_name(level), f"trials until a test reaches {level:g} reinforcement/step (per run)",
+                    "lower", section)
+
+
+Q_FINAL = Quantity("final_performance", "mean test performance over the last 3 tests (trials 280-300)",
+                   "higher", "5.4")
+Q_MEAN = Quantity("mean_performance", "test performance averaged over all 31 tests (area under the curve)",
+                  "higher", "5.4")
+
+PROFILES = {
+    "tiny": {"runs": 1, "trials": 4, "test_every": 2, "test_tasks": 3, "lessons_per_trial": 3, "paths": 2},
+    "quick": {"runs": 2, "trials": 100, "test_tasks": 25},
+    "full": {"runs": 7},
+}
+
+
+def _spec(name, title, section, base, variants, quantities, paths=0, description=""):
+    return ExperimentSpec(name=name, title=title, section=section, run="connrl.experiments.robot:run_robot",
+                          params={**ROBOT_PARAMS, **base, "paths": paths},
+                          profiles={k: ({**v, "paths": min(v.get("paths", paths), paths)} if paths else dict(v))
+                                    for k, v in PROFILES.items()},
+                          variants=tuple(variants), quantities=tuple(quantities), x_label="trials",
+                          y_label="reinforcement per step (greedy test, 50 tasks)", description=description,
+                          y_reference={"2.5": 2.5, "5": 5.0} if base.get("task") == "DP" else {})
+
+
+_DP_Q = (_q_reach(2.5), _q_reach(5.0), Q_FINAL, Q_MEAN)
+_Q = (Q_FINAL, Q_MEAN)
+
+EXPERIMENTS = [
+    _spec("robot-teaching-dp", "Exp. 1: door passing (DP) with 0, 3 and 10 taught lessons", "5.4.1 Fig. 5.4a",
+          {"task": "DP"},
+          [Variant("no teaching", {"lessons": 0}, {"trials_to_2.5": 280}),
+           Variant("3 lessons", {"lessons": 3}, {"trials_to_2.5": 20}),
+           Variant("10 lessons", {"lessons": 10}, {"trials_to_2.5": 10, "trials_to_5": 65})],
+          _DP_Q, paths=8),
+    _spec("robot-teaching-dk", "Exp. 1: docking (DK) with 0, 3 and 10 taught lessons", "5.4.1 Fig. 5.4b",
+          {"task": "DK"},
+          [Variant("no teaching", {"lessons": 0}), Variant("3 lessons", {"lessons": 3}),
+           Variant("10 lessons", {"lessons": 10})], _Q, paths=6),
+    _spec("robot-teaching-wfl", "Exp. 1: left wall following (WFL) with 0, 2 and 5 taught lessons",
+          "5.4.1 Fig. 5.4c", {"task": "WFL"},
+          [Variant("no teaching", {"lessons": 0}), Variant("2 lessons", {"lessons": 2}),
+           Variant("5 lessons", {"lessons": 5})], _Q, paths=6),
+    _spec("robot-lambda-dp", "Exp. 2: TD(lambda) on DP with 10 taught lessons", "5.4.2 Fig. 5.8a",
+          {"task": "DP", "lessons": 10},
+          [Variant("lambda=0", {"lam": 0.0}, {"trials_to_5": 280}),
+           Variant("lambda=0.3", {"lam": 0.3}, {"trials_to_5": 140}),
+           Variant("lambda=0.7", {"lam": 0.7}, {"trials_to_5": 65}),
+           Variant("lambda=0.9", {"lam": 0.9}), Variant("lambda=1", {"lam": 1.0})], _DP_Q),
+    _spec("robot-lambda-wfl", "Exp. 2: TD(lambda) on WFL without teaching", "5.4.2 Fig. 5.8b",
+          {"task": "WFL", "lessons": 0},
+          [Variant(f"lambda={lam:g}", {"lam": lam}) for lam in (0.0, 0.3, 0.7, 0.9, 1.0)], _Q),
+    _spec("robot-repairs-3", "Exp. 3: lower / raise repairs on DP with 3 taught lessons", "5.4.3 Fig. 5.9a",
+          {"task": "DP", "lessons": 3},
+          [Variant(r, {"repair": r}) for r in ("none", "lower", "raise")], _DP_Q),
+    _spec("robot-repairs-10", "Exp. 3: lower / raise repairs on DP with 10 taught lessons", "5.4.3 Fig. 5.9b",
+          {"task": "DP", "lessons": 10},
+          [Variant(r, {"repair": r}) for r in ("none", "lower", "raise")], _DP_Q),
+    _spec("robot-single-layer", "Exp. 4: single-layer Q-nets (0/1 binaries, no momentum) on DP, DK, WFL",
+          "5.4.4 Fig. 5.10", {"hidden_fraction": 0.0, "momentum": 0.0, "binary_low": 0.0},
+          [Variant("DP single-layer", {"task": "DP", "lessons": 10, "lr": 0.04}),
+           Variant("DK single-layer", {"task": "DK", "lessons": 10, "lr": 0.04}),
+           Variant("WFL single-layer", {"task": "WFL", "lessons": 5, "lr": 0.03})], _Q,
+          description="compare with the multi-layer curves of robot-teaching-* (10/10/5 lessons)"),
+]
+
+
+# ------------------------------------------------------------------------------------------- results
+
+def _records(spec: ExperimentSpec, out: Path) -> tuple[dict | None, list[dict]]:
+    from connrl.experiments.runner import load_record, make_jobs
+
+    p = out / spec.name / "summary.json"
+    if not p.exists():
+        return None, []
+    summary = json.loads(p.read_text())
+    jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], out)
+    return summary, [r for r in (load_record(j) for j in jobs) if r is not None]
+
+
+def mean_curve(records: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    xs = np.asarray(records[0]["curve_x"], dtype=float)
+    ys = np.array([r["curve_y"] for r in records if len(r["curve_y"]) == xs.size], dtype=float)
+    return xs, ys.mean(axis=0)
+
+
+def _fmt(v, nd=2) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "—"
+    return f"{v:.{nd}f}" if isinstance(v, float) and not float(v).is_integer() else f"{v:g}"
+
+
+def draw_solution_paths(records: list[dict], file: Path, task: str, k: int) -> Path | None:
+    """Figs. 5.5-5.7: up to ``k`` greedy paths of the first run's final policy (successful ones first)."""
+    from connrl.envs.robot import Layout, render_paths
+
+    rec = next((r for r in sorted(records, key=lambda r: r["seed"]) if r.get("extra", {}).get("paths")), None)
+    if rec is None:
+        return None
+    paths = sorted(rec["extra"]["paths"], key=lambda p: (not p["success"], -p["reward"]))[:k]
+    render_paths(Layout.load("default"), [p["poses"] for p in paths],
+                 labels=[f"{'goal' if p['success'] else 'no goal'}, {len(p['poses']) - 1} steps, "
+                         f"r={p['reward']:g}" for p in paths],
+                 title=f"{task}: greedy paths after {rec['params']['trials']} trials (seed {rec['seed']})",
+                 file=file)
+    return file
+
+
+def results_section(out_dir: Path) -> str:
+    """Markdown for docs/RESULTS.md: our Ch. 5 numbers beside the thesis's, from OUT/robot-*/ records."""
+    out_dir = Path(out_dir)
+    lines = ["## Chapter 5: robot skills with QCON-T (DP, DK, WFL)", "",
+             "Performance = reinforcement per step on 50 fixed greedy test tasks, tested every 10 trials. "
+             "\"Mean curve\" columns read the level off the mean learning curve over runs, as the thesis's "
+             "tables of 5.6 do; \"per run\" is the mean of each run's first test reaching the level "
+             "(over the runs that reached it). Taught lessons: scripted teachers "
+             "(`python -m connrl.experiments.robot make-lessons`).", ""]
+    curves: dict[tuple[str, str], tuple[np.ndarray, np.ndarray, int]] = {}
+    any_found = False
+    for spec in EXPERIMENTS:
+        summary, recs = _records(spec, out_dir)
+        if summary is None or not recs:
+            continue
+        any_found = True
+        prof = summary["profile"]
+        lines += [f"### {spec.name}: {spec.title} (thesis {spec.section})", "",
+                  f"`connrl run {spec.name} --profile {prof} --seed {summary['base_seed']}` — "
+                  f"{summary['runs_per_variant']} runs per variant, seeds {summary['base_seed']}.."
+                  f"{summary['base_seed'] + summary['runs_per_variant'] - 1}, "
+                  f"wall {summary['timing']['wall_time_s']:.0f} s.", ""]
+        dp = any(q.name == "trials_to_2.5" for q in spec.quantities)
+        head = "| variant | final perf. | mean perf. |"
+        if dp:
+            head += " to 2.5 (mean curve) | to 2.5 (per run, reached) | thesis | to 5 (mean curve) " \
+                    "| to 5 (per run, reached) | thesis |"
+        lines += [head, "|" + "---|" * (head.count("|") - 1)]
+        for v in spec.variants:
+            vr = [r for r in recs if r["variant"] == v.label]
+            if not vr:
+                continue
+            xs, ys = mean_curve(vr)
+            curves[(spec.name, v.label)] = (xs, ys, len(vr))
+            qs = summary["variants"][v.label]["quantities"]
+            row = f"| {v.label} | {_fmt(qs['final_performance']['mean'])} | {_fmt(qs['mean_performance']['mean'])} |"
+            if dp:
+                for level in THRESHOLDS:
+                    q = qs[quantity_name(level)]
+                    row += (f" {_fmt(first_reaching(list(xs), list(ys), level))} | {_fmt(q['mean'], 0)} "
+                            f"({q['runs_reaching']}/{len(q['per_run'])}) | {_fmt(q['thesis'])} |")
+            lines.append(row)
+        lines.append("")
+        if spec.params.get("paths"):
+            task = spec.params["task"]
+            best = spec.variants[-1].label
+            f = draw_solution_paths([r for r in recs if r["variant"] == best], out_dir / spec.name /
+                                    "solution-paths.png", task, {"DP": 4, "DK": 3, "WFL": 3}[task])
+            if f is not None:
+                lines += [f"Solution paths (Figs. 5.5-5.7), {best}: `{f}`", ""]
+    if not any_found:
+        return "\n".join(lines + ["No Ch. 5 results yet: run `connrl run robot-teaching-dp` etc.", ""])
+    lines += _speedup_tables(curves)
+    return "\n".join(lines)
+
+
+def _speedup_tables(curves) -> list[str]:
+    out = []
+    rows = [("no teaching", ("robot-teaching-dp", "no teaching"), 280, None),
+            ("3 taught lessons", ("robot-teaching-dp", "3 lessons"), 20, 14),
+            ("10 taught lessons", ("robot-teaching-dp", "10 lessons"), 10, 28)]
+    rows2 = [("lambda = 0", ("robot-lambda-dp", "lambda=0"), 280, None),
+             ("lambda = 0.3", ("robot-lambda-dp", "lambda=0.3"), 140, 2.0),
+             ("lambda = 0.7", ("robot-lambda-dp", "lambda=0.7"), 65, 4.3)]
+    for title, level, table in (("Speedup from teaching (DP, lambda = 0.7, trials to reach 2.5)", 2.5, rows),
+                                ("Speedup from lambda (DP, 10 lessons, trials to reach 5)", 5.0, rows2)):
+        if not all(key in curves for _, key, _, _ in table):
+            continue
+        out += [f"### {title} (thesis 5.6)", "", "| | trials (ours) | speedup (ours) | trials (thesis) | "
+                "speedup (thesis) |", "|---|---|---|---|---|"]
+        base = None
+        for label, key, t_trials, t_speed in table:
+            xs, ys, _ = curves[key]
+            n = first_reaching(list(xs), list(ys), level)
+            if base is None:
+                base = n
+                sp = None
+            else:
+                sp = (base / n) if (base and n) else None
+            out.append(f"| {label} | {_fmt(n) if n is not None else 'not reached'} | {_fmt(sp, 1)} | "
+                       f"{t_trials} | {_fmt(t_speed, 1)} |")
+        out.append("")
+    return out
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] == ["make-lessons"]:
+        for path in write_taught_lessons():
+            print(path)
+    else:
+        raise SystemExit("usage: python -m connrl.experiments.robot make-lessons")

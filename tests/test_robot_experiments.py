@@ -1,0 +1,81 @@
+"""Ch. 5 experiments: specs, the run function's protocol and determinism, lesson regeneration, CLI smoke run."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from connrl import cli
+from connrl.experiments import robot
+from connrl.experiments.robot import EXPERIMENTS, ROBOT_PARAMS, first_reaching, make_taught_lessons, run_robot
+from connrl.replay import load_lessons
+
+TINY = {**ROBOT_PARAMS, "trials": 4, "test_every": 2, "test_tasks": 3, "lessons_per_trial": 3}
+
+
+def test_specs_cover_chapter_5():
+    names = {s.name for s in EXPERIMENTS}
+    assert names == {"robot-teaching-dp", "robot-teaching-dk", "robot-teaching-wfl", "robot-lambda-dp",
+                     "robot-lambda-wfl", "robot-repairs-3", "robot-repairs-10", "robot-single-layer"}
+    for s in EXPERIMENTS:
+        params, runs = s.resolve("full")
+        assert runs == 7 and params["trials"] == 300 and params["test_every"] == 10 and params["test_tasks"] == 50
+    dp = next(s for s in EXPERIMENTS if s.name == "robot-teaching-dp")
+    assert {v.label: v.thesis.get("trials_to_2.5") for v in dp.variants} == {
+        "no teaching": 280, "3 lessons": 20, "10 lessons": 10}
+    lam = next(s for s in EXPERIMENTS if s.name == "robot-lambda-dp")
+    assert [v.thesis.get("trials_to_5") for v in lam.variants] == [280, 140, 65, None, None]
+    single = next(s for s in EXPERIMENTS if s.name == "robot-single-layer")
+    assert single.params["hidden_fraction"] == 0 and single.params["binary_low"] == 0.0
+    assert [v.params["lr"] for v in single.variants] == [0.04, 0.04, 0.03]  # 5.4.4
+
+
+def test_first_reaching():
+    assert first_reaching([0, 10, 20, 30], [0.0, 2.4, 2.6, 1.0], 2.5) == 20
+    assert first_reaching([0, 10], [0.0, 1.0], 2.5) is None
+
+
+def test_run_protocol_and_determinism():
+    a = run_robot(dict(TINY, lessons=3), np.random.default_rng(5))
+    b = run_robot(dict(TINY, lessons=3), np.random.default_rng(5))
+    assert a.curve_x == [0, 2, 4]  # a test before learning and after every test_every trials
+    assert a.curve_y == b.curve_y and a.metrics == b.metrics
+    assert all(-10.0 <= y <= 100.0 for y in a.curve_y)  # reinforcement per step is within the reward range
+    assert set(a.metrics) == {"trials_to_2.5", "trials_to_5", "final_performance", "mean_performance"}
+
+
+def test_wfl_single_layer_run():
+    r = run_robot(dict(TINY, task="WFL", lessons=2, hidden_fraction=0.0, momentum=0.0, binary_low=0.0, lr=0.03,
+                       paths=2), np.random.default_rng(0))
+    assert len(r.extra["paths"]) == 2 and len(r.extra["paths"][0]["poses"]) == ROBOT_PARAMS["max_steps"] + 1
+
+
+def test_lesson_files_are_regenerated_deterministically():
+    shipped = load_lessons(robot.lesson_path("DK"), env_id="connrl/Robot-DK-v0")
+    fresh = make_taught_lessons("DK", n=2, seed=0)
+    for s, f in zip(shipped[:2], fresh, strict=True):
+        np.testing.assert_allclose(s.inputs, f.inputs)
+        np.testing.assert_array_equal(s.actions, f.actions)
+    doc = json.loads(robot.lesson_path("WFL").read_text())
+    assert "scripted teacher" in doc["source"] and len(doc["lessons"]) == 5
+
+
+def test_cli_tiny_smoke_and_results_section(tmp_path):
+    assert cli.main(["run", "robot-teaching-dp", "--profile", "tiny", "--out", str(tmp_path), "--workers", "1",
+                     "--quiet"]) == 0
+    summary = json.loads((tmp_path / "robot-teaching-dp" / "summary.json").read_text())
+    assert summary["variants"]["10 lessons"]["quantities"]["trials_to_2.5"]["thesis"] == 10
+    md = robot.results_section(tmp_path)
+    assert "robot-teaching-dp" in md and "| 10 lessons |" in md
+    assert (tmp_path / "robot-teaching-dp" / "solution-paths.png").exists()
+
+
+def test_results_section_without_runs(tmp_path):
+    assert "No Ch. 5 results yet" in robot.results_section(tmp_path)
+
+
+def test_bad_task_is_rejected():
+    with pytest.raises(ValueError, match="task must be one of"):
+        run_robot(dict(TINY, task="CHG"), np.random.default_rng(0))
