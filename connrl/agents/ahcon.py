@@ -38,25 +38,37 @@ class AHCONConfig:
 class AHCON(LessonAgent):
     """Adaptive heuristic critic (Fig. 3.2) with optional backward replay (Fig. 5.1b) and teaching."""
 
-    def __init__(self, config: AHCONConfig, n_actions: int, rng: np.random.Generator):
+    def __init__(self, config: AHCONConfig, n_actions: int, rng: np.random.Generator, policy=None, planner=None):
         self.config = config
         self.n_actions = n_actions
         self.rng = rng
         self.v = OAON(config.v_net, 1, rng)
-        self.policy = OAON(config.policy_net, n_actions, rng)
+        # any object with values/update_error works as the policy net (Ch. 4's rotated global net, 4.2.4)
+        self.policy = policy if policy is not None else OAON(config.policy_net, n_actions, rng)
         self.explore = Exploration(config.temperature, config.stuck)
         self.book = LessonBook(config.replay)
         self.trial = 0
         self.learning = True
         self._x: np.ndarray | None = None
         self.last_probabilities: np.ndarray | None = None
+        # relaxation planning with an action model (AHCON-M, 3.6.1): connrl.agents.models.RelaxationPlanner
+        self.planner = planner
 
-
+    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
+        super().begin_trial(obs, info, trial=trial, learning=learning)
+        if self.planner is not None:
+            self.planner.begin_trial()
 
     def act(self, obs, info=None, *, greedy: bool = False) -> int:
-        x = self._x if self._x is not None else self.encode(obs)
+        if not self.learning or self._x is None:
+            # test trials never call observe(), so the input must come from obs, not the cached _x
+            self._x = self.encode(obs)
+        x = self._x
         t = 0.0 if greedy else self.explore.temperature(info)
-        a, self.last_probabilities = boltzmann_select(self.policy.values(x), t, self.rng)
+        merits = self.policy.values(x)
+        if self.planner is not None and self.learning and not greedy and self.planner.plan(self, x, merits, t):
+            merits = self.policy.values(x)  # plan before choosing (3.6.1)
+        a, self.last_probabilities = boltzmann_select(merits, t, self.rng)
         return a
 
     def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
@@ -68,11 +80,11 @@ class AHCON(LessonAgent):
                 target = min(target, self.config.target_clip)
             e = self.v.update(x, 0, target)  # step 5
             self.policy.update_error(x, action, target - e)  # step 6
+        if self.planner is not None:
+            self.planner.observe(x, action, reward, y, terminated)  # a learned model trains on-line (4.2.5)
         self.book.recorder.add(x, action, reward, y)
         self.book.ended = (bool(terminated), bool(truncated))
         self._x = y
-
-
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
         r = self.config.replay

@@ -41,7 +41,7 @@ class QCON(LessonAgent):
     """Connectionist Q-learning (Fig. 3.4), optionally with backward TD(lambda) replay and teaching."""
 
     def __init__(self, config: QCONConfig, n_actions: int, rng: np.random.Generator,
-                 q: QFunction | None = None):
+                 q: QFunction | None = None, planner=None):
         self.config = config
         self.n_actions = n_actions
         self.rng = rng
@@ -53,8 +53,13 @@ class QCON(LessonAgent):
         self._x: np.ndarray | None = None
         self._q_x: np.ndarray | None = None
         self.last_probabilities: np.ndarray | None = None
+        # relaxation planning with an action model (QCON-M, 3.6.2): connrl.agents.models.RelaxationPlanner
+        self.planner = planner
 
-
+    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
+        super().begin_trial(obs, info, trial=trial, learning=learning)
+        if self.planner is not None:
+            self.planner.begin_trial()
 
     def act(self, obs, info=None, *, greedy: bool = False) -> int:
         if not self.learning or self._x is None:
@@ -64,6 +69,9 @@ class QCON(LessonAgent):
         q = self.q.values(x)
         self._q_x = q
         t = 0.0 if greedy else self.explore.temperature(info)
+        if self.planner is not None and self.learning and not greedy and self.planner.plan(self, x, q, t):
+            q = self.q.values(x)  # plan before choosing (3.6.1), so the choice benefits from the look-ahead
+            self._q_x = q
         a, self.last_probabilities = boltzmann_select(q, t, self.rng)
         return a
 
@@ -75,11 +83,11 @@ class QCON(LessonAgent):
             if self.config.target_clip is not None:
                 target = min(target, self.config.target_clip)
             self.q.update(x, action, target)
+        if self.planner is not None:
+            self.planner.observe(x, action, reward, y, terminated)  # a learned model trains on-line (4.2.5)
         self.book.recorder.add(x, action, reward, y)
         self.book.ended = (bool(terminated), bool(truncated))
         self._x = y
-
-
 
     def replay_params(self, p_threshold: float) -> ReplayParams:
         r = self.config.replay

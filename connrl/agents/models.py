@@ -1,0 +1,291 @@
+"""Action models and relaxation planning: AHCON-M and QCON-M (thesis 3.6, 4.2.5; Figs. 3.5 and 3.6).
+
+An *action model* maps a state and an action to the next state and reinforcement. Planning here is Lin's
+*relaxation planning*: from the state actually visited, every *promising* action (probability of being
+chosen > 2%, 3.6.1) is simulated one step with the model and the networks are moved toward the one-step
+look-ahead values; nothing is planned when only one action is promising. Each simulated action is a
+"hypothetical action" (Fig. 4.5 counts them per step).
+
+* :func:`relaxation_q` — Fig. 3.6: ``U'_a = r + gamma max_k Q(y, k)``; Q(x, a) moves toward U'_a, a in S.
+* :func:`relaxation_ahc` — Fig. 3.5: ``E_a = r + gamma V(y)``; V(x) moves toward max_a E_a and the policy
+  merit of each a in S by ``E_a - mu`` with ``mu`` the probability-weighted mean of the E_a.
+* :class:`RelaxationPlanner` — when to plan (promising threshold, no planning in the first plays with a
+  learned model, 4.2.5) and bookkeeping of hypothetical actions; QCON/AHCON call it through their
+  ``planner`` option (before choosing an action, so the choice benefits from the look-ahead, 3.6.1).
+* :class:`PerfectSurvivalModel` — the "perfect" model of 4.2.5: the simulator itself, stepped from a copy of
+  the true state with its own random enemy moves.
+* :class:`LearnedSurvivalModel` — the learned model of 4.2.5: single-layer *reinforcement nets* on all 145
+  inputs and *enemy nets* on the enemy and obstacle maps that predict each enemy sensor after the move,
+  trained on-line from a bounded queue of experiences. As in the thesis, food, obstacle, energy and history
+  units are not learned ("quite easy to predict"): they come from the simulator.
+
+A model offers ``simulate(x, actions) -> [(y, r, terminal), ...]`` for the current state and, if it
+learns, ``learn(x, a, r, y, terminated)`` for each real experience.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from connrl.exploration import boltzmann_probabilities
+
+# ------------------------------------------------------------------------------------ relaxation planning
+
+
+def _clip(v: float, clip: float | None) -> float:
+    return v if clip is None or v <= clip else clip
+
+
+def relaxation_q(q, x: np.ndarray, actions, outcomes, gamma: float, clip: float | None = None) -> np.ndarray:
+    """Fig. 3.6 steps 4-5 for the promising ``actions`` and their simulated ``outcomes`` [(y, r, terminal)].
+
+    Returns the targets ``U'_a`` (truncated at ``clip``, 4.2.4) after moving Q(x, a) toward each.
+    """
+    targets = np.empty(len(actions))
+    for i, (y, r, terminal) in enumerate(outcomes):
+        u = 0.0 if terminal else float(q.values(y).max())
+        targets[i] = _clip(r + gamma * u, clip)
+    for a, target in zip(actions, targets, strict=True):
+        q.update(x, int(a), float(target))
+    return targets
+
+
+def relaxation_ahc(v_net, policy_net, x: np.ndarray, probabilities: np.ndarray, actions, outcomes,
+                   gamma: float, clip: float | None = None) -> tuple[np.ndarray, float]:
+    """Fig. 3.5 steps 4-7. ``probabilities`` are the policy's Boltzmann probabilities of all actions.
+
+    ``mu`` weights the E_a by the probabilities renormalised over the promising set S (the figure's sum
+    runs over S only; renormalising keeps mu a mean when some mass lies outside S). Returns (E, mu).
+    """
+    e = np.empty(len(actions))
+    for i, (y, r, terminal) in enumerate(outcomes):
+        u = 0.0 if terminal else float(v_net.value(y, 0))
+        e[i] = _clip(r + gamma * u, clip)
+    p = np.asarray(probabilities, dtype=np.float64)[np.asarray(actions, dtype=np.int64)]
+    mu = float(np.dot(p, e) / p.sum())
+    v_net.update(x, 0, float(e.max()))  # step 6
+    for a, e_a in zip(actions, e, strict=True):  # step 7
+        policy_net.update_error(x, int(a), float(e_a - mu))
+    return e, mu
+
+
+@dataclass(frozen=True)
+class PlanningConfig:
+    """When relaxation planning happens (3.6.1, 4.2.5, 4.2.7)."""
+
+    promising: float = 0.02  # actions with P(a) > this are promising (3.6.1, 4.2.7: 2%)
+    start_trial: int = 0  # no planning before this play (4.2.5: 10 with a learned model, 0 with the perfect one)
+
+
+class RelaxationPlanner:
+    """Relaxation planning for QCON (``agent.q``) or AHCON (``agent.v``, ``agent.policy``) with a model.
+
+    Counts hypothetical actions: ``hypothetical`` (this play) and ``steps`` (planning opportunities, i.e.
+    learning steps, this play); ``begin_trial`` resets them.
+    """
+
+    def __init__(self, model, config: PlanningConfig = PlanningConfig()):
+        self.model = model
+        self.config = config
+        self.hypothetical = 0
+        self.steps = 0
+
+    def begin_trial(self) -> None:
+        self.hypothetical = 0
+        self.steps = 0
+
+    def plan(self, agent, x: np.ndarray, merits: np.ndarray, temperature: float) -> bool:
+        """Plan from the current state before the agent chooses; True when the networks were changed."""
+        self.steps += 1
+        if agent.trial < self.config.start_trial or temperature <= 0:
+            return False
+        p = boltzmann_probabilities(merits, temperature)
+        actions = np.flatnonzero(p > self.config.promising)
+        if len(actions) < 2:  # the policy is decisive: no planning (Figs. 3.5/3.6 step 3)
+            return False
+        outcomes = self.model.simulate(x, actions)
+        self.hypothetical += len(actions)
+        c = agent.config
+        if hasattr(agent, "q"):
+            relaxation_q(agent.q, x, actions, outcomes, c.gamma, c.target_clip)
+        else:
+            relaxation_ahc(agent.v, agent.policy, x, p, actions, outcomes, c.gamma, c.target_clip)
+        return True
+
+    def observe(self, x, a, r, y, terminated) -> None:
+        learn = getattr(self.model, "learn", None)
+        if learn is not None:
+            learn(x, a, r, y, terminated)
+
+
+# ------------------------------------------------------------------------------------------ survival models
+
+
+class PerfectSurvivalModel:
+    """The "perfect" model of 4.2.5: a scratch copy of the simulator set to the live env's true state.
+
+    Enemy moves of a simulated step are drawn from the scratch env's own generator, so the model samples
+    the real outcome distribution without disturbing the live play's random stream.
+    """
+
+    def __init__(self, env, rng: np.random.Generator):
+        from connrl.envs.survival import SurvivalEnv
+
+        self.env = env
+        self.scratch = SurvivalEnv(action_representation=env.action_representation)
+        self.scratch.reset(seed=int(rng.integers(2**31 - 1)))
+
+    def _step_from(self, state: dict, a: int):
+        self.scratch.set_state(state)
+        y, r, terminated, _, info = self.scratch.step(int(a))
+        return y, r, terminated, info
+
+    def simulate(self, x: np.ndarray, actions) -> list[tuple[np.ndarray, float, bool]]:
+        state = self.env.get_state()
+        out = []
+        for a in actions:
+            y, r, terminated, _ = self._step_from(state, a)
+            out.append((y, float(r), bool(terminated)))
+        return out
+
+
+@numba.njit(cache=True, fastmath=True)
+def _single_layer(w, x, lo, hi, out):
+    """out[k] = f(w[k] . [x[lo:hi], 1]) with the symmetric sigmoid f (range +-0.5)."""
+    n = hi - lo
+    for k in range(w.shape[0]):
+        s = w[k, n]
+        for i in range(n):
+            s += w[k, i] * x[lo + i]
+        out[k] = 1.0 / (1.0 + math.exp(-s)) - 0.5
+
+
+@numba.njit(cache=True, fastmath=True)
+def _single_layer_train(w, d, x, lo, hi, target, scale, lr, momentum, out):
+    """One momentum step of every unit toward target/scale (delta rule through f); out gets f before."""
+    n = hi - lo
+    _single_layer(w, x, lo, hi, out)
+    for k in range(w.shape[0]):
+        delta = (target[k] / scale - out[k]) * (0.25 - out[k] * out[k])
+        for i in range(n):
+            s = lr * delta * x[lo + i] + momentum * d[k, i]
+            d[k, i] = s
+            w[k, i] += s
+        s = lr * delta + momentum * d[k, n]
+        d[k, n] = s
+        w[k, n] += s
+
+
+@dataclass(frozen=True)
+class LearnedModelConfig:
+    """The learned survival model (4.2.5); the thesis gives its structure, not these constants (R)."""
+
+    lr: float = 0.1  # learning rate of the single-layer nets (R)
+    momentum: float = 0.9  # as every net of Ch. 4 (4.3.1)
+    init_range: float = 0.1  # as every net of Ch. 4 (4.3.1)
+    queue: int = 2000  # experiences kept for repeated presentation (4.2.5: "a queue of limited length") (R)
+    replays: int = 3  # queued experiences presented after each new one (R)
+    death_threshold: float = -0.5  # a predicted reinforcement below this ends the simulated play (R)
+
+
+class LearnedSurvivalModel:
+    """The learned action model of 4.2.5 for the survival task.
+
+    * reinforcement nets: single layer, all 145 inputs -> r (range +-1);
+    * enemy nets: single layer, the enemy + obstacle maps (72 inputs) -> each of the 32 enemy sensors
+      after the move (range +-0.5, the observation's own units); the most likely outcome (sign) is used.
+
+    Under the global representation one reinforcement net and one enemy net (for "north") serve all four
+    actions through the input rotations of 4.2.4; under the local one there is one of each per action.
+    Food, obstacle, energy and history units of the predicted state come from the simulator stepped from
+    the true state, as in the thesis, which did not make the agents learn them.
+    """
+
+    ENEMY, MAPS = slice(52, 84), (52, 124)  # enemy units; enemy + obstacle maps (inputs of the enemy nets)
+
+    def __init__(self, env, rng: np.random.Generator, config: LearnedModelConfig = LearnedModelConfig()):
+        from connrl.envs.survival import ACTION_ROTATION, N_INPUTS, ROTATION_PERMUTATIONS
+
+        self.config = config
+        self.rng = rng
+        self.sim = PerfectSurvivalModel(env, rng)
+        self.global_ = env.action_representation == "global"
+        if self.global_:
+            self.perms = np.stack([ROTATION_PERMUTATIONS[ACTION_ROTATION[a]] for a in range(4)])
+        else:
+            self.perms = np.tile(np.arange(N_INPUTS), (4, 1))
+        n_models = 1 if self.global_ else 4
+        r = config.init_range
+        self.w_r = rng.uniform(-r, r, (n_models, 1, N_INPUTS + 1))
+        self.w_e = rng.uniform(-r, r, (n_models, 32, 72 + 1))
+        self.d_r, self.d_e = np.zeros_like(self.w_r), np.zeros_like(self.w_e)
+        self._q = np.zeros((config.queue, 2 * N_INPUTS + 2))  # rows: x, y, a, r
+        self._n = 0
+        self._out_r, self._out_e = np.empty(1), np.empty(32)
+        self.errors = {"reward_abs": 0.0, "enemy_bits": 0.0, "n": 0}  # prediction errors before training
+
+    def _net(self, a: int) -> int:
+        return 0 if self.global_ else int(a)
+
+    def predict(self, x: np.ndarray, a: int) -> tuple[float, np.ndarray]:
+        """(predicted r, predicted enemy units of y) for action a from input x."""
+        xr = np.ascontiguousarray(x[self.perms[a]])
+        m = self._net(a)
+        _single_layer(self.w_r[m], xr, 0, xr.shape[0], self._out_r)
+        _single_layer(self.w_e[m], xr, self.MAPS[0], self.MAPS[1], self._out_e)
+        enemy = np.empty(32)
+        # the nets work in the rotated frame; unit i of the rotated map is unit perms[a][52 + i] of y
+        enemy[self.perms[a][52:84] - 52] = np.where(self._out_e > 0, 0.5, -0.5)
+        return 2.0 * float(self._out_r[0]), enemy
+
+    def simulate(self, x: np.ndarray, actions) -> list[tuple[np.ndarray, float, bool]]:
+        state = self.sim.env.get_state()
+        out = []
+        for a in actions:
+            y, _, _, info = self.sim._step_from(state, a)
+            r, enemy = self.predict(x, int(a))
+            y = y.copy()
+            y[self.ENEMY] = enemy
+            terminal = r < self.config.death_threshold or info["outcome"] == "all_food"
+            out.append((y, r, bool(terminal)))
+        return out
+
+    def _train(self, row: np.ndarray) -> None:
+        n_in = (row.shape[0] - 2) // 2
+        x, y, a, r = row[:n_in], row[n_in:2 * n_in], int(row[-2]), row[-1]
+        perm = self.perms[a]
+        xr, yr = np.ascontiguousarray(x[perm]), y[perm]
+        m, c = self._net(a), self.config
+        _single_layer_train(self.w_r[m], self.d_r[m], xr, 0, n_in, np.array([r]), 2.0, c.lr, c.momentum,
+                            self._out_r)
+        _single_layer_train(self.w_e[m], self.d_e[m], xr, self.MAPS[0], self.MAPS[1],
+                            np.ascontiguousarray(yr[52:84]), 1.0, c.lr, c.momentum, self._out_e)
+
+    def learn(self, x, a, r, y, terminated) -> None:
+        """Present a real experience, then ``replays`` random ones from the queue (4.2.5)."""
+        n_in = x.shape[0]
+        row = np.empty(2 * n_in + 2)
+        row[:n_in], row[n_in:2 * n_in], row[-2], row[-1] = x, y, a, r
+        # prediction error before learning (the model's accuracy over time, 4.4.3)
+        pr, enemy = self.predict(x, int(a))
+        self.errors["reward_abs"] += abs(pr - r)
+        self.errors["enemy_bits"] += float(np.mean(enemy != y[self.ENEMY]))
+        self.errors["n"] += 1
+        self._train(row)
+        cap = self._q.shape[0]
+        self._q[self._n % cap] = row
+        self._n += 1
+        size = min(self._n, cap)
+        for i in self.rng.integers(size, size=self.config.replays):
+            self._train(self._q[i])
+
+    def pop_errors(self) -> dict[str, float]:
+        """Mean prediction errors since the last call (absolute reward error, fraction of wrong enemy bits)."""
+        n = max(self.errors["n"], 1)
+        out = {"reward_abs": self.errors["reward_abs"] / n, "enemy_bits": self.errors["enemy_bits"] / n}
+        self.errors = {"reward_abs": 0.0, "enemy_bits": 0.0, "n": 0}
+        return out
