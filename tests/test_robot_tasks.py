@@ -22,6 +22,7 @@ from connrl.envs.robot_tasks import (
     TASKS,
     RobotTaskEnv,
     encode_sonar,
+    sample_dp_start,
     side_alignment,
     side_clearance,
     teach,
@@ -155,13 +156,38 @@ def test_dk_other_contacts_are_collisions():
     assert (r, term, info["success"], info["collision_side"]) == (-10.0, False, False, "right")
 
 
-def test_dp_success_after_clearing_the_door():
+def test_dp_success_when_the_centre_gets_into_another_room():
     env = exact("DP")
     env.reset(seed=0, options={"start": (114, 330, 270)})  # above door A, facing it
+    out = [env.step(MOVE_FORWARD) for _ in range(3)]  # y: 318, 306 (still in C), 294 (in A)
+    assert [o[1] for o in out] == [0, 0, 100]
+    assert [o[2] for o in out] == [False, False, True]
+    assert out[-1][4]["room"] == "A" and out[-1][4]["pose"][1] == pytest.approx(294)
+    assert out[1][4]["room"] == "C" and not out[1][4]["success"]  # body in the doorway, centre not through
+    # Backing through counts too: it is the room that matters (6.5), not the heading.
+    env.reset(seed=0, options={"start": (246, 306, 90)})  # in C just above door B, facing away
+    _, r, term, _, info = env.step(MOVE_BACKWARD)
+    assert (r, term, info["room"]) == (100.0, True, "B")
+    # The stricter variant asks for the centre pass_depth in from every doorway segment.
+    env = exact("DP", pass_depth=24.0)
+    env.reset(seed=0, options={"start": (114, 330, 270)})
     out = [env.step(MOVE_FORWARD) for _ in range(5)]
     assert [o[1] for o in out] == [0, 0, 0, 0, 100]
-    assert [o[2] for o in out] == [False] * 4 + [True]
-    assert out[-1][4]["room"] == "A" and out[-1][4]["pose"][1] == pytest.approx(270)
+
+
+def test_dp_jamb_collision():
+    env = exact("DP")
+    # 8 in off door A's axis (6 in of slack per side): the body touches the west jamb (96, 300) when the
+    # centre is at y = 300 + sqrt(12^2 - 10^2) = 306.6, so the second move south (318 -> 306) is cancelled,
+    # the contact 56.4 deg right of the heading.
+    env.reset(seed=0, options={"start": (106, 330, 270)})
+    assert env.step(MOVE_FORWARD)[1] == 0
+    _, r, term, _, info = env.step(MOVE_FORWARD)
+    assert (r, term, info["collision_side"], info["room"]) == (-10.0, False, "right", "C")
+    assert info["pose"][1] == pytest.approx(318)
+    # 5 in off the axis the body clears the jamb by 1 in and the robot gets through.
+    env.reset(seed=0, options={"start": (109, 330, 270)})
+    assert [env.step(MOVE_FORWARD)[1] for _ in range(3)] == [0, 0, 100]
 
 
 def test_truncation_after_max_steps():
@@ -183,9 +209,25 @@ def test_start_generators():
         assert L.is_free(x, y) and math.hypot(x - 9, y - 9) <= 96 and L.light_visible(x, y) and 0 <= h < 360
         x, y, h = dp.sample_task(rng)
         door = min(abs(x - 114), abs(x - 246))
-        assert L.is_free(x, y) and door <= 48 and 24 <= abs(y - 300) <= 72
+        assert L.is_free(x, y) and door <= 18 and 24 <= abs(y - 300) <= 72 and 0 <= h < 360  # in front
         x, y, h = wf.sample_task(rng)
         assert L.is_free(x, y) and L.room_at(x, y) in "ABC"
+
+
+def test_dp_start_region_arguments():
+    rng = np.random.default_rng(1)
+    L = Layout.load("default")
+    pts = [sample_dp_start(rng, L, offset=40.0, depth=(30.0, 36.0)) for _ in range(200)]
+    lat = [min(abs(x - 114), abs(x - 246)) for x, _, _ in pts]
+    assert max(lat) <= 40 and max(lat) > 18 and all(30 <= abs(y - 300) <= 36 for _, y, _ in pts)
+    rooms = {L.room_at(x, y) for x, y, _ in pts}
+    assert rooms == {"A", "B", "C"}  # both doors, both sides
+    with pytest.raises(ValueError, match="dp_offset"):
+        sample_dp_start(rng, L, offset=-1.0)
+    with pytest.raises(ValueError, match="dp_depth"):
+        sample_dp_start(rng, L, depth=(72.0, 24.0))
+    with pytest.raises(ValueError, match="pass_depth"):
+        RobotTaskEnv("DP", pass_depth=-1.0)
 
 
 def test_fixed_test_tasks_and_seed_reproducibility():

@@ -33,9 +33,10 @@ Rewards (5.3.1):
       charger box with the contact point within ``dock_tolerance`` (30 deg) of the heading, i.e. the
       robot drives head-on into the charger ("position itself ... accurately and then drive to bump
       into it", 5.4.1). Any other contact, including a sideways bump into the charger, is a collision.
-    - DP: +100 on passing a door, -10 on a collision, 0 otherwise. Passing = the centre is in a room
-      other than the start room and at least ``pass_depth`` (24 in = one body width) from every doorway
-      segment, i.e. the whole body is through and clear of the door.
+    - DP: +100 on passing a door, -10 on a collision, 0 otherwise. Passing = "getting into another
+      room" (6.5): the centre is in a room other than the start room. (The only way there is through a
+      doorway, so the body is then at least half through it, past the jambs' narrowest point.) With
+      ``pass_depth`` > 0 the centre must also be that far from every doorway segment.
     - WFL / WFR, first matching rule: -10 collision; -3 the action was "move backward"; 0 the clearance
       on either side is under 14 in; 0 the clearance on the followed side is over 32 in; 0 the action
       was a turn (only forward moves earn the 8..10, 5.3.1); else 10 / 9 / 8 when the body is parallel
@@ -44,8 +45,9 @@ Rewards (5.3.1):
 Starting State (5.4; overridable with ``start_sampler`` or ``reset(options={"start": (x, y, heading)})``):
     uniformly random heading; position uniform over free space (at least 1 in from any surface)
     - DK: in the charger's room within ``dk_radius`` (96 in) of the light, with the light in sight;
-    - DP: a random door, a random one of its two rooms, within +-48 in of the door centre along the
-      wall and 24..72 in from the wall;
+    - DP: "near a door" (5.4), "in front of a door" (5.4.1, 6.5): a random door, a random one of its two
+      rooms, the centre within the doorway's span along the wall (+-``dp_offset``, default half the door
+      width, +-18 in for the 36-in doors) and 24..72 in (``dp_depth``) from the wall;
     - WFL / WFR: anywhere in the three rooms.
 
 Episode End:
@@ -56,8 +58,8 @@ Arguments:
     task ("DK" | "DP" | "WFL" | "WFR"), layout (name or Layout, default "default"),
     binary_low (-0.5), max_steps (30), render_mode (None | "rgb_array" | "human"), noise (True; sets
     sensor_noise and control_noise unless given), sensor_noise, control_noise, start_sampler
-    (callable(rng, layout) -> (x, y, heading)), dk_radius (96), dp_offset (48), dp_depth ((24, 72)),
-    dock_tolerance (30 deg), pass_depth (24 in), render_rays (False).
+    (callable(rng, layout) -> (x, y, heading)), dk_radius (96), dp_offset (None = half the door width),
+    dp_depth ((24, 72)), dock_tolerance (30 deg), pass_depth (0 in), render_rays (False).
 
 info:
     "pose" (x, y, heading deg) -- the true pose, which the agent's stuck detector dead-reckons with
@@ -68,6 +70,18 @@ Differences from the thesis:
     - The success conditions of DK and DP, the parallelism measure and its 8/9/10 thresholds, the side
       rays used for clearance, and the start regions are our reconstructions: the thesis states the
       reinforcement values but not these details.
+    - DP success is the centre entering another room, read from "the door passing behavior has a
+      termination condition (i.e., getting into another room)" (6.5). An earlier version asked for the
+      whole body 24 in past the doorway (two more moves after the jambs are cleared).
+    - DP start region: the thesis says only "near a door" (5.2.2, 5.4), and wants the skill used where the
+      robot is "in front of a door" (6.5; "just in front of a door way", 5.4.1; Ch. 6 uses DP between the
+      subgoals on either side of a door). We read "in front of" as the centre within the doorway's span
+      along the wall (+-18 in) and 24..72 in out, any heading. An earlier version allowed +-48 in along
+      the wall: there the robot starts beside the door, behind a jamb, and must first manoeuvre onto the
+      door's axis, since the 36-in door (SPEC 5) leaves only +-6 in of slack for the 24-in body. Measured
+      (2000 starts): a uniformly random policy passes in 0.3% of trials with both old choices, 0.9% with
+      the new success rule, 1.6% now; turning to the door and driving at it passes from 30% of the old
+      starts and 79% of the new ones (500 starts).
     - The WF reinforcement reads the noise-free ranges so the reward depends on the true state; the
       inputs (including the parallelism and clearance units) use the noisy sonar, as the robot sees it.
     - The two parallelism units always come in (left, right) order for both WFL and WFR.
@@ -243,19 +257,25 @@ def sample_dk_start(rng: np.random.Generator, layout: Layout, radius: float = 96
     return (x, y, _uniform_heading(rng))
 
 
-def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float = 48.0,
+def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float | None = None,
                     depth: tuple[float, float] = (24.0, 72.0)):
-    """Near a door: random door and side, +-offset along the wall, depth[0]..depth[1] from it."""
+    """In front of a door: random door and side, centre +-offset along the wall from the door centre
+    (None: half the door's width, i.e. within the opening's span), depth[0]..depth[1] from the wall."""
     doors = list(layout.doors.values())
     if not doors:
         raise ValueError(f"layout {layout.name!r} has no doors; DP needs at least one")
+    if offset is not None and not offset >= 0:
+        raise ValueError(f"dp_offset must be None (half the door width) or >= 0 inches, got {offset!r}")
+    if not 0 <= depth[0] <= depth[1]:
+        raise ValueError(f"dp_depth must be (min, max) inches with 0 <= min <= max, got {depth!r}")
 
     def sample():
         d = doors[int(rng.integers(len(doors)))]
         x0, y0, x1, y1 = d.segment
         u = np.array([x1 - x0, y1 - y0]) / d.width
         n = np.array([-u[1], u[0]]) * (1.0 if rng.random() < 0.5 else -1.0)
-        p = d.center + u * rng.uniform(-offset, offset) + n * rng.uniform(*depth)
+        half = d.width / 2.0 if offset is None else offset
+        p = d.center + u * rng.uniform(-half, half) + n * rng.uniform(*depth)
         return (float(p[0]), float(p[1]))
 
     x, y = _rejection(rng, sample, lambda p: layout.is_free(*p), "DP")
@@ -283,9 +303,9 @@ class RobotTaskEnv(gym.Env):
                  max_steps: int = 30, render_mode: str | None = None, noise: bool = True,
                  sensor_noise: bool | None = None, control_noise: bool | None = None,
                  start_sampler: Callable[[np.random.Generator, Layout], tuple] | None = None,
-                 dk_radius: float = 96.0, dp_offset: float = 48.0,
+                 dk_radius: float = 96.0, dp_offset: float | None = None,
                  dp_depth: tuple[float, float] = (24.0, 72.0),
-                 dock_tolerance: float = 30.0, pass_depth: float = 24.0, render_rays: bool = False):
+                 dock_tolerance: float = 30.0, pass_depth: float = 0.0, render_rays: bool = False):
         if task not in TASKS:
             raise ValueError(f"task must be one of {TASKS}, got {task!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -304,9 +324,12 @@ class RobotTaskEnv(gym.Env):
         self.render_mode = render_mode
         self.render_rays = bool(render_rays)
         self.dock_tolerance = float(dock_tolerance)
+        if not pass_depth >= 0:
+            raise ValueError(f"pass_depth must be >= 0 inches, got {pass_depth!r}")
         self.pass_depth = float(pass_depth)
         self._start_sampler = start_sampler
-        self._dk_radius, self._dp_offset, self._dp_depth = float(dk_radius), float(dp_offset), tuple(dp_depth)
+        self._dk_radius, self._dp_depth = float(dk_radius), tuple(float(v) for v in dp_depth)
+        self._dp_offset = None if dp_offset is None else float(dp_offset)
         sn = noise if sensor_noise is None else sensor_noise
         cn = noise if control_noise is None else control_noise
         self.sim = RobotSim(self.layout, np.random.default_rng(), sensor_noise=sn, control_noise=cn)
@@ -424,6 +447,8 @@ class RobotTaskEnv(gym.Env):
     def _passed_door(self, room) -> bool:
         if room is None or room == self._start_room:
             return False
+        if self.pass_depth <= 0.0:
+            return True  # "getting into another room" (6.5)
         x, y = self.sim.x, self.sim.y
         for d in self.layout.doors.values():
             x0, y0, x1, y1 = d.segment
