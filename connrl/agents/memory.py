@@ -1,0 +1,357 @@
+"""Three memory architectures for hidden-state tasks (thesis Ch. 7, Fig. 7.1): window-Q, recurrent-Q and
+recurrent-model. All follow the agent protocol of ``connrl.agents.base`` and learn a Q-function.
+
+- **Window-Q** (7.3, Fig. 7.1a): QCON whose input is the current sensation, the N latest sensations and the
+  N latest actions (a tapped delay line). Lessons store the windowed inputs, so replay is ordinary
+  incremental TD(lambda) replay (Fig. 5.1a).
+- **Recurrent-Q** (7.3, Fig. 7.1b): a recurrent OAON Q-net (``connrl.nets.recurrent``). Lessons store raw
+  sensations; a lesson is replayed in *batch mode* (7.5): the Q-values of the whole trial are computed
+  from a zero context with the weights as they are, the TD(lambda) returns are computed backward
+  (``connrl.replay.lambda_returns``, lambda cut at non-policy actions), and one BPTT step is made on the
+  trial with the non-policy steps weighted 0 (not replayed, 3.5.1).
+- **Recurrent-model** (7.3, Fig. 7.1c): a recurrent OAON *action model* predicts the next sensation and the
+  payoff; its context units, together with the current sensation, are the input of a feed-forward OAON
+  Q-net. The model is trained in batch mode (BPTT) on lessons drawn from *all* past experience (7.5 fn. 2);
+  the Q-net by incremental replay of the latest lessons. Lessons store raw sensations and the contexts are
+  recomputed by the current model when a lesson is replayed, because the model's history features change
+  as it learns (the instability 7.5.2 describes).
+
+Context units are reset to 0 at the start of every trial, learning and test alike (7.4). Every agent's
+``act`` takes ``force=a`` to execute a given action instead of its choice while updating its memory as if it
+had chosen it: the interruption of the robustness probe of 7.5.1.
+
+On-line learning: the thesis says the recurrent nets are trained in batch mode "to avoid possible
+instability" (7.5); recurrent-Q therefore learns only by replay after each trial. Window-Q and the
+recurrent-model's feed-forward Q-net also learn on-line from each step (Fig. 3.4) when ``online`` is set.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
+from connrl.agents.qcon import QCON, QCONConfig
+from connrl.exploration import TemperatureSchedule, boltzmann_probabilities, boltzmann_select
+from connrl.nets import OAON, NetConfig
+from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
+from connrl.replay import Lesson, ReplayParams, lambda_returns, replay_q
+
+ON, OFF = 0.5, -0.5  # binary input encoding (5.3.2)
+
+
+def _select(agent, merits: np.ndarray, info, greedy: bool, force: int | None) -> int:
+    """Boltzmann choice (3.4); ``force`` overrides the choice (robustness probe) after the same draw."""
+    t = 0.0 if greedy else agent.explore.temperature(info)
+    a, agent.last_probabilities = boltzmann_select(merits, t, agent.rng)
+    if force is not None:
+        if not 0 <= int(force) < agent.n_actions:
+            raise ValueError(f"force must be an action in [0, {agent.n_actions}), got {force!r}")
+        a = int(force)
+    return a
+
+
+def _raw(obs) -> np.ndarray:
+    return np.asarray(obs, dtype=np.float64).ravel()
+
+
+# ------------------------------------------------------------------------------------------- window-Q
+
+def window_input_size(n_sensation: int, n_actions: int, window: int) -> int:
+    """Input units of window-Q: current sensation + N sensations + N one-hot actions (7.3)."""
+    return n_sensation * (window + 1) + n_actions * window
+
+
+class SensationWindow:
+    """The N latest sensations and actions (7.3), newest first.
+
+    ``encode(s)`` is ``[s, s_{t-1}, .., s_{t-N}, a_{t-1}, .., a_{t-N}]``; an action is one-hot in +-0.5
+    (5.3.2). Slots before the start of the trial hold 0 (neither on nor off).
+    """
+
+    def __init__(self, n_sensation: int, n_actions: int, window: int):
+        if window < 1:
+            raise ValueError(f"window size N must be >= 1 (Table B.1: 5 for cups, 1 for the pole), got {window}")
+        self.n_sensation, self.n_actions, self.window = n_sensation, n_actions, window
+        self.sensations = np.zeros((window, n_sensation))
+        self.actions = np.zeros((window, n_actions))
+
+    def reset(self) -> None:
+        self.sensations[:] = 0.0
+        self.actions[:] = 0.0
+
+    def push(self, sensation: np.ndarray, action: int) -> None:
+        """Shift in the sensation just left and the action taken there."""
+        self.sensations[1:] = self.sensations[:-1]
+        self.actions[1:] = self.actions[:-1]
+        self.sensations[0] = sensation
+        self.actions[0] = OFF
+        self.actions[0, action] = ON
+
+    def encode(self, sensation: np.ndarray) -> np.ndarray:
+        return np.concatenate([sensation, self.sensations.ravel(), self.actions.ravel()])
+
+
+class WindowQ(QCON):
+    """Window-Q (7.3, Fig. 7.1a): QCON on the current sensation plus the N latest sensations and actions.
+
+    ``config.net.n_inputs`` must be ``window_input_size(n_sensation, n_actions, window)``.
+    """
+
+    def __init__(self, config: QCONConfig, n_actions: int, rng: np.random.Generator, *, n_sensation: int,
+                 window: int):
+        expected = window_input_size(n_sensation, n_actions, window)
+        if config.net.n_inputs != expected:
+            raise ValueError(f"window-Q with {n_sensation} sensation bits, {n_actions} actions and N={window} "
+                             f"needs net.n_inputs={expected}, got {config.net.n_inputs}")
+        super().__init__(config, n_actions, rng)
+        self.memory = SensationWindow(n_sensation, n_actions, window)
+        self._last_obs: np.ndarray | None = None
+        self._last_action: int | None = None
+
+    def encode(self, obs) -> np.ndarray:
+        return self.memory.encode(_raw(obs))
+
+    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
+        self.memory.reset()
+        self._last_obs, self._last_action = _raw(obs), None
+        super().begin_trial(obs, info, trial=trial, learning=learning)
+
+    def act(self, obs, info=None, *, greedy: bool = False, force: int | None = None) -> int:
+        if not self.learning:  # no observe() in tests: shift the window here
+            if self._last_action is not None:
+                self.memory.push(self._last_obs, self._last_action)
+            self._x = self.encode(obs)
+        q = self.q.values(self._x)
+        self._q_x = q
+        a = _select(self, q, info, greedy, force)
+        self._last_obs, self._last_action = _raw(obs), a
+        return a
+
+    def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
+        self.memory.push(self._last_obs, int(action))
+        self._last_action = None  # already in the window
+        super().observe(action, reward, next_obs, terminated, truncated, info)  # encodes next_obs
+
+
+# ----------------------------------------------------------------------------------------- recurrent-Q
+
+def recurrent_q_targets(values: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool,
+                        params: ReplayParams) -> tuple[np.ndarray, np.ndarray]:
+    """Batch-mode TD(lambda) targets of one lesson for a recurrent Q-net (Fig. 5.1a in batch mode, 7.5).
+
+    ``values`` (n+1, A) are the Q-values along the lesson (from a zero context, weights before the
+    update). Returns ``(targets (n,), weights (n,))``: weight 0 marks a non-policy action (P(a) < P_l
+    under the Boltzmann policy at ``params.temperature``), which is not replayed and cuts lambda for the
+    step before it (lambda is also 0 at the last step). Pure.
+    """
+    values = np.asarray(values, dtype=np.float64)
+    n = len(actions)
+    if values.shape[0] != n + 1:
+        raise ValueError(f"values must have n+1={n + 1} rows for a lesson of {n} steps, got {values.shape}")
+    if params.p_threshold > 0:
+        policy = np.array([boltzmann_probabilities(values[t], params.temperature)[actions[t]]
+                           >= params.p_threshold for t in range(n)])
+    else:
+        policy = np.ones(n, dtype=bool)
+    u = values[1:].max(axis=1)
+    if terminated:
+        u[-1] = 0.0
+    lams = np.where(np.append(policy[1:], False), params.lam, 0.0)
+    targets = lambda_returns(rewards, u, params.gamma, lams, params.clip)
+    return targets, policy.astype(np.float64)
+
+
+def replay_recurrent_q(net: RecurrentOAON, lesson: Lesson, params: ReplayParams) -> int:
+    """Replay one lesson into a recurrent Q-net: one batch BPTT step; returns the experiences used."""
+    acts_ext = np.append(lesson.actions, 0)  # the action at x_n does not affect the outputs at x_n
+    ys, _ = net.forward_sequence(lesson.inputs, acts_ext)
+    targets, weights = recurrent_q_targets(ys[:, :, 0], lesson.actions, lesson.rewards, lesson.terminated, params)
+    if weights.any():
+        net.train_sequence(lesson.inputs[:-1], lesson.actions, targets, weights)
+    return int(weights.sum())
+
+
+@dataclass(frozen=True)
+class RecurrentQConfig:
+    """Recurrent-Q (7.3, Fig. 7.1b); Table B.1 gives the thesis's values."""
+
+    net: RecurrentNetConfig  # recurrent Q-net, n_outputs = 1 (Table B.1: C_q, H_q, eta_q)
+    temperature: TemperatureSchedule  # Boltzmann temperature over trials (Table B.1: 1/T 5 -> 30)
+    gamma: float = 0.9  # discount factor (App. B)
+    lam: float = 0.8  # TD(lambda) recency factor (Table B.1)
+    replay: ReplayConfig = ReplayConfig(capacity=70, p_threshold=0.01, p_threshold_oldest=1e-5,
+                                        batch=True)  # latest 70 trials, P_l 0.01..0.00001 (7.5, App. B)
+    target_clip: float | None = None  # truncate Q targets above this value (4.2.4); unused in Ch. 7
+
+    def __post_init__(self):
+        if self.net.n_outputs != 1:
+            raise ValueError(f"a recurrent Q-net has one output per action net, got n_outputs={self.net.n_outputs}")
+        if not 0 <= self.gamma <= 1 or not 0 <= self.lam <= 1:
+            raise ValueError(f"gamma and lam must be in [0, 1], got {self.gamma}, {self.lam}")
+        if self.replay is None:
+            raise ValueError("recurrent-Q learns only by replay (7.5): replay must be set")
+
+
+class RecurrentQ(LessonAgent):
+    """Recurrent-Q: the Q-function is a recurrent OAON; learning is batch replay after each trial (7.5)."""
+
+    def __init__(self, config: RecurrentQConfig, n_actions: int, rng: np.random.Generator):
+        self.config = config
+        self.n_actions = n_actions
+        self.rng = rng
+        self.net = RecurrentOAON(config.net, n_actions, rng)
+        self.explore = Exploration(config.temperature, None)
+        self.book = LessonBook(config.replay)
+        self.trial, self.learning = 0, True
+        self._x: np.ndarray | None = None
+        self.last_probabilities: np.ndarray | None = None
+
+    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
+        self.net.reset()
+        super().begin_trial(obs, info, trial=trial, learning=learning)
+
+    def act(self, obs, info=None, *, greedy: bool = False, force: int | None = None) -> int:
+        self._x = _raw(obs)
+        q = self.net.values(self._x)
+        a = _select(self, q, info, greedy, force)
+        self.net.advance(a)  # the taken action's net makes the next context (7.4)
+        return a
+
+    def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
+        self.book.recorder.add(self._x, int(action), float(reward), _raw(next_obs))
+        self.book.ended = (bool(terminated), bool(truncated))
+
+    def replay_params(self, p_threshold: float) -> ReplayParams:
+        return ReplayParams(gamma=self.config.gamma, lam=self.config.lam, temperature=self.explore.base,
+                            p_threshold=p_threshold, batch=True, clip=self.config.target_clip)
+
+    def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
+        replay_recurrent_q(self.net, lesson, self.replay_params(p_threshold))
+
+
+# ------------------------------------------------------------------------------------- recurrent-model
+
+def model_targets(lesson: Lesson, payoff_scale: float) -> np.ndarray:
+    """(n, d+1) targets of the action model on a lesson: the next sensation and the scaled payoff (7.3)."""
+    return np.hstack([lesson.inputs[1:], payoff_scale * lesson.rewards[:, None]])
+
+
+@dataclass(frozen=True)
+class RecurrentModelConfig:
+    """Recurrent-model (7.3, Fig. 7.1c); Table B.1 gives the thesis's values."""
+
+    model: RecurrentNetConfig  # action model, n_outputs = sensation + 1 payoff (Table B.1: C_m, H_m, eta_m)
+    q_net: NetConfig  # feed-forward Q-nets on [sensation, context], n_inputs = sensation + C_m (H_q, eta_q)
+    temperature: TemperatureSchedule  # Boltzmann temperature over trials (Table B.1: 1/T 5 -> 30)
+    gamma: float = 0.9  # discount factor (App. B)
+    lam: float = 0.8  # TD(lambda) recency factor (Table B.1)
+    online: bool = True  # the feed-forward Q-net also learns from each step (Fig. 3.4)
+    replay: ReplayConfig = ReplayConfig(capacity=70, p_threshold=0.01,
+                                        p_threshold_oldest=1e-5)  # Q replay: latest 70 trials (7.5, App. B)
+    model_lessons_per_trial: int = 20  # model BPTT passes per trial, lessons from all past trials (7.5 fn. 2) (R)
+    payoff_scale: float = 0.5  # the model's payoff output is trained on payoff_scale * r (fits +-0.5 bits) (R)
+    target_clip: float | None = None  # truncate Q targets above this value (4.2.4); unused in Ch. 7
+
+    def __post_init__(self):
+        n_sens = self.model.n_outputs - 1
+        if n_sens < 1 or self.model.n_inputs != n_sens:
+            raise ValueError(f"the action model maps a sensation of {self.model.n_inputs} units to the next "
+                             f"sensation + payoff: n_outputs must be {self.model.n_inputs + 1}, "
+                             f"got {self.model.n_outputs}")
+        if self.q_net.n_inputs != self.model.n_inputs + self.model.n_context:
+            raise ValueError(f"the Q-net input is sensation + context: n_inputs must be "
+                             f"{self.model.n_inputs + self.model.n_context}, got {self.q_net.n_inputs}")
+        if not 0 <= self.gamma <= 1 or not 0 <= self.lam <= 1:
+            raise ValueError(f"gamma and lam must be in [0, 1], got {self.gamma}, {self.lam}")
+        if self.model_lessons_per_trial < 0:
+            raise ValueError(f"model_lessons_per_trial must be >= 0, got {self.model_lessons_per_trial}")
+
+
+class RecurrentModelQ(LessonAgent):
+    """Recurrent-model: a recurrent action model supplies history features to a feed-forward Q-net."""
+
+    def __init__(self, config: RecurrentModelConfig, n_actions: int, rng: np.random.Generator):
+        self.config = config
+        self.n_actions = n_actions
+        self.rng = rng
+        self.model = RecurrentOAON(config.model, n_actions, rng)
+        self.q = OAON(config.q_net, n_actions, rng)
+        self.explore = Exploration(config.temperature, None)
+        self.book = LessonBook(config.replay)  # raw lessons; the latest 70 are replayed into the Q-net
+        self.history: list[Lesson] = []  # all past lessons: the model trains on them (7.5 fn. 2)
+        self.freeze_model = False  # 7.5.2: "I fixed the model at some point of learning"
+        self.trial, self.learning = 0, True
+        self._x: np.ndarray | None = None
+        self._xq: np.ndarray | None = None
+        self.last_probabilities: np.ndarray | None = None
+
+    def q_input(self, sensation: np.ndarray) -> np.ndarray:
+        """Q-net input: the current sensation and the model's context units (Fig. 7.1c)."""
+        return np.concatenate([sensation, self.model.context])
+
+    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
+        self.model.reset()
+        super().begin_trial(obs, info, trial=trial, learning=learning)
+
+    def act(self, obs, info=None, *, greedy: bool = False, force: int | None = None) -> int:
+        self._x = _raw(obs)
+        self._xq = self.q_input(self._x)
+        q = self.q.values(self._xq)
+        a = _select(self, q, info, greedy, force)
+        self.model.step(self._x, a)  # the model is told the action and moves its context on
+        return a
+
+    def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
+        y = _raw(next_obs)
+        if self.config.online:
+            yq = self.q_input(y)
+            u = 0.0 if terminated else float(self.q.values(yq).max())
+            target = reward + self.config.gamma * u  # Fig. 3.4 step 4
+            if self.config.target_clip is not None:
+                target = min(target, self.config.target_clip)
+            self.q.update(self._xq, int(action), target)
+        self.book.recorder.add(self._x, int(action), float(reward), y)
+        self.book.ended = (bool(terminated), bool(truncated))
+
+    def end_trial(self) -> None:
+        if self.learning:
+            lesson = self.book.close_trial()
+            if lesson is not None:
+                self.history.append(lesson)
+        else:
+            self.book.recorder.finish(False, False)
+
+    def train_model(self) -> float:
+        """BPTT passes on lessons from all past trials: the latest, then uniform draws; returns mean loss."""
+        k = self.config.model_lessons_per_trial
+        if not self.history or k == 0 or self.freeze_model:
+            return 0.0
+        picks = [len(self.history) - 1] + list(self.rng.integers(0, len(self.history), k - 1))
+        loss = 0.0
+        for i in picks:
+            lesson = self.history[i]
+            loss += self.model.train_sequence(lesson.inputs[:-1], lesson.actions,
+                                              model_targets(lesson, self.config.payoff_scale))
+        return loss / len(picks)
+
+    def q_lesson(self, lesson: Lesson) -> Lesson:
+        """The lesson with Q-net inputs ``[x_t, c_t]``, contexts recomputed by the current model."""
+        _, cs = self.model.forward_sequence(lesson.inputs, np.append(lesson.actions, 0))
+        return Lesson(np.hstack([lesson.inputs, cs[:-1]]), lesson.actions, lesson.rewards,
+                      terminated=lesson.terminated, truncated=lesson.truncated, taught=lesson.taught)
+
+    def learn(self) -> None:
+        """After a trial: train the model, then replay the latest lessons into the Q-net (7.5)."""
+        if not self.learning:
+            return
+        self.train_model()
+        super().learn()
+
+    def replay_params(self, p_threshold: float) -> ReplayParams:
+        return ReplayParams(gamma=self.config.gamma, lam=self.config.lam, temperature=self.explore.base,
+                            p_threshold=p_threshold, batch=self.config.replay.batch, clip=self.config.target_clip)
+
+    def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
+        replay_q(self.q, self.q_lesson(lesson), self.replay_params(p_threshold))

@@ -1,0 +1,114 @@
+"""Ch. 7 experiments: the test measure, the robustness probe against scripted agents, Table 7.1's summary,
+Table B.1's parameters, determinism, and a tiny CLI smoke run of every experiment."""
+
+import json
+
+import numpy as np
+import pytest
+
+from connrl import cli
+from connrl.envs.cup import LEFT, PICK_UP, RIGHT, CupCollectionEnv
+from connrl.experiments import hidden_state as hs
+from connrl.experiments.registry import get_experiment
+
+
+class Oracle:
+    """Reads the true state from ``info`` (walk to the nearest remaining cup, pick it up)."""
+
+    n_actions = 3
+
+    def begin_trial(self, obs, info=None, *, trial=0, learning=True):
+        self.info = info
+
+    def act(self, obs, info=None, *, greedy=False, force=None):
+        pos, cups = info["position"], info["cups"]
+        target = min(cups, key=lambda c: abs(c - pos))
+        a = PICK_UP if target == pos else (RIGHT if target > pos else LEFT)
+        return a if force is None else force
+
+    def observe(self, *args, **kwargs):
+        pass
+
+    def end_trial(self):
+        pass
+
+    def learn(self):
+        pass
+
+
+class Habit(Oracle):
+    """Optimal when undisturbed, but after the first cup it keeps walking the way it last walked: the
+    window-Q failure of 7.5.1 ('its policy will choose to continue on the new direction')."""
+
+    def begin_trial(self, obs, info=None, *, trial=0, learning=True):
+        self.last_move = None
+
+    def act(self, obs, info=None, *, greedy=False, force=None):
+        pos, cups = info["position"], info["cups"]
+        if len(cups) == 2 or self.last_move is None or pos in cups:
+            a = Oracle.act(self, obs, info)
+        else:
+            a = self.last_move
+        a = a if force is None else force
+        if a != PICK_UP:
+            self.last_move = a
+        return a
+
+
+def test_test_score_of_the_optimal_policy_is_14():
+    assert hs.test_score(CupCollectionEnv(), Oracle()) == hs.OPTIMAL_SCORE == 14
+
+
+def test_probe_tells_a_state_based_policy_from_a_habit():
+    oracle = hs.robustness_probe(Oracle(), 0)
+    habit = hs.robustness_probe(Habit(), 0)
+    assert len(oracle) == len(habit) == 2 * 4 * 3
+    assert all(r["resumed_optimally"] for r in oracle)
+    assert not any(r["resumed_optimally"] for r in habit)
+    # instance A, one greedy step after the first cup (cell 4), forced 2 steps left: cell 2, 5 steps left
+    r = next(r for r in oracle if (r["instance"], r["walk"], r["forced"]) == ("A", 1, 2))
+    assert (r["position"], r["optimal"], r["steps"]) == (2, 6, 6)
+
+
+def test_best_5_of_6():
+    assert hs.best_k_mean([300, 100, 200, 400, 500, 600]) == (300.0, 0)
+    assert hs.best_k_mean([300, None, 200, 400, 500, 600]) == (400.0, 0)  # the failed run is dropped
+    assert hs.best_k_mean([None, None, 200, 400, 500, 600], fail_value=1000) == (540.0, 1)
+    assert hs.best_k_mean([None, None, 200, 400, 500, 600]) == (None, 1)
+
+
+def test_table_b1_parameters_reach_the_nets():
+    rng = np.random.default_rng(0)
+    p = {**hs.CUP_PARAMS, "task": 2, "arch": "recurrent-model"}
+    agent = hs.make_agent(p, 6, 3, rng)
+    m = agent.model.config
+    assert (m.n_hidden, m.n_context, m.n_outputs, m.lr, m.feedback, m.decay) == (26, 18, 7, 0.02, 1.5, 0.9)
+    assert (agent.q.config.n_inputs, agent.q.config.n_hidden, agent.q.config.lr) == (24, 11, 0.2)
+    agent = hs.make_agent({**hs.CUP_PARAMS, "task": 3, "arch": "window-Q", "lam": 0.0}, 4, 3, rng)
+    assert (agent.config.net.n_hidden, agent.config.net.lr, agent.config.lam) == (0, 0.01, 0.0)
+    assert agent.config.net.n_inputs == 4 * 6 + 3 * 5
+    assert agent.config.replay.threshold_for_age(0) == pytest.approx(0.01)
+    assert agent.config.replay.threshold_for_age(69) == pytest.approx(1e-5)
+    agent = hs.make_agent({**hs.POLE_PARAMS, "arch": "recurrent-Q"}, 2, 2, rng)
+    assert (agent.net.config.n_context, agent.net.config.n_hidden, agent.config.lam) == (2, 10, 0.7)
+    assert agent.explore.schedule(0) == pytest.approx(1 / 20) and agent.explore.schedule(999) == pytest.approx(1 / 50)
+    with pytest.raises(ValueError, match="arch must be one of"):
+        hs.make_agent({**hs.CUP_PARAMS, "arch": "lstm"}, 4, 3, rng)
+
+
+def test_run_cup_is_deterministic():
+    p = {**hs.CUP_PARAMS, "arch": "recurrent-model", "trials": 4, "lessons_per_trial": 3,
+         "model_lessons_per_trial": 3, "task": 3}
+    a = hs.run_cup(p, np.random.default_rng(7))
+    b = hs.run_cup(p, np.random.default_rng(7))
+    assert a.curve_y == b.curve_y and a.rows == b.rows
+    assert all(14 <= y <= 60 for y in a.curve_y)
+
+
+@pytest.mark.parametrize("name", [s.name for s in hs.EXPERIMENTS])
+def test_cli_tiny(tmp_path, name):
+    assert cli.main(["run", name, "--profile", "tiny", "--out", str(tmp_path), "--workers", "1", "--quiet"]) == 0
+    summary = json.loads((tmp_path / name / "summary.json").read_text())
+    assert set(summary["variants"]) == {v.label for v in get_experiment(name).variants}
+    md = hs.results_section(tmp_path)
+    assert "Command: `connrl run " + name in md

@@ -1,0 +1,254 @@
+"""Memory architectures of Ch. 7: window encoding, batch TD(lambda) targets for recurrent Q-nets, and that
+what an agent sees while acting is exactly what replay reconstructs."""
+
+import numpy as np
+import pytest
+
+from connrl.agents.base import LinearSchedule, ReplayConfig
+from connrl.agents.memory import (
+    RecurrentModelConfig,
+    RecurrentModelQ,
+    RecurrentQ,
+    RecurrentQConfig,
+    SensationWindow,
+    WindowQ,
+    model_targets,
+    recurrent_q_targets,
+    replay_recurrent_q,
+    window_input_size,
+)
+from connrl.agents.qcon import QCONConfig
+from connrl.envs.cup import CupCollectionEnv
+from connrl.experiments.loop import run_trial
+from connrl.exploration import TemperatureSchedule, boltzmann_probabilities
+from connrl.nets import NetConfig, RecurrentNetConfig, RecurrentOAON
+from connrl.replay import Lesson, ReplayParams, lambda_returns
+
+TEMP = TemperatureSchedule.inverse(5, 30, 100)
+REPLAY = ReplayConfig(capacity=70, lessons_per_trial=LinearSchedule(3, 3), p_threshold=0.01,
+                      p_threshold_oldest=1e-5)
+
+
+def window_agent(seed=0, window=2):
+    net = NetConfig(window_input_size(4, 3, window), 0, lr=0.02, init_range=0.5, momentum=0.0)
+    cfg = QCONConfig(net=net, temperature=TEMP, lam=0.8, replay=REPLAY)
+    return WindowQ(cfg, 3, np.random.default_rng(seed), n_sensation=4, window=window)
+
+
+def recurrent_q_agent(seed=0):
+    net = RecurrentNetConfig(4, 6, 3, 1, lr=0.04)
+    return RecurrentQ(RecurrentQConfig(net=net, temperature=TEMP, lam=0.8, replay=REPLAY), 3,
+                      np.random.default_rng(seed))
+
+
+def model_agent(seed=0):
+    model = RecurrentNetConfig(4, 8, 5, 5, lr=0.02)
+    q_net = NetConfig(9, 4, lr=0.2, init_range=0.5)
+    cfg = RecurrentModelConfig(model=model, q_net=q_net, temperature=TEMP, lam=0.8, replay=REPLAY,
+                               model_lessons_per_trial=3)
+    return RecurrentModelQ(cfg, 3, np.random.default_rng(seed))
+
+
+# ------------------------------------------------------------------------------------------- window-Q
+
+def test_window_encoding_by_hand():
+    w = SensationWindow(2, 3, 2)
+    s0, s1, s2 = np.array([0.5, -0.5]), np.array([-0.5, -0.5]), np.array([0.5, 0.5])
+    assert np.array_equal(w.encode(s0), np.r_[s0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0])  # empty slots are 0
+    w.push(s0, 1)
+    w.push(s1, 2)
+    expected = np.r_[s2, s1, s0, -0.5, -0.5, 0.5, -0.5, 0.5, -0.5]  # newest first; actions one-hot +-0.5
+    assert np.array_equal(w.encode(s2), expected)
+    assert window_input_size(2, 3, 2) == expected.size
+    w.reset()
+    assert not w.encode(s2)[2:].any()
+
+
+def test_window_q_rejects_wrong_input_size():
+    cfg = QCONConfig(net=NetConfig(10, 0), temperature=TEMP)
+    with pytest.raises(ValueError, match="n_inputs=39"):
+        WindowQ(cfg, 3, np.random.default_rng(0), n_sensation=4, window=5)
+
+
+@pytest.mark.parametrize("make", [window_agent, recurrent_q_agent, model_agent])
+def test_act_rejects_a_bad_forced_action(make):
+    agent = make()
+    env = CupCollectionEnv()
+    obs, info = env.reset(seed=0)
+    agent.begin_trial(obs, info, learning=False)
+    with pytest.raises(ValueError, match="force"):
+        agent.act(obs, info, greedy=True, force=3)
+
+
+def _scripted_inputs(agent, actions, learning):
+    """Network inputs the agent used at each act() of a scripted trial (forced actions)."""
+    env = CupCollectionEnv()
+    obs, info = env.reset(seed=0, options={"instance": "A"})
+    agent.begin_trial(obs, info, learning=learning)
+    seen = []
+    for a in actions:
+        got = agent.act(obs, info, greedy=not learning, force=a)
+        assert got == a
+        seen.append(agent._x.copy())
+        obs, r, term, trunc, info = env.step(a)
+        if learning:
+            agent.observe(a, r, obs, term, trunc, info)
+    agent.end_trial()
+    return np.array(seen)
+
+
+def test_window_q_sees_the_same_window_in_learning_and_test_trials():
+    actions = [1, 2, 1, 0, 0, 1, 1]
+    learn = _scripted_inputs(window_agent(), actions, learning=True)
+    test = _scripted_inputs(window_agent(), actions, learning=False)
+    assert np.array_equal(learn, test)
+    # act 2 (after the pick-up at cell 3): window = sensations at cell 3 and cell 2, actions pick-up, right
+    assert np.array_equal(learn[2][4:12], np.r_[-0.5, -0.5, -0.5, -0.5, -0.5, 0.5, -0.5, -0.5])
+    assert np.array_equal(learn[2][12:], np.r_[-0.5, -0.5, 0.5, -0.5, 0.5, -0.5])
+    agent = window_agent()  # the lessons store the windowed inputs that were acted on
+    _scripted_inputs(agent, actions, learning=True)
+    assert np.array_equal(agent.book.memory.lessons[-1].inputs[:-1], learn)
+
+
+# ----------------------------------------------------------------------------------------- recurrent-Q
+
+def test_recurrent_q_targets_by_hand():
+    # 3 steps; the action at t=1 is non-policy (prob below threshold): weight 0 and lambda cut at t=0.
+    values = np.array([[0.2, 0.1], [0.0, 5.0], [0.3, 0.6], [0.4, 0.9]])
+    actions = np.array([0, 0, 1])
+    rewards = np.array([0.0, 0.0, 1.0])
+    params = ReplayParams(gamma=0.9, lam=0.5, temperature=1.0, p_threshold=0.01)
+    targets, weights = recurrent_q_targets(values, actions, rewards, True, params)
+    assert boltzmann_probabilities(values[1], 1.0)[0] < 0.01
+    assert np.array_equal(weights, [1.0, 0.0, 1.0])
+    e2 = 1.0  # terminal: u = 0, lambda 0 at the last step
+    e1 = 0.9 * (0.5 * 0.6 + 0.5 * e2)  # u_2 = max Q(x_2) = 0.6
+    e0 = 0.9 * 5.0  # lambda cut: a_1 is non-policy, so e'_0 = r_0 + gamma u_1
+    assert np.allclose(targets, [e0, e1, e2])
+    # a truncated lesson bootstraps from the last input; lambda_returns agrees with p_threshold 0
+    t2, w2 = recurrent_q_targets(values, actions, rewards, False, ReplayParams(gamma=0.9, lam=0.5))
+    assert np.allclose(t2, lambda_returns(rewards, values[1:].max(1), 0.9, 0.5)) and w2.all()
+
+
+def test_recurrent_q_targets_checks_shapes():
+    with pytest.raises(ValueError, match="n\\+1=3"):
+        recurrent_q_targets(np.zeros((2, 2)), np.array([0, 1]), np.zeros(2), True, ReplayParams(gamma=0.9))
+
+
+def test_replay_recurrent_q_is_one_bptt_step_toward_the_targets():
+    rng = np.random.default_rng(1)
+    net = RecurrentOAON(RecurrentNetConfig(4, 6, 3, 1, lr=0.04, momentum=0.0), 3, rng)
+    lesson = Lesson(rng.choice([-0.5, 0.5], (6, 4)), rng.integers(0, 3, 5), np.r_[0, 0, 0, 0, 1.0], True)
+    params = ReplayParams(gamma=0.9, lam=0.8)
+    ys, _ = net.forward_sequence(lesson.inputs, np.append(lesson.actions, 0))
+    targets, weights = recurrent_q_targets(ys[:, :, 0], lesson.actions, lesson.rewards, True, params)
+    twin = RecurrentOAON(net.config, 3, np.random.default_rng(9))
+    twin.load_state_dict(net.state_dict())
+    used = replay_recurrent_q(net, lesson, params)
+    twin.train_sequence(lesson.inputs[:-1], lesson.actions, targets, weights)
+    assert used == 5
+    assert np.array_equal(net.w1, twin.w1) and np.array_equal(net.w2, twin.w2)
+    after, _ = net.forward_sequence(lesson.inputs, np.append(lesson.actions, 0))
+    taken = np.arange(5), lesson.actions
+    assert np.abs(after[:-1, :, 0][taken] - targets).sum() < np.abs(ys[:-1, :, 0][taken] - targets).sum()
+
+
+def test_recurrent_q_acts_on_the_contexts_replay_reconstructs():
+    agent = recurrent_q_agent(seed=3)
+    env = CupCollectionEnv()
+    env.reset(seed=3)
+    seen = []
+    orig = agent.net.values
+
+    def spy(x):
+        q = orig(x)
+        seen.append(q.copy())
+        return q
+
+    agent.net.values = spy
+    run_trial(env, agent, trial=0, learning=True)  # learn() changes weights after the trial ...
+    lesson = agent.book.memory.lessons[-1]
+    agent2 = recurrent_q_agent(seed=3)  # ... so compare with an untouched twin
+    ys, _ = agent2.net.forward_sequence(lesson.inputs, np.append(lesson.actions, 0))
+    assert np.allclose(np.array(seen), ys[:-1, :, 0])
+
+
+def test_forced_action_moves_the_context_as_if_chosen():
+    agent = recurrent_q_agent(seed=4)
+    env = CupCollectionEnv()
+    obs, info = env.reset(seed=0, options={"instance": "B"})
+    agent.begin_trial(obs, info, learning=False)
+    agent.act(obs, info, greedy=True, force=2)
+    twin = RecurrentOAON(agent.net.config, 3, np.random.default_rng(0))
+    twin.load_state_dict(agent.net.state_dict())
+    twin.values(np.asarray(obs, dtype=float))
+    twin.advance(2)
+    assert np.array_equal(agent.net.context, twin.context)
+
+
+# ------------------------------------------------------------------------------------- recurrent-model
+
+def test_model_config_checks_shapes():
+    with pytest.raises(ValueError, match="n_outputs must be 5"):
+        RecurrentModelConfig(model=RecurrentNetConfig(4, 8, 5, 4), q_net=NetConfig(9, 4), temperature=TEMP)
+    with pytest.raises(ValueError, match="n_inputs must be 9"):
+        RecurrentModelConfig(model=RecurrentNetConfig(4, 8, 5, 5), q_net=NetConfig(4, 4), temperature=TEMP)
+
+
+def test_model_targets_are_next_sensation_and_scaled_payoff():
+    lesson = Lesson(np.array([[1.0, 2], [3, 4], [5, 6]]), np.array([0, 1]), np.array([0.0, 1.0]), True)
+    assert np.array_equal(model_targets(lesson, 0.5), [[3, 4, 0.0], [5, 6, 0.5]])
+
+
+def test_recurrent_model_q_inputs_are_sensation_plus_model_context_and_replay_rebuilds_them():
+    agent = model_agent(seed=5)
+    agent.learn = lambda: None  # keep the weights fixed for the comparison
+    env = CupCollectionEnv()
+    obs, info = env.reset(seed=5)
+    agent.begin_trial(obs, info, learning=True)
+    used = []
+    done = False
+    while not done:
+        a = agent.act(obs, info)
+        used.append(agent._xq.copy())
+        obs, r, term, trunc, info = env.step(a)
+        agent.observe(a, r, obs, term, trunc, info)
+        done = term or trunc
+    agent.end_trial()
+    lesson = agent.history[-1]
+    assert agent.book.memory.lessons[-1] is lesson
+    rebuilt = agent.q_lesson(lesson).inputs
+    assert rebuilt.shape == (len(lesson) + 1, 9)
+    assert np.allclose(rebuilt[:-1], np.array(used))
+    assert np.array_equal(rebuilt[:, :4], lesson.inputs)
+    assert not rebuilt[0, 4:].any()  # the context is 0 at the start of a trial (7.4)
+
+
+def test_model_learns_to_predict_a_deterministic_trial():
+    agent = model_agent(seed=6)
+    env = CupCollectionEnv()
+    env.reset(seed=6)
+    for k in range(3):
+        run_trial(env, agent, trial=k, learning=True)
+    lesson = agent.history[0]
+    targets = model_targets(lesson, 0.5)
+    first = agent.model.train_sequence(lesson.inputs[:-1], lesson.actions, targets)
+    for _ in range(60):
+        agent.train_model()
+    last = agent.model.train_sequence(lesson.inputs[:-1], lesson.actions, targets)
+    assert last < 0.5 * first
+    agent.freeze_model = True
+    w = agent.model.w1.copy()
+    agent.train_model()
+    assert np.array_equal(w, agent.model.w1)
+
+
+@pytest.mark.parametrize("make", [window_agent, recurrent_q_agent, model_agent])
+def test_same_seed_same_learning(make):
+    def trace(agent):
+        env = CupCollectionEnv(random_bits=0, control_error=0.15)
+        env.reset(seed=11)
+        return [run_trial(env, agent, trial=k, learning=True).steps for k in range(4)] + [
+            float(np.sum(v)) for v in (getattr(agent, "q", None) or agent.net).state_dict().values()]
+
+    assert trace(make(seed=2)) == trace(make(seed=2))
