@@ -118,8 +118,8 @@ POLE_PARAMS = {
     **COMMON,
     "task": 4,
     "trials": 1000,  # 7.5.4: "not always found within 1000 trials"
-    "lessons_per_trial": 12,  # as the full-state pole experiment (R)
-    "model_lessons_per_trial": 12,  # (R)
+    "lessons_per_trial": 70,  # as the full-state pole experiment and the cup tasks (R)
+    "model_lessons_per_trial": 70,  # as the cup tasks (R)
     "model_range": 1.5,  # normalized x, theta reach ~1.05 at failure (R)
     "p_threshold": 1e-4,  # App. B
     "p_threshold_oldest": 1e-7,  # App. B

@@ -32,7 +32,7 @@ POLE_PARAMS = {
     "inv_t_end": 50.0,
     "anneal_trials": 1000,  # trials over which 1/T moves (R)
     "capacity": 70,  # replay only the latest 70 trials (7.5)
-    "lessons_per_trial": 12,  # lessons replayed after each trial (R)
+    "lessons_per_trial": 70,  # lessons replayed after each trial, drawn by App. A.2 from the latest 70 (R)
     "p_threshold": 1e-4,  # P_l for the latest lesson (App. B)
     "p_threshold_oldest": 1e-7,  # P_l for the oldest lesson (App. B)
     "online": True,  # also learn on-line from each step (Fig. 3.4)
