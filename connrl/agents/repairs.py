@@ -14,7 +14,7 @@ Ch. 5 needs:
   uses with similar temperatures (Table 4.1). The non-policy test of replay (P_l = 2 %, 5.3.5) uses the same
   probabilities.
 - **Speed.** When the Q-function is an :class:`~connrl.nets.OAON`, a whole lesson is replayed by one Numba
-  kernel (``replay_lesson_kernel``) that does exactly what :func:`connrl.replay.replay_q` does (incremental
+  kernel (``connrl.nets.mlp.replay_lesson_q``) that does exactly what :func:`connrl.replay.replay_q` does (incremental
   mode) followed by the repairs; any other Q-function uses ``replay_q`` and :func:`repair_step`.
 
 "Fewer lessons were replayed in the beginning when there were not many lessons available" (5.3.5 fn. 1):
@@ -23,16 +23,14 @@ Ch. 5 needs:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 from connrl.agents.qcon import QCON, QCONConfig
 from connrl.exploration import boltzmann_select
 from connrl.nets import OAON
-from connrl.nets.mlp import _mlp_forward, _mlp_update, _perceptron_forward, _perceptron_update
+from connrl.nets.mlp import replay_lesson_q
 from connrl.replay import Lesson, ReplayParams, replay_q
 
 REPAIRS = ("none", "lower", "raise")  # 5.4.3; "none" = plain teaching
@@ -64,108 +62,12 @@ def repair_step(q, x: np.ndarray, a: int, mode: str) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------------------------ the kernel
-
-@numba.njit(cache=True, fastmath=True)
-def _values(w1, w2, x, h, scale, q):
-    if w1.shape[1] > 0:
-        for a in range(w2.shape[0]):
-            q[a] = scale * _mlp_forward(w1, w2, a, x, h)
-    else:
-        for a in range(w2.shape[0]):
-            q[a] = scale * _perceptron_forward(w2, a, x)
-
-
-@numba.njit(cache=True, fastmath=True)
-def _update(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum):
-    if w1.shape[1] > 0:
-        return _mlp_update(w1, w2, d1, d2, a, x, h, target, False, scale, lr, momentum)
-    return _perceptron_update(w2, d2, a, x, target, False, scale, lr, momentum)
-
-
-@numba.njit(cache=True, fastmath=True)
-def _probability(q, a, temperature):
-    """Boltzmann probability of action a (Eq. 3.4); temperature 0 = greedy with ties sharing."""
-    m = q[0]
-    for i in range(1, q.shape[0]):
-        m = max(m, q[i])
-    if temperature <= 0.0:
-        if q[a] < m:
-            return 0.0
-        k = 0
-        for i in range(q.shape[0]):
-            if q[i] == m:
-                k += 1
-        return 1.0 / k
-    s = 0.0
-    for i in range(q.shape[0]):
-        s += math.exp((q[i] - m) / temperature)
-    return math.exp((q[a] - m) / temperature) / s
-
-
-@numba.njit(cache=True)
-def replay_lesson_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, gamma, lam, temperature,
-                         p_threshold, clip, scale, lr, momentum, repair):
-    """Fig. 5.1(a), incremental mode, on an OAON (``w1``/``w2`` as in connrl.nets.mlp), then 5.4.3 repairs.
-
-    ``temperature`` is on the raw Q scale; ``clip`` is +inf for none; ``repair`` 0 none, 1 lower, 2 raise.
-    Returns the number of experiences replayed.
-    """
-    n = actions.shape[0]
-    used = 0
-    e_next = 0.0
-    next_policy = False
-    for t in range(n - 1, -1, -1):
-        if t == n - 1 and terminated:
-            u = 0.0
-        else:
-            _values(w1, w2, inputs[t + 1], h, scale, q)
-            u = q[0]
-            for i in range(1, q.shape[0]):
-                u = max(u, q[i])
-        lam_t = lam if (t < n - 1 and next_policy) else 0.0
-        e = rewards[t] + gamma * ((1.0 - lam_t) * u + lam_t * e_next)
-        if e > clip:
-            e = clip
-        a = actions[t]
-        x = inputs[t]
-        if p_threshold <= 0.0:
-            next_policy = True
-        else:
-            _values(w1, w2, x, h, scale, q)
-            next_policy = _probability(q, a, temperature) >= p_threshold
-        if next_policy:
-            _update(w1, w2, d1, d2, a, x, h, e, scale, lr, momentum)
-            used += 1
-        if repair != 0:
-            _values(w1, w2, x, h, scale, q)
-            qa = q[a]
-            if repair == 1:
-                for i in range(q.shape[0]):
-                    if i != a and q[i] > qa:
-                        _update(w1, w2, d1, d2, i, x, h, qa, scale, lr, momentum)
-            else:
-                best = -np.inf
-                for i in range(q.shape[0]):
-                    if i != a and q[i] > best:
-                        best = q[i]
-                if best > qa:
-                    _update(w1, w2, d1, d2, a, x, h, best, scale, lr, momentum)
-        e_next = e
-    return used
-
-
 def replay_oaon(net: OAON, lesson: Lesson, params: ReplayParams, repair: str = "none") -> int:
     """Replay one lesson into an OAON with the kernel (same result as ``replay_q`` + ``repair_step``)."""
     if params.batch:
         raise ValueError("the fast kernel does incremental replay only (5.1.2); use connrl.replay.replay_q")
-    c = net.config
-    q = np.empty(net.n_nets)
-    return int(replay_lesson_kernel(net.w1, net.w2, net.d1, net.d2, net._h, q,
-                                    np.ascontiguousarray(lesson.inputs), lesson.actions, lesson.rewards,
-                                    bool(lesson.terminated), params.gamma, params.lam, params.temperature,
-                                    params.p_threshold, np.inf if params.clip is None else params.clip,
-                                    net.scale, net.lr, c.momentum, REPAIRS.index(repair)))
+    return replay_lesson_q(net, lesson.inputs, lesson.actions, lesson.rewards, lesson.terminated, params.gamma,
+                           params.lam, params.temperature, params.p_threshold, params.clip, REPAIRS.index(repair))
 
 
 # ------------------------------------------------------------------------------------------- the agent

@@ -256,9 +256,22 @@ def _policy_probability(q, a, temperature):
 
 
 @numba.njit(cache=True, fastmath=True)
+def _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum):
+    if w1.shape[1] > 0:
+        _mlp_update(w1, w2, d1, d2, a, x, h, target, False, scale, lr, momentum)
+    else:
+        _perceptron_update(w2, d2, a, x, target, False, scale, lr, momentum)
+
+
+@numba.njit(cache=True, fastmath=True)
 def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, gamma, lam, temperature,
-                     p_threshold, clip, has_clip, scale, lr, momentum):
-    """Fig. 5.1(a) in incremental mode over a whole lesson; same arithmetic as ``connrl.replay.replay_q``."""
+                     p_threshold, clip, has_clip, scale, lr, momentum, repair):
+    """Fig. 5.1(a) in incremental mode over a whole lesson; same arithmetic as ``connrl.replay.replay_q``.
+
+    ``repair`` (5.4.3, for taught lessons; see connrl.agents.repairs): 0 none; 1 *lower*: every other action
+    valued above the taught one is moved toward it; 2 *raise*: the taught action is moved toward the largest
+    other value. The check follows the TD update of each experience, with the net as it is then.
+    """
     n = actions.shape[0]
     used = 0
     e_next = 0.0
@@ -280,21 +293,33 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
         else:
             next_policy = True
         if next_policy:
-            if w1.shape[1] > 0:
-                _mlp_update(w1, w2, d1, d2, a, inputs[t], h, e, False, scale, lr, momentum)
-            else:
-                _perceptron_update(w2, d2, a, inputs[t], e, False, scale, lr, momentum)
+            _update_any(w1, w2, d1, d2, a, inputs[t], h, e, scale, lr, momentum)
             used += 1
+        if repair != 0:
+            _values_any(w1, w2, inputs[t], h, scale, q)
+            qa = q[a]
+            if repair == 1:
+                for i in range(q.shape[0]):
+                    if i != a and q[i] > qa:
+                        _update_any(w1, w2, d1, d2, i, inputs[t], h, qa, scale, lr, momentum)
+            else:
+                best = -np.inf
+                for i in range(q.shape[0]):
+                    if i != a and q[i] > best:
+                        best = q[i]
+                if best > qa:
+                    _update_any(w1, w2, d1, d2, a, inputs[t], h, best, scale, lr, momentum)
         e_next = e
     return used
 
 
 def replay_lesson_q(net: OAON, inputs, actions, rewards, terminated: bool, gamma: float, lam: float,
-                    temperature: float, p_threshold: float, clip: float | None) -> int:
-    """Compiled incremental backward replay of one lesson into an OAON Q-function (see connrl.replay)."""
+                    temperature: float, p_threshold: float, clip: float | None, repair: int = 0) -> int:
+    """Compiled incremental backward replay of one lesson into an OAON Q-function (see connrl.replay);
+    ``repair`` 1/2 adds the lower/raise repairs of 5.4.3 after each experience."""
     return int(_replay_q_kernel(net.w1, net.w2, net.d1, net.d2, net._h, np.empty(net.n_nets),
                                 np.ascontiguousarray(inputs, dtype=np.float64), np.ascontiguousarray(actions),
                                 np.ascontiguousarray(rewards, dtype=np.float64), bool(terminated), float(gamma),
                                 float(lam), float(temperature), float(p_threshold),
                                 0.0 if clip is None else float(clip), clip is not None, net.scale, net.lr,
-                                net.config.momentum))
+                                net.config.momentum, int(repair)))
