@@ -49,6 +49,10 @@ def plot_experiment(spec: ExperimentSpec, records: list[dict], out_dir: Path) ->
     for label, y in spec.y_reference.items():
         ax.axhline(y, color="k", ls="--", lw=0.8)
         ax.annotate(label, (ax.get_xlim()[0], y), xytext=(4, 3), textcoords="offset points", fontsize=8)
+    for label, x in spec.x_reference.items():
+        ax.axvline(x, color="k", ls=":", lw=0.9)
+        ax.annotate(label, (x, ax.get_ylim()[0]), xytext=(4, 6), textcoords="offset points", fontsize=8,
+                    rotation=90)
     ax.set_xlabel(spec.x_label)
     ax.set_ylabel(spec.y_label)
     ax.set_title(f"{spec.name}: {spec.title}\n(thesis {spec.section}; shaded: min-max over runs)", fontsize=9)

@@ -95,7 +95,7 @@ _QUANTITY = Quantity("trials_to_satisfactory", "training trials until the greedy
                      "from all 7 test starts", "lower", "7.5.4 fn. 4")
 _PROFILES = {
     "tiny": {"runs": 1, "max_trials": 3, "test_steps": 200},
-    "quick": {"runs": 2, "max_trials": 300},
+    "quick": {"runs": 4, "max_trials": 300},
     "full": {"runs": 10},
 }
 
@@ -111,6 +111,7 @@ EXPERIMENTS = [
         quantities=(_QUANTITY,),
         x_label="training trials",
         y_label="fraction of runs with a satisfactory policy",
+        x_reference={"thesis: 119 trials": 119},
     ),
     ExperimentSpec(
         name="pole-full-ahc",

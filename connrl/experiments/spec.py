@@ -63,6 +63,7 @@ class ExperimentSpec:
     y_label: str = ""
     description: str = ""
     y_reference: Mapping[str, float] = field(default_factory=dict)  # horizontal lines on the plot
+    x_reference: Mapping[str, float] = field(default_factory=dict)  # vertical lines on the plot
 
     def __post_init__(self):
         missing = [p for p in PROFILES if p not in self.profiles]
