@@ -34,24 +34,22 @@ def cmd_list(args) -> int:
     return 0
 
 
-def _positive_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {v}")
-    return v
+def _int_at_least(low: int):
+    """An argparse type: a whole number >= low, with an error that says what is allowed."""
+
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if v < low:
+            raise argparse.ArgumentTypeError(f"must be >= {low}, got {v}")
+        return v
+
+    return parse
 
 
-def _seed(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {v}")
-    return v
+_positive_int, _seed = _int_at_least(1), _int_at_least(0)
 
 
 def cmd_run(args) -> int:
@@ -77,17 +75,11 @@ def cmd_run(args) -> int:
     return 0
 
 
-def _fmt(v) -> str:
-    if v is None:
-        return "-"
-    if isinstance(v, float):
-        return f"{v:.4g}"
-    return str(v)
-
-
 def _print_summary(summary: dict) -> None:
     from rich.console import Console
     from rich.table import Table
+
+    from connrl.experiments.results import fmt as _fmt
 
     table = Table(title=f"{summary['experiment']} ({summary['profile']} profile, {summary['runs_per_variant']} "
                   f"run(s) per variant, seeds from {summary['base_seed']})")

@@ -16,9 +16,10 @@ from connrl.experiments.registry import SPEC_MODULES, all_experiments
 from connrl.storage import atomic_write_text
 
 
-def _fmt(v) -> str:
+def fmt(v) -> str:
+    """A number for a table: 4 significant digits, a dash for none."""
     if v is None:
-        return "—"
+        return "-"
     if isinstance(v, float):
         return f"{v:.4g}"
     return str(v)
@@ -39,8 +40,8 @@ def summary_table(summary: dict) -> str:
     for label, v in summary["variants"].items():
         for name, q in v["quantities"].items():
             meets = {True: "yes", False: "**no**", None: "—"}[q.get("meets_thesis")]
-            per_run = ", ".join(_fmt(x) for x in q["per_run"])
-            lines.append(f"| {label} | {name} | {_fmt(q['mean'])} | {per_run} | {_fmt(q['thesis'])} | {meets} |")
+            per_run = ", ".join(fmt(x) for x in q["per_run"])
+            lines.append(f"| {label} | {name} | {fmt(q['mean'])} | {per_run} | {fmt(q['thesis'])} | {meets} |")
     return "\n".join(lines)
 
 
