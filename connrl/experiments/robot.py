@@ -386,7 +386,10 @@ def results_section(out_dir: Path) -> str:
             f = draw_solution_paths([r for r in recs if r["variant"] == best], out_dir / spec.name /
                                     "solution-paths.png", task, {"DP": 4, "DK": 3, "WFL": 3}[task])
             if f is not None:
-                lines += [f"Solution paths (Figs. 5.5-5.7), {best}: `{f}`", ""]
+                from connrl.experiments.results import figure
+
+                lines += [f"Solution paths (Figs. 5.5-5.7) of the learned greedy policies, {best}:", "",
+                          figure(Path(f), Path("docs/RESULTS.md"), f"{spec.name}-paths"), ""]
     if not any_found:
         return "\n".join(lines + ["No Ch. 5 results yet: run `connrl run robot-teaching-dp` etc.", ""])
     lines += _speedup_tables(curves)
