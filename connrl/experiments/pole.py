@@ -152,7 +152,13 @@ def results_section(out_dir) -> str:
         "`connrl/envs/pole.py`). In exploratory runs (not part of this page) replaying only 12 lessons per trial "
         "also learned, but more slowly and with a heavier tail of slow runs; the number of replayed lessons was "
         "the setting that mattered most. The AHCON-R counterpart has no thesis number (the thesis reports only "
-        "Q-learning here); it uses P_t = 0.2 as Ch. 4 does for AHC agents.",
+        "Q-learning here); it uses P_t = 0.2 as Ch. 4 does for AHC agents. It does not learn this task: with a "
+        "reward of -1 on failure and 0 otherwise, V is negative almost everywhere, so an ordinary step's TD error "
+        "gamma V(y) - V(x) ~ (gamma - 1) V(x) is positive; the action taken most often is reinforced on almost every "
+        "step (and again in every replay), its merit saturates at the top of the sigmoid, the policy becomes "
+        "deterministic and the other action is never tried. Inspecting the merits (`policy.values`) during a run "
+        "shows one action at +1 and the other near -1 within about ten trials. QCON has no such bias because "
+        "its targets bootstrap from max_a Q(y, a) per action.",
         "",
     ]
     return "\n".join(parts)
