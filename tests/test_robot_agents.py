@@ -156,3 +156,21 @@ def test_agent_config_matches_thesis():
     with pytest.raises(ValueError, match="repair must be one of"):
         TeachingConfig(repair="up")
     assert isinstance(agent, TeachingQCON)
+
+
+def test_taught_lessons_replayed_with_p_zero_and_q_scale_temperature():
+    """5.3.5 / 3.7: every taught lesson is replayed after each trial with P_t = 0 (no taught action is
+    skipped as non-policy), experienced ones with P_l = 2 %; the kernel's T is on the scale of Q (x 100)."""
+    agent = make_agent({**ROBOT_PARAMS, "task": "DP", "lessons": 3}, np.random.default_rng(0))
+    seen = []
+    agent.replay_lesson = lambda lesson, pt: seen.append((lesson.taught, pt))
+    agent.learning, agent.trial = True, 0
+    agent.book.memory.add(_lesson(np.random.default_rng(0), d=52))
+    agent.learn()
+    assert seen == [(False, 0.02), (True, 0.0), (True, 0.0), (True, 0.0)]
+    params = TeachingQCON.replay_params(agent, 0.0)
+    assert params.temperature == pytest.approx(0.05 * 100.0) and params.p_threshold == 0.0
+    # with P_t = 0 the kernel updates every experience of a taught lesson, however unlikely its action
+    lesson = agent.book.taught[0]
+    used = replay_oaon(agent.q, lesson, params)
+    assert used == len(lesson)
