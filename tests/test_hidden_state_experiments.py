@@ -110,5 +110,5 @@ def test_cli_tiny(tmp_path, name):
     assert cli.main(["run", name, "--profile", "tiny", "--out", str(tmp_path), "--workers", "1", "--quiet"]) == 0
     summary = json.loads((tmp_path / name / "summary.json").read_text())
     assert set(summary["variants"]) == {v.label for v in get_experiment(name).variants}
-    md = hs.results_section(tmp_path)
+    md = hs.results_section(tmp_path, tmp_path / "RESULTS.md")
     assert "Command: `connrl run " + name in md

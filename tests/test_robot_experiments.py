@@ -67,13 +67,13 @@ def test_cli_tiny_smoke_and_results_section(tmp_path):
                      "--quiet"]) == 0
     summary = json.loads((tmp_path / "robot-teaching-dp" / "summary.json").read_text())
     assert summary["variants"]["10 lessons"]["quantities"]["trials_to_2.5"]["thesis"] == 10
-    md = robot.results_section(tmp_path)
+    md = robot.results_section(tmp_path, tmp_path / "RESULTS.md")
     assert "robot-teaching-dp" in md and "| 10 lessons |" in md
     assert (tmp_path / "robot-teaching-dp" / "solution-paths.png").exists()
 
 
 def test_results_section_without_runs(tmp_path):
-    assert "No Ch. 5 results yet" in robot.results_section(tmp_path)
+    assert "No Ch. 5 results yet" in robot.results_section(tmp_path, tmp_path / "RESULTS.md")
 
 
 def test_bad_task_is_rejected():

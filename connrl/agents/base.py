@@ -142,6 +142,9 @@ class LessonAgent:
     rng: np.random.Generator
     explore: Exploration
     book: LessonBook
+    # replay no more experienced lessons than are stored: "fewer lessons were replayed in the beginning"
+    # (5.3.5, footnote 1); Ch. 4 samples n lessons with replacement from the start (App. A.2)
+    replay_at_most_stored: bool = False
 
     def encode(self, obs) -> np.ndarray:
         """Network input for an observation; memoryless agents feed the observation as it is."""
@@ -173,10 +176,12 @@ class LessonAgent:
         if r is None or not self.learning:
             return
         mem = self.book.memory
-        if len(mem):
-            for _ in range(int(round(r.lessons_per_trial(self.trial)))):
-                age, lesson = mem.sample(self.rng)
-                self.replay_lesson(lesson, r.threshold_for_age(age))
+        n = int(round(r.lessons_per_trial(self.trial))) if len(mem) else 0
+        if self.replay_at_most_stored:
+            n = min(n, len(mem))
+        for _ in range(n):
+            age, lesson = mem.sample(self.rng)
+            self.replay_lesson(lesson, r.threshold_for_age(age))
         p_taught = r.taught_probability(self.trial)
         for lesson in self.book.taught:
             if p_taught >= 1 or self.rng.random() < p_taught:

@@ -90,6 +90,8 @@ class TeachingConfig:
 class TeachingQCON(QCON):
     """QCON-T of Ch. 5 with the 5.4.3 repairs; see the module docstring."""
 
+    replay_at_most_stored = True  # 5.3.5 fn. 1
+
     def __init__(self, config: QCONConfig, n_actions: int, rng: np.random.Generator,
                  teaching: TeachingConfig | None = None, q=None):
         super().__init__(config, n_actions, rng, q=q)
@@ -122,23 +124,10 @@ class TeachingQCON(QCON):
         # the reference path: the same backward pass, with the repair right after each TD update
         _replay_q_with_repairs(self.q, lesson, params, repair)
 
-    def learn(self) -> None:
-        """Replay min(n, available) experienced lessons (App. A.2 choice), then every taught lesson (5.3.5)."""
-        r = self.config.replay
-        if r is None or not self.learning:
-            return
-        mem = self.book.memory
-        for _ in range(min(int(round(r.lessons_per_trial(self.trial))), len(mem))):
-            age, lesson = mem.sample(self.rng)
-            self.replay_lesson(lesson, r.threshold_for_age(age))
-        p_taught = r.taught_probability(self.trial)
-        for lesson in self.book.taught:
-            if p_taught >= 1 or self.rng.random() < p_taught:
-                self.replay_lesson(lesson, r.taught_p_threshold)
-
 
 def _replay_q_with_repairs(q, lesson: Lesson, params: ReplayParams, repair: str) -> int:
-    """Pure-Python twin of ``replay_lesson_kernel`` (for Q-functions that are not OAONs, and for tests)."""
+    """Pure-Python twin of the compiled replay with repairs (``connrl.nets.mlp.replay_lesson_q``), for
+    Q-functions that are not OAONs and for tests."""
     from connrl.exploration import boltzmann_probabilities
 
     x, acts, rews = lesson.inputs, lesson.actions, lesson.rewards

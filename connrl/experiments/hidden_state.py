@@ -392,7 +392,7 @@ def _cmd(s: dict) -> str:
             f"--seed {s['base_seed']}`")
 
 
-def results_section(out_dir: Path) -> str:
+def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     """Markdown for docs/RESULTS.md: Ch. 7 numbers beside the thesis's, from OUT/NAME/summary.json."""
     lines = ["## Chapter 7: hidden state (window-Q, recurrent-Q, recurrent-model)", ""]
     found = False

@@ -128,12 +128,13 @@ EXPERIMENTS = [
 ]
 
 
-def results_section(out_dir) -> str:
+def results_section(out_dir, doc=None) -> str:
     """docs/RESULTS.md section: the stored summaries of pole-full and pole-full-ahc, with how to read them."""
     from pathlib import Path
 
     from connrl.experiments.results import figure, load_summary, summary_table
 
+    doc = Path(doc) if doc is not None else Path("docs/RESULTS.md")
     parts = ["## Pole balancing, full state (thesis 7.5.4, footnote 4; App. C)", "",
              "Memoryless agents see (x, x_dot, theta, theta_dot). After every training trial the greedy policy is "
              "tested from the 7 starts of 7.5.4; a run reports the training trials until it balances > 5000 steps "
@@ -144,7 +145,7 @@ def results_section(out_dir) -> str:
         if summary is None:
             continue
         parts += [f"### {spec.name}: {spec.title}", "", summary_table(summary), "",
-                  figure(Path(out_dir) / spec.name / "curve.png", Path("docs/RESULTS.md"), spec.name), ""]
+                  figure(Path(out_dir) / spec.name / "curve.png", doc, spec.name), ""]
     parts += [
         "Where the thesis is silent we chose, and say so: the number of lessons replayed after each trial "
         "(70, drawn by App. A.2's recency rule from the latest 70 trials that 7.5 says are kept), the length of "

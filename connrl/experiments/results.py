@@ -1,7 +1,8 @@
 """``connrl results``: docs/RESULTS.md from the stored ``OUT/NAME/summary.json`` files.
 
 Every number on the page comes from a summary written by ``connrl run``; the page says which command,
-profile, runs and seeds produced it. Chapters may add analysis through ``results_section(out_dir)``.
+profile, runs and seeds produced it. Chapters may add analysis through ``results_section(out_dir, doc)``;
+they put their figures in ``doc``'s folder.
 """
 
 from __future__ import annotations
@@ -80,7 +81,7 @@ def write_results(out: Path, doc: Path) -> Path:
         section = getattr(module, "results_section", None)
         names = [s.name for s in module.EXPERIMENTS]
         if section is not None:
-            text = section(out)
+            text = section(out, doc)
             if text:
                 parts += [text, ""]
                 covered.update(names)

@@ -359,7 +359,7 @@ def draw_solution_paths(records: list[dict], file: Path, task: str, k: int) -> P
     return file
 
 
-def results_section(out_dir: Path) -> str:
+def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     """Markdown for docs/RESULTS.md: our Ch. 5 numbers beside the thesis's, from OUT/robot-*/ records."""
     out_dir = Path(out_dir)
     lines = ["## Chapter 5: robot skills with QCON-T (DP, DK, WFL)", "",
@@ -411,7 +411,7 @@ def results_section(out_dir: Path) -> str:
                 from connrl.experiments.results import figure
 
                 lines += [f"Solution paths (Figs. 5.5-5.7) of the learned greedy policies, {best}:", "",
-                          figure(Path(f), Path("docs/RESULTS.md"), f"{spec.name}-paths"), ""]
+                          figure(Path(f), doc, f"{spec.name}-paths"), ""]
     if not any_found:
         return "\n".join(lines + ["No Ch. 5 results yet: run `connrl run robot-teaching-dp` etc.", ""])
     lines += _speedup_tables(curves)
