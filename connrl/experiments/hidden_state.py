@@ -53,7 +53,7 @@ from connrl.agents.qcon import QCONConfig
 from connrl.envs.cup import INSTANCES, LEFT, OPTIMAL_STEPS, RIGHT, CupCollectionEnv
 from connrl.envs.pole import PoleBalancingEnv
 from connrl.experiments.loop import run_trial
-from connrl.experiments.pole import satisfactory
+from connrl.experiments.pole import train_until_satisfactory
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
 from connrl.exploration import TemperatureSchedule
 from connrl.nets import NetConfig
@@ -277,20 +277,7 @@ def run_pole_hidden(p: dict, rng: np.random.Generator, progress=lambda done, tot
     test_env = PoleBalancingEnv(observe="x_theta", max_steps=p["test_steps"])
     train_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, 2, 2, rng)
-    rows, solved_at = [], None
-    for k in range(p["trials"]):
-        stats = run_trial(train_env, agent, trial=k, learning=True)
-        ok = satisfactory(test_env, agent, p["test_steps"])
-        rows.append({"trial": k + 1, "train_steps": stats.steps, "train_failed": stats.terminated,
-                     "satisfactory": ok})
-        progress(k + 1, p["trials"])
-        if ok:
-            solved_at = k + 1
-            break
-    progress(p["trials"], p["trials"])
-    xs = list(range(1, p["trials"] + 1))
-    ys = [float(solved_at is not None and x >= solved_at) for x in xs]
-    return RunResult(xs, ys, {"trials_to_satisfactory": solved_at}, rows)
+    return train_until_satisfactory(train_env, test_env, agent, p["trials"], p["test_steps"], progress)
 
 
 def best_k_mean(values, k: int = 5, fail_value: float | None = None) -> tuple[float | None, int]:

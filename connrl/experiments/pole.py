@@ -69,26 +69,35 @@ def satisfactory(env: PoleBalancingEnv, agent, test_steps: int) -> bool:
     return True
 
 
+def train_until_satisfactory(train_env, test_env, agent, max_trials: int, test_steps: int, progress) -> RunResult:
+    """The 7.5.4 protocol: a training trial, then the 7-start test, until satisfactory or ``max_trials``.
+
+    The curve is 0 before the run's first satisfactory test and 1 from then on, so its mean over runs is the
+    fraction of runs solved by each trial.
+    """
+    rows, solved_at = [], None
+    for k in range(max_trials):
+        stats = run_trial(train_env, agent, trial=k, learning=True)
+        ok = satisfactory(test_env, agent, test_steps)
+        rows.append({"trial": k + 1, "train_steps": stats.steps, "train_failed": stats.terminated,
+                     "satisfactory": ok})
+        progress(k + 1, max_trials)
+        if ok:
+            solved_at = k + 1
+            break
+    progress(max_trials, max_trials)
+    xs = list(range(1, max_trials + 1))
+    ys = [float(solved_at is not None and x >= solved_at) for x in xs]
+    return RunResult(xs, ys, {"trials_to_satisfactory": solved_at}, rows)
+
+
 def run_pole(p: dict, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
     train_env = PoleBalancingEnv(observe=p["observe"], max_steps=p["train_max_steps"], start_x=p["start_x"],
                                  start_theta=p["start_theta"])
     test_env = PoleBalancingEnv(observe=p["observe"], max_steps=p["test_steps"])
     train_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, train_env.observation_space.shape[0], rng)
-    rows, solved_at = [], None
-    for k in range(p["max_trials"]):
-        stats = run_trial(train_env, agent, trial=k, learning=True)
-        ok = satisfactory(test_env, agent, p["test_steps"])
-        rows.append({"trial": k + 1, "train_steps": stats.steps, "train_failed": stats.terminated,
-                     "satisfactory": ok})
-        progress(k + 1, p["max_trials"])
-        if ok:
-            solved_at = k + 1
-            break
-    progress(p["max_trials"], p["max_trials"])
-    xs = list(range(1, p["max_trials"] + 1))
-    ys = [float(solved_at is not None and x >= solved_at) for x in xs]
-    return RunResult(xs, ys, {"trials_to_satisfactory": solved_at}, rows)
+    return train_until_satisfactory(train_env, test_env, agent, p["max_trials"], p["test_steps"], progress)
 
 
 _QUANTITY = Quantity("trials_to_satisfactory", "training trials until the greedy policy balances > 5000 steps "
