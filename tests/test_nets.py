@@ -119,3 +119,33 @@ def test_state_dict_round_trip():
     np.testing.assert_array_equal(a.values(x), b.values(x))
     with pytest.raises(ValueError, match="shape"):
         OAON(NetConfig(5, 3), 2, np.random.default_rng(0)).load_state_dict(a.state_dict())
+
+
+def test_linear_perceptron_is_value_range_times_net_and_follows_the_delta_rule():
+    rng = np.random.default_rng(4)
+    cfg = NetConfig(5, 0, value_range=2.0, init_range=1.0, lr=0.1, momentum=0.0, linear_output=True)
+    net = OAON(cfg, 3, rng)
+    x = rng.normal(size=5)
+    xb = np.append(x, 1.0)
+    np.testing.assert_allclose(net.values(x), 2.0 * (net.w2 @ xb), rtol=1e-12)
+    # finite differences of 0.5 ((target - Q) / value_range)^2
+    target, a = 0.7, 1
+    _, g2 = net.loss_gradients(x, a, target)
+    eps = 1e-6
+    for i in range(6):
+        old = net.w2[a, i]
+        net.w2[a, i] = old + eps
+        up = 0.5 * ((target - net.value(x, a)) / 2.0) ** 2
+        net.w2[a, i] = old - eps
+        down = 0.5 * ((target - net.value(x, a)) / 2.0) ** 2
+        net.w2[a, i] = old
+        assert g2[i] == pytest.approx((up - down) / (2 * eps), rel=1e-6, abs=1e-10)
+    # one update is w += lr * (target - Q) / value_range * x  (Widrow-Hoff)
+    w_before, q_before = net.w2[a].copy(), net.value(x, a)
+    assert net.update(x, a, target) == pytest.approx(q_before)
+    np.testing.assert_allclose(net.w2[a], w_before + 0.1 * (target - q_before) / 2.0 * xb, rtol=1e-12)
+
+
+def test_linear_output_needs_a_perceptron():
+    with pytest.raises(ValueError, match="linear_output"):
+        NetConfig(4, 3, linear_output=True)

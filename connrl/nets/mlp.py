@@ -3,7 +3,10 @@
 Every unit (hidden and output) uses ``f(x) = 1/(1+e^-x) - 0.5`` (thesis 2.4, 4.2, 7.4), so an output lies in
 (-0.5, 0.5); it is scaled by ``2 * value_range`` to cover the task's value range (Ch. 4: +-1, Ch. 5: +-100).
 Errors are divided by the same factor before back-propagation, so learning rates mean the same thing
-whatever the range. ``n_hidden = 0`` gives a single-layer perceptron (5.4.4, App. B).
+whatever the range. ``n_hidden = 0`` gives a single-layer perceptron (5.4.4, App. B); with ``linear_output`` its
+output unit is linear, ``Q = value_range * net``, trained by the delta rule on the error in units of
+value_range: 7.4 gives the sigmoid to output units "in the nonlinear case" only, and calls the linear OAON
+"single-layer perceptrons".
 
 The thesis trains per sample (one experience at a time), so the work per call is tiny (a 145-30-1 net is
 about 9k multiply-adds) and interpreter/dispatch overhead dominates; the kernels are therefore Numba-compiled
@@ -38,6 +41,7 @@ class NetConfig:
     init_range: float = 0.1  # initial weights uniform in +-init_range (4.2.7: 0.1; Ch. 5, 7: 0.5)
     lr: float = 0.1  # back-propagation learning rate (Table 4.1, 5.3.3, Table B.1)
     momentum: float = 0.9  # momentum factor (4.2.7, 5.3.3, App. B)
+    linear_output: bool = False  # perceptrons only: a linear output unit, Q = value_range * net (7.4, App. B)
 
     def __post_init__(self):
         if self.n_inputs < 1:
@@ -51,6 +55,9 @@ class NetConfig:
             raise ValueError(f"learning rate lr must be > 0, got {self.lr}")
         if not 0 <= self.momentum < 1:
             raise ValueError(f"momentum must be in [0, 1), got {self.momentum}")
+        if self.linear_output and self.n_hidden > 0:
+            raise ValueError("linear_output applies to single-layer perceptrons only (n_hidden=0), "
+                             f"got n_hidden={self.n_hidden}")
 
 
 # --------------------------------------------------------------------------------------------- kernels
@@ -109,26 +116,31 @@ def _mlp_update(w1, w2, d1, d2, a, x, h, target, is_error, scale, lr, momentum):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _perceptron_forward(w2, a, x):
+def _perceptron_forward(w2, a, x, linear):
+    """Output of perceptron a in the net's units (times ``scale`` = the value): f(net), or net / 2 when
+    ``linear`` (so the value is value_range * net)."""
     n_in = w2.shape[1] - 1
     s = w2[a, n_in]
     for i in range(n_in):
         s += w2[a, i] * x[i]
+    if linear:
+        return 0.5 * s
     return 1.0 / (1.0 + math.exp(-s)) - 0.5
 
 
 @numba.njit(cache=True, fastmath=True)
-def _perceptron_values(w2, x, scale, q):
+def _perceptron_values(w2, x, scale, q, linear):
     for a in range(w2.shape[0]):
-        q[a] = scale * _perceptron_forward(w2, a, x)
+        q[a] = scale * _perceptron_forward(w2, a, x, linear)
 
 
 @numba.njit(cache=True, fastmath=True)
-def _perceptron_update(w2, d2, a, x, target, is_error, scale, lr, momentum):
+def _perceptron_update(w2, d2, a, x, target, is_error, scale, lr, momentum, linear):
     n_in = w2.shape[1] - 1
-    y = _perceptron_forward(w2, a, x)
+    y = _perceptron_forward(w2, a, x, linear)
     err = target if is_error else target - scale * y
-    delta = err / scale * (0.25 - y * y)
+    # gradient of 0.5 (err / value_range)^2 for a linear unit; error in output units times f' otherwise
+    delta = 2.0 * err / scale if linear else err / scale * (0.25 - y * y)
     for i in range(n_in):
         s = lr * delta * x[i] + momentum * d2[a, i]
         d2[a, i] = s
@@ -174,14 +186,14 @@ class OAON:
         if self.config.n_hidden > 0:
             _mlp_values(self.w1, self.w2, x, self._h, self.scale, q)
         else:
-            _perceptron_values(self.w2, x, self.scale, q)
+            _perceptron_values(self.w2, x, self.scale, q, self.config.linear_output)
         return q
 
     def value(self, x: np.ndarray, a: int) -> float:
         x = np.ascontiguousarray(x, dtype=np.float64)
         if self.config.n_hidden > 0:
             return self.scale * _mlp_forward(self.w1, self.w2, a, x, self._h)
-        return self.scale * _perceptron_forward(self.w2, a, x)
+        return self.scale * _perceptron_forward(self.w2, a, x, self.config.linear_output)
 
     def update(self, x: np.ndarray, a: int, target: float) -> float:
         """Back-propagate ``target - output_a`` through net a; returns output_a before the step."""
@@ -197,13 +209,18 @@ class OAON:
         if c.n_hidden > 0:
             return _mlp_update(self.w1, self.w2, self.d1, self.d2, a, x, self._h, value, is_error,
                                self.scale, self.lr, c.momentum)
-        return _perceptron_update(self.w2, self.d2, a, x, value, is_error, self.scale, self.lr, c.momentum)
+        return _perceptron_update(self.w2, self.d2, a, x, value, is_error, self.scale, self.lr, c.momentum,
+                                  c.linear_output)
 
     def loss_gradients(self, x: np.ndarray, a: int, target: float) -> tuple[np.ndarray, np.ndarray]:
-        """Gradients of ``0.5 * ((target - y_a) / scale)^2`` w.r.t. (w1[a], w2[a]) (NumPy; for tests)."""
+        """Gradients of ``0.5 * ((target - y_a) / scale)^2`` w.r.t. (w1[a], w2[a]) (NumPy; for tests); for a linear
+        perceptron, of ``0.5 * ((target - y_a) / value_range)^2`` (the delta rule)."""
         x = np.asarray(x, dtype=np.float64)
         if self.config.n_hidden == 0:
             xb = np.append(x, 1.0)
+            if self.config.linear_output:
+                r = self.config.value_range
+                return np.zeros((0, xb.size)), -(target - r * (self.w2[a] @ xb)) / r * xb
             y = symmetric_sigmoid(self.w2[a] @ xb)
             delta = (target - self.scale * y) / self.scale * (0.25 - y * y)
             return np.zeros((0, xb.size)), -delta * xb
@@ -230,11 +247,11 @@ class OAON:
 # ------------------------------------------------------------------------------- whole-lesson replay kernel
 
 @numba.njit(cache=True, fastmath=True)
-def _values_any(w1, w2, x, h, scale, q):
+def _values_any(w1, w2, x, h, scale, q, linear):
     if w1.shape[1] > 0:
         _mlp_values(w1, w2, x, h, scale, q)
     else:
-        _perceptron_values(w2, x, scale, q)
+        _perceptron_values(w2, x, scale, q, linear)
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -256,16 +273,16 @@ def _policy_probability(q, a, temperature):
 
 
 @numba.njit(cache=True, fastmath=True)
-def _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum):
+def _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum, linear):
     if w1.shape[1] > 0:
         _mlp_update(w1, w2, d1, d2, a, x, h, target, False, scale, lr, momentum)
     else:
-        _perceptron_update(w2, d2, a, x, target, False, scale, lr, momentum)
+        _perceptron_update(w2, d2, a, x, target, False, scale, lr, momentum, linear)
 
 
 @numba.njit(cache=True, fastmath=True)
 def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, gamma, lam, temperature,
-                     p_threshold, clip, has_clip, scale, lr, momentum, repair):
+                     p_threshold, clip, has_clip, scale, lr, momentum, repair, linear):
     """Fig. 5.1(a) in incremental mode over a whole lesson; same arithmetic as ``connrl.replay.replay_q``.
 
     ``repair`` (5.4.3, for taught lessons; see connrl.agents.repairs): 0 none; 1 *lower*: every other action
@@ -280,7 +297,7 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
         if t == n - 1 and terminated:
             u = 0.0
         else:
-            _values_any(w1, w2, inputs[t + 1], h, scale, q)
+            _values_any(w1, w2, inputs[t + 1], h, scale, q, linear)
             u = q.max()
         lam_t = lam if (t < n - 1 and next_policy) else 0.0
         e = rewards[t] + gamma * ((1.0 - lam_t) * u + lam_t * e_next)
@@ -288,27 +305,27 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
             e = clip
         a = actions[t]
         if p_threshold > 0.0:
-            _values_any(w1, w2, inputs[t], h, scale, q)
+            _values_any(w1, w2, inputs[t], h, scale, q, linear)
             next_policy = _policy_probability(q, a, temperature) >= p_threshold
         else:
             next_policy = True
         if next_policy:
-            _update_any(w1, w2, d1, d2, a, inputs[t], h, e, scale, lr, momentum)
+            _update_any(w1, w2, d1, d2, a, inputs[t], h, e, scale, lr, momentum, linear)
             used += 1
         if repair != 0:
-            _values_any(w1, w2, inputs[t], h, scale, q)
+            _values_any(w1, w2, inputs[t], h, scale, q, linear)
             qa = q[a]
             if repair == 1:
                 for i in range(q.shape[0]):
                     if i != a and q[i] > qa:
-                        _update_any(w1, w2, d1, d2, i, inputs[t], h, qa, scale, lr, momentum)
+                        _update_any(w1, w2, d1, d2, i, inputs[t], h, qa, scale, lr, momentum, linear)
             else:
                 best = -np.inf
                 for i in range(q.shape[0]):
                     if i != a and q[i] > best:
                         best = q[i]
                 if best > qa:
-                    _update_any(w1, w2, d1, d2, a, inputs[t], h, best, scale, lr, momentum)
+                    _update_any(w1, w2, d1, d2, a, inputs[t], h, best, scale, lr, momentum, linear)
         e_next = e
     return used
 
@@ -322,4 +339,4 @@ def replay_lesson_q(net: OAON, inputs, actions, rewards, terminated: bool, gamma
                                 np.ascontiguousarray(rewards, dtype=np.float64), bool(terminated), float(gamma),
                                 float(lam), float(temperature), float(p_threshold),
                                 0.0 if clip is None else float(clip), clip is not None, net.scale, net.lr,
-                                net.config.momentum, int(repair)))
+                                net.config.momentum, int(repair), net.config.linear_output))
