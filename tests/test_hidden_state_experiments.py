@@ -77,6 +77,20 @@ def test_best_5_of_6():
     assert hs.best_k_mean([None, None, 200, 400, 500, 600]) == (None, 1)
 
 
+def test_best5_of_6_distribution_enumerates_every_subset():
+    # 6 runs: the only subset is the runs themselves
+    assert hs.best5_of_6_distribution([300, 100, 200, 400, 500, 600], 1000) == (300.0, 300.0, 300.0)
+    # 7 runs, one failed (counts 1000, so it is never among the best five): 6 subsets drop a finished run
+    # and keep the other five; the 7th drops the failure and keeps the best five of the six finished runs
+    m, lo, hi = hs.best5_of_6_distribution([100, 200, 300, 400, 500, 600, None], 1000)
+    subsets = [(200 + 300 + 400 + 500 + 600) / 5, (100 + 300 + 400 + 500 + 600) / 5,
+               (100 + 200 + 400 + 500 + 600) / 5, (100 + 200 + 300 + 500 + 600) / 5,
+               (100 + 200 + 300 + 400 + 600) / 5, (100 + 200 + 300 + 400 + 500) / 5,
+               (100 + 200 + 300 + 400 + 500) / 5]
+    assert m == pytest.approx(np.mean(subsets))
+    assert lo == pytest.approx(np.percentile(subsets, 5)) and hi == pytest.approx(np.percentile(subsets, 95))
+
+
 def test_table_b1_parameters_reach_the_nets():
     rng = np.random.default_rng(0)
     p = {**hs.CUP_PARAMS, "task": 2, "arch": "recurrent-model"}
