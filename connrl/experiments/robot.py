@@ -89,7 +89,6 @@ ROBOT_PARAMS = {
     "task": "DP",  # "DP" | "DK" | "WFL" (5.4)
     "lessons": 10,  # taught lessons given to the agent (5.4.1: 0/3/10 DP, DK; 0/2/5 WFL)
     "hidden_fraction": 0.3,  # hidden units ~ 30 % of inputs (5.3.3); 0 = single-layer (5.4.4)
-    "linear_output": False,  # single-layer nets only: linear output unit (7.4's "linear OAON") (R)
     "lr": 0.05,  # back-propagation learning rate (5.3.3; 5.4.4: 0.04 DP/DK, 0.03 WFL)
     "momentum": 0.9,  # (5.3.3; 5.4.4: 0)
     "init_range": 0.5,  # initial weights in +-0.5 (5.3.3)
@@ -195,10 +194,12 @@ def taught_lessons(task: str, n: int, binary_low: float = -0.5) -> list[Lesson]:
 # --------------------------------------------------------------------------------------------- agent
 
 def make_agent(p: dict, rng: np.random.Generator) -> TeachingQCON:
+    """QCON-T of 5.3 from ROBOT_PARAMS; optional ``p["linear_output"]``: single-layer nets with a linear output
+    unit (7.4's "linear OAON"; a diagnostic, not in ROBOT_PARAMS so stored runs keep their keys)."""
     n_in = OBS_SIZE[p["task"]]
     hidden = int(round(p["hidden_fraction"] * n_in))
     net = NetConfig(n_in, hidden, value_range=p["value_range"], init_range=p["init_range"], lr=p["lr"],
-                    momentum=p["momentum"], linear_output=bool(p["linear_output"]) and hidden == 0)
+                    momentum=p["momentum"], linear_output=bool(p.get("linear_output")) and hidden == 0)
     replay = ReplayConfig(capacity=p["capacity"],
                           lessons_per_trial=LinearSchedule(p["lessons_per_trial"], p["lessons_per_trial"]),
                           p_threshold=p["p_threshold"])
