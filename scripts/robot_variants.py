@@ -21,9 +21,9 @@ def main(argv: list[str]) -> None:
     if len(argv) != 3:
         raise SystemExit(__doc__)
     over, first, stop = json.loads(argv[0]), int(argv[1]), int(argv[2])
-    unknown = set(over) - set(ROBOT_PARAMS) - {"linear_output"}
+    unknown = set(over) - set(ROBOT_PARAMS)
     if unknown:
-        raise SystemExit(f"unknown parameters {sorted(unknown)}; allowed: {sorted([*ROBOT_PARAMS, 'linear_output'])}")
+        raise SystemExit(f"unknown parameters {sorted(unknown)}; allowed: {sorted(ROBOT_PARAMS)}")
     t0, finals, curves = time.time(), [], []
     for seed in range(first, stop):
         r = run_robot({**ROBOT_PARAMS, **over}, np.random.default_rng(seed))

@@ -18,7 +18,8 @@ TINY = {**ROBOT_PARAMS, "trials": 4, "test_every": 2, "test_tasks": 3, "lessons_
 def test_specs_cover_chapter_5():
     names = {s.name for s in EXPERIMENTS}
     assert names == {"robot-teaching-dp", "robot-teaching-dk", "robot-teaching-wfl", "robot-lambda-dp",
-                     "robot-lambda-wfl", "robot-repairs-3", "robot-repairs-10", "robot-single-layer"}
+                     "robot-lambda-wfl", "robot-repairs-3", "robot-repairs-10", "robot-single-layer",
+                     "robot-dp-geometry", "robot-dk-geometry"}
     for s in EXPERIMENTS:
         params, runs = s.resolve("full")
         assert runs == 7 and params["trials"] == 300 and params["test_every"] == 10 and params["test_tasks"] == 50
@@ -30,6 +31,32 @@ def test_specs_cover_chapter_5():
     single = next(s for s in EXPERIMENTS if s.name == "robot-single-layer")
     assert single.params["hidden_fraction"] == 0 and single.params["binary_low"] == 0.0
     assert [v.params["lr"] for v in single.variants] == [0.04, 0.04, 0.03]  # 5.4.4
+
+
+def test_geometry_studies_vary_only_the_geometry():
+    dp = next(s for s in EXPERIMENTS if s.name == "robot-dp-geometry")
+    combos = {(v.params["door_width"], v.params["dp_heading"], v.params["lessons"]) for v in dp.variants}
+    assert combos == {(w, h, n) for w in (36.0, 48.0) for h in (180.0, 45.0) for n in (0, 3, 10)}
+    assert {v.thesis["trials_to_2.5"] for v in dp.variants if v.params["lessons"] == 10} == {10}
+    dk = next(s for s in EXPERIMENTS if s.name == "robot-dk-geometry")
+    assert {v.params["dock_tolerance"] for v in dk.variants} == {30.0, 10.0}
+    for s in (dp, dk):
+        base = {k: v for k, v in s.params.items() if k not in ("door_width", "dp_heading", "dock_tolerance")}
+        assert all(base[k] == ROBOT_PARAMS[k] for k in base if k not in ("task", "paths"))
+
+
+def test_other_geometry_gets_its_own_taught_lessons():
+    p = dict(ROBOT_PARAMS, door_width=48.0)
+    wide = robot.taught_lessons("DP", 3, -0.5, robot.make_env(p))
+    again = robot.taught_lessons("DP", 3, -0.5, robot.make_env(p))
+    shipped = robot.taught_lessons("DP", 3)
+    assert all(w.meta["success"] for w in wide)
+    for a, b in zip(wide, again, strict=True):  # deterministic
+        np.testing.assert_array_equal(a.inputs, b.inputs)
+    assert any(a.inputs.shape != b.inputs.shape or not np.array_equal(a.inputs, b.inputs)
+               for a, b in zip(wide, shipped, strict=True))
+    r = run_robot(dict(TINY, door_width=48.0, dp_heading=45.0, lessons=3), np.random.default_rng(1))
+    assert r.curve_x == [0, 2, 4]
 
 
 def test_first_reaching():
@@ -70,6 +97,17 @@ def test_cli_tiny_smoke_and_results_section(tmp_path):
     md = robot.results_section(tmp_path, tmp_path / "RESULTS.md")
     assert "robot-teaching-dp" in md and "| 10 lessons |" in md
     assert (tmp_path / "robot-teaching-dp" / "solution-paths.png").exists()
+
+
+def test_geometry_sections_draw_panels_and_notes(tmp_path):
+    for name in ("robot-dp-geometry", "robot-dk-geometry"):
+        assert cli.main(["run", name, "--profile", "tiny", "--out", str(tmp_path), "--workers", "1", "--quiet"]) == 0
+    md = robot.results_section(tmp_path, tmp_path / "docs" / "RESULTS.md")
+    assert "**Door width and start heading**" in md and "**Docking tolerance**" in md
+    assert "| 48-in doors, facing +-45, 10 lessons |" in md
+    for name in ("robot-dp-geometry", "robot-dk-geometry"):
+        assert (tmp_path / name / "panels.png").exists()
+        assert (tmp_path / "docs" / "figures" / f"{name}-curves.png").exists()
 
 
 def test_results_section_without_runs(tmp_path):

@@ -84,6 +84,23 @@ def test_layout_round_trips_through_dict():
     assert Layout.from_dict(L.to_dict()) == L
 
 
+def test_with_door_width_widens_each_door_about_its_centre():
+    d = Layout.load("default")
+    w = d.with_door_width(48.0)
+    assert {k: v.segment for k, v in w.doors.items()} == {"A": (90.0, 300.0, 138.0, 300.0),
+                                                          "B": (222.0, 300.0, 270.0, 300.0)}
+    walls_300 = sorted(x for x in w.walls if x[1] == x[3] == 300.0)
+    assert walls_300 == [(0.0, 300.0, 90.0, 300.0), (138.0, 300.0, 222.0, 300.0), (270.0, 300.0, 360.0, 300.0)]
+    assert [x for x in w.walls if x not in walls_300] == [x for x in d.walls if not x[1] == x[3] == 300.0]
+    assert d.with_door_width(36.0).walls == d.walls  # the reconstruction's own width changes nothing
+    # a centre just outside the old jambs' reach is blocked at 36 in and free at 48 in
+    assert not d.is_free(103.0, 300.0) and w.is_free(103.0, 300.0)
+    with pytest.raises(ValueError, match="door width"):
+        d.with_door_width(20.0)
+    with pytest.raises(ValueError, match="swallow"):
+        d.with_door_width(200.0)
+
+
 def test_place_rejects_overlap():
     sim = RobotSim(box_layout(), np.random.default_rng(0))
     with pytest.raises(ValueError, match="overlaps"):

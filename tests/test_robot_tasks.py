@@ -228,6 +228,21 @@ def test_dp_start_region_arguments():
         sample_dp_start(rng, L, depth=(72.0, 24.0))
     with pytest.raises(ValueError, match="pass_depth"):
         RobotTaskEnv("DP", pass_depth=-1.0)
+    with pytest.raises(ValueError, match="dp_heading"):
+        RobotTaskEnv("DP", dp_heading=181.0)
+
+
+def test_dp_start_heading_faces_the_door():
+    rng = np.random.default_rng(2)
+    env = RobotTaskEnv("DP", dp_heading=45.0)
+    for _ in range(200):
+        x, y, h = env.sample_task(rng)
+        through = 90.0 if y < 300 else -90.0  # north from A/B, south from C
+        assert abs((h - through + 180.0) % 360.0 - 180.0) <= 45.0 + 1e-9
+    # any heading (the default) keeps the draws of the original generator
+    a = RobotTaskEnv("DP").sample_task(np.random.default_rng(3))
+    b = sample_dp_start(np.random.default_rng(3), Layout.load("default"))
+    assert a == b
 
 
 def test_fixed_test_tasks_and_seed_reproducibility():

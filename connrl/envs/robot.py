@@ -246,6 +246,34 @@ class Layout:
             "subgoals": {k: list(v) for k, v in self.subgoals.items()},
         }
 
+    def with_door_width(self, width: float) -> Layout:
+        """A copy whose doorways are ``width`` in wide, each about its own centre, the abutting collinear
+        wall segments cut back or extended to meet the new jambs (a sensitivity study of SPEC 5's 36 in)."""
+        if not (math.isfinite(width) and width > 2 * ROBOT_RADIUS):
+            raise ValueError(f"door width must be a finite number of inches above the robot's diameter "
+                             f"({2 * ROBOT_RADIUS:g}), got {width!r}")
+        d = self.to_dict()
+        walls = [list(w) for w in d["walls"]]
+        for name, door in self.doors.items():
+            u = (np.asarray(door.segment[2:]) - door.segment[:2]) / door.width
+            old = (np.asarray(door.segment[:2]), np.asarray(door.segment[2:]))
+            new = (door.center - u * width / 2, door.center + u * width / 2)
+            for w in walls:
+                for end in (0, 2):
+                    for o, n in zip(old, new, strict=True):
+                        if np.allclose(w[end:end + 2], o):
+                            other = np.asarray(w[2 - end:4 - end])
+                            if abs(float(u[0] * (other - o)[1] - u[1] * (other - o)[0])) > 1e-9:
+                                continue  # a wall meeting the jamb at an angle stays as it is
+                            if np.dot(other - n, o - door.center) <= 0:
+                                raise ValueError(f"door {name!r} {width:g} in wide would swallow a whole wall")
+                            w[end:end + 2] = [float(n[0]), float(n[1])]
+            d["doors"][name]["segment"] = [float(v) for v in (*new[0], *new[1])]
+        d["walls"] = walls
+        d["name"] = f"{self.name}-door{width:g}"
+        d["description"] = f"{self.description} Doorways {width:g} in wide."
+        return Layout.from_dict(d)
+
     # -- derived geometry ---------------------------------------------------------------------------
     @property
     def segments(self) -> np.ndarray:

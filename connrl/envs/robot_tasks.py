@@ -47,7 +47,8 @@ Starting State (5.4; overridable with ``start_sampler`` or ``reset(options={"sta
     - DK: in the charger's room within ``dk_radius`` (96 in) of the light, with the light in sight;
     - DP: "near a door" (5.4), "in front of a door" (5.4.1, 6.5): a random door, a random one of its two
       rooms, the centre within the doorway's span along the wall (+-``dp_offset``, default half the door
-      width, +-18 in for the 36-in doors) and 24..72 in (``dp_depth``) from the wall;
+      width, +-18 in for the 36-in doors) and 24..72 in (``dp_depth``) from the wall; any heading, or
+      within +-``dp_heading`` deg of facing through the door;
     - WFL / WFR: anywhere in the three rooms.
 
 Episode End:
@@ -59,7 +60,7 @@ Arguments:
     binary_low (-0.5), max_steps (30), render_mode (None | "rgb_array" | "human"), noise (True; sets
     sensor_noise and control_noise unless given), sensor_noise, control_noise, start_sampler
     (callable(rng, layout) -> (x, y, heading)), dk_radius (96), dp_offset (None = half the door width),
-    dp_depth ((24, 72)), dock_tolerance (30 deg), pass_depth (0 in), render_rays (False).
+    dp_depth ((24, 72)), dp_heading (180 = any), dock_tolerance (30 deg), pass_depth (0 in), render_rays (False).
 
 info:
     "pose" (x, y, heading deg) -- the true pose, which the agent's stuck detector dead-reckons with
@@ -258,9 +259,10 @@ def sample_dk_start(rng: np.random.Generator, layout: Layout, radius: float = 96
 
 
 def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float | None = None,
-                    depth: tuple[float, float] = (24.0, 72.0)):
+                    depth: tuple[float, float] = (24.0, 72.0), heading: float = 180.0):
     """In front of a door: random door and side, centre +-offset along the wall from the door centre
-    (None: half the door's width, i.e. within the opening's span), depth[0]..depth[1] from the wall."""
+    (None: half the door's width, i.e. within the opening's span), depth[0]..depth[1] from the wall.
+    The heading is uniform within +-``heading`` deg of facing through the door (180: any heading)."""
     doors = list(layout.doors.values())
     if not doors:
         raise ValueError(f"layout {layout.name!r} has no doors; DP needs at least one")
@@ -268,6 +270,9 @@ def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float | No
         raise ValueError(f"dp_offset must be None (half the door width) or >= 0 inches, got {offset!r}")
     if not 0 <= depth[0] <= depth[1]:
         raise ValueError(f"dp_depth must be (min, max) inches with 0 <= min <= max, got {depth!r}")
+    if not 0 <= heading <= 180:
+        raise ValueError(f"dp_heading must be 0..180 deg (spread about facing the door), got {heading!r}")
+    facing = [0.0]
 
     def sample():
         d = doors[int(rng.integers(len(doors)))]
@@ -276,10 +281,13 @@ def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float | No
         n = np.array([-u[1], u[0]]) * (1.0 if rng.random() < 0.5 else -1.0)
         half = d.width / 2.0 if offset is None else offset
         p = d.center + u * rng.uniform(-half, half) + n * rng.uniform(*depth)
+        facing[0] = math.degrees(math.atan2(-n[1], -n[0]))
         return (float(p[0]), float(p[1]))
 
     x, y = _rejection(rng, sample, lambda p: layout.is_free(*p), "DP")
-    return (x, y, _uniform_heading(rng))
+    if heading >= 180.0:
+        return (x, y, _uniform_heading(rng))  # the draw order of "any heading" is kept
+    return (x, y, wrap_deg(facing[0] + float(rng.uniform(-heading, heading))))
 
 
 def sample_anywhere(rng: np.random.Generator, layout: Layout):
@@ -304,7 +312,7 @@ class RobotTaskEnv(gym.Env):
                  sensor_noise: bool | None = None, control_noise: bool | None = None,
                  start_sampler: Callable[[np.random.Generator, Layout], tuple] | None = None,
                  dk_radius: float = 96.0, dp_offset: float | None = None,
-                 dp_depth: tuple[float, float] = (24.0, 72.0),
+                 dp_depth: tuple[float, float] = (24.0, 72.0), dp_heading: float = 180.0,
                  dock_tolerance: float = 30.0, pass_depth: float = 0.0, render_rays: bool = False):
         if task not in TASKS:
             raise ValueError(f"task must be one of {TASKS}, got {task!r}")
@@ -330,6 +338,9 @@ class RobotTaskEnv(gym.Env):
         self._start_sampler = start_sampler
         self._dk_radius, self._dp_depth = float(dk_radius), tuple(float(v) for v in dp_depth)
         self._dp_offset = None if dp_offset is None else float(dp_offset)
+        if not 0 <= dp_heading <= 180:
+            raise ValueError(f"dp_heading must be 0..180 deg (spread about facing the door), got {dp_heading!r}")
+        self._dp_heading = float(dp_heading)
         sn = noise if sensor_noise is None else sensor_noise
         cn = noise if control_noise is None else control_noise
         self.sim = RobotSim(self.layout, np.random.default_rng(), sensor_noise=sn, control_noise=cn)
@@ -360,7 +371,7 @@ class RobotTaskEnv(gym.Env):
         if self.task == "DK":
             return sample_dk_start(rng, self.layout, self._dk_radius)
         if self.task == "DP":
-            return sample_dp_start(rng, self.layout, self._dp_offset, self._dp_depth)
+            return sample_dp_start(rng, self.layout, self._dp_offset, self._dp_depth, self._dp_heading)
         return sample_anywhere(rng, self.layout)
 
     # -- observation --------------------------------------------------------------------------------
