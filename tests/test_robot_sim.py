@@ -19,6 +19,7 @@ from connrl.envs.robot import (
     Layout,
     RobotSim,
     collision_side,
+    render_figure_5_3,
     render_frame,
     render_paths,
 )
@@ -294,3 +295,11 @@ def test_render_frame_and_paths(tmp_path):
     assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and img.shape[2] == 3
     with pytest.raises(ValueError, match="path 0"):
         render_paths(L, [[]])
+
+
+def test_figure_5_3_panels(tmp_path):
+    img = render_figure_5_3(file=tmp_path / "f.png", dpi=40)
+    assert img.ndim == 3 and img.shape[2] == 3 and (tmp_path / "f.png").stat().st_size > 0
+    np.testing.assert_array_equal(img, render_figure_5_3(dpi=40))  # same seed, same readings
+    with pytest.raises(ValueError, match="no location 'L3'"):
+        render_figure_5_3(box_layout(), dpi=40)

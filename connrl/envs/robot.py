@@ -699,6 +699,38 @@ def render_frame(layout: Layout, pose, *, reading: Reading | None = None, rays: 
     return _to_rgb(fig)
 
 
+def render_figure_5_3(layout: Layout | str = "default", *, seed: int = 0, file=None, dpi: int = 100) -> np.ndarray:
+    """Fig. 5.3's four panels: (a) the layout with L1..L4, (b) sonar at L3 facing north, (c) at L4 (they
+    look alike: the hidden state of Ch. 8), (d) the light bits at L2 facing north. Readings are noisy, drawn
+    with ``seed``; purple dots mark door-edge bits. Returns the RGB image; with ``file`` also writes a PNG."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    layout = layout if isinstance(layout, Layout) else Layout.load(layout)
+    sim = RobotSim(layout, np.random.default_rng(seed))
+    w, h = layout.size
+    fig = Figure(figsize=(2 * (1.5 * w / 100 + 0.2), 2 * (1.5 * h / 100 + 0.5)), dpi=dpi)
+    FigureCanvasAgg(fig)
+    panels = [("(a) the robot's world, locations L1-L4", None, False),
+              ("(b) sonar at L3 facing north (dots: door edges)", "L3", True),
+              ("(c) sonar at L4 facing north", "L4", True),
+              ("(d) light bits at L2 facing north (yellow rays)", "L2", True)]
+    for i, (title, loc, rays) in enumerate(panels):
+        ax = fig.add_subplot(2, 2, i + 1)
+        draw_layout(ax, layout, locations=loc is None)
+        ax.set_title(title, fontsize=9)
+        if loc is not None:
+            if loc not in layout.locations:
+                raise ValueError(f"layout {layout.name!r} has no location {loc!r}; it has {sorted(layout.locations)}")
+            sim.place(*layout.locations[loc])
+            draw_robot(ax, sim.pose, reading=sim.sense(), rays=rays)
+    fig.tight_layout()
+    img = _to_rgb(fig)
+    if file is not None:
+        save_png(img, file)
+    return img
+
+
 def render_paths(layout: Layout, paths: Sequence[Sequence[Sequence[float]]], *,
                  labels: Sequence[str] | None = None, title: str | None = None, file=None,
                  robots: bool = True, dpi: int = 100, scale: float = 1.5,

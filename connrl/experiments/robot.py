@@ -453,11 +453,15 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
              "(`python -m connrl.experiments.robot make-lessons`).", ""]
     curves: dict[tuple[str, str], tuple[np.ndarray, np.ndarray, int]] = {}
     any_found = False
+    walls, run_walls, cpus = [], [], set()
     for spec in EXPERIMENTS:
         summary, recs = _records(spec, out_dir)
         if summary is None or not recs:
             continue
         any_found = True
+        walls.append(summary["timing"]["wall_time_s"])
+        run_walls += summary["timing"]["run_wall_time_s"]
+        cpus.add(summary["environment"].get("cpus"))
         prof = summary["profile"]
         lines += [f"### {spec.name}: {spec.title} (thesis {spec.section})", "",
                   f"`connrl run {spec.name} --profile {prof} --seed {summary['base_seed']}` — "
@@ -504,6 +508,18 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
                           figure(Path(f), doc, f"{spec.name}-paths"), ""]
     if not any_found:
         return "\n".join(lines + ["No Ch. 5 results yet: run `connrl run robot-teaching-dp` etc.", ""])
+    from connrl.envs.robot import render_figure_5_3
+    from connrl.experiments.results import figure
+
+    sim_png = out_dir / "robot-figure-5-3.png"
+    render_figure_5_3(file=sim_png)
+    at = 4  # after the chapter heading and the introduction
+    lines[at:at] = ["The simulator as Fig. 5.3 shows it (`connrl.envs.robot.render_figure_5_3`, noisy readings, "
+                    "seed 0):", "", figure(sim_png, doc, "robot-figure-5-3"), ""]
+    lines += [f"**Compute:** the {len(walls)} Ch. 5 experiments above ({len(run_walls)} runs) took "
+              f"{sum(walls) / 60:.1f} min of wall time together ({sum(run_walls) / 60:.1f} min summed over runs; "
+              f"machine with {', '.join(str(c) for c in sorted(cpus, key=str))} CPUs, the `connrl run` commands "
+              "above, run one after another).", ""]
     lines += _speedup_tables(curves)
     lines += ["### Where Ch. 5 falls short", "",
               "Door passing learns far slower than the thesis's, with or without taught lessons (tables above). "
