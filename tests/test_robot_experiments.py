@@ -33,28 +33,49 @@ def test_specs_cover_chapter_5():
     assert [v.params["lr"] for v in single.variants] == [0.04, 0.04, 0.03]  # 5.4.4
 
 
+def _variant_params(name: str, label: str) -> dict:
+    spec = next(s for s in EXPERIMENTS if s.name == name)
+    params, _ = spec.resolve("full")
+    v = next(v for v in spec.variants if v.label == label)
+    return {k: x for k, x in {**params, **v.params}.items() if k != "paths"}
+
+
 def test_geometry_studies_vary_only_the_geometry():
     dp = next(s for s in EXPERIMENTS if s.name == "robot-dp-geometry")
     combos = {(v.params["door_width"], v.params["dp_heading"], v.params["lessons"]) for v in dp.variants}
     assert combos == {(w, h, n) for w in (36.0, 48.0) for h in (180.0, 45.0) for n in (0, 3, 10)}
     assert {v.thesis["trials_to_2.5"] for v in dp.variants if v.params["lessons"] == 10} == {10}
-    dk = next(s for s in EXPERIMENTS if s.name == "robot-dk-geometry")
-    assert {v.params["dock_tolerance"] for v in dk.variants} == {30.0, 10.0}
-    for s in (dp, dk):
-        base = {k: v for k, v in s.params.items() if k not in ("door_width", "dp_heading", "dock_tolerance")}
-        assert all(base[k] == ROBOT_PARAMS[k] for k in base if k not in ("task", "paths"))
+    # in the SPEC geometry the studies' variants are exactly the thesis experiments' variants
+    for n, label in ((0, "no teaching"), (3, "3 lessons"), (10, "10 lessons")):
+        assert _variant_params("robot-dp-geometry", f"36-in doors, any heading, {n} lessons") == \
+            _variant_params("robot-teaching-dp", label)
+    assert _variant_params("robot-dk-geometry", "30 deg, multi-layer, 10 lessons") == \
+        _variant_params("robot-teaching-dk", "10 lessons")
+    assert _variant_params("robot-dk-geometry", "30 deg, single-layer, 10 lessons") == \
+        _variant_params("robot-single-layer", "DK single-layer")
+    tight = _variant_params("robot-dk-geometry", "10 deg, single-layer, 10 lessons")
+    assert tight == {**_variant_params("robot-single-layer", "DK single-layer"), "dock_tolerance": 10.0}
 
 
 def test_other_geometry_gets_its_own_taught_lessons():
-    p = dict(ROBOT_PARAMS, door_width=48.0)
-    wide = robot.taught_lessons("DP", 3, -0.5, robot.make_env(p))
-    again = robot.taught_lessons("DP", 3, -0.5, robot.make_env(p))
+    wide = robot.taught_lessons("DP", 3, -0.5, door_width=48.0)
+    again = robot.taught_lessons("DP", 3, -0.5, door_width=48.0)
     shipped = robot.taught_lessons("DP", 3)
-    assert all(w.meta["success"] for w in wide)
     for a, b in zip(wide, again, strict=True):  # deterministic
         np.testing.assert_array_equal(a.inputs, b.inputs)
+    # the teacher demonstrated in the 48-in layout: its first lesson is what the teacher does there
+    env = robot.make_env(dict(ROBOT_PARAMS, door_width=48.0))
+    assert env.layout.doors["A"].width == 48.0
+    direct = make_taught_lessons("DP", n=1, seed=0, env=env)[0]
+    np.testing.assert_array_equal(wide[0].inputs, direct.inputs)
+    assert all(w.meta["success"] for w in wide)
     assert any(a.inputs.shape != b.inputs.shape or not np.array_equal(a.inputs, b.inputs)
                for a, b in zip(wide, shipped, strict=True))
+    # docking tolerance matters for DK only
+    assert all(np.array_equal(a.inputs, b.inputs) for a, b in
+               zip(robot.taught_lessons("DP", 2, dock_tolerance=10.0), robot.taught_lessons("DP", 2), strict=True))
+    with pytest.raises(ValueError, match="the teacher made 10"):
+        robot.taught_lessons("DP", 11, door_width=48.0)
     r = run_robot(dict(TINY, door_width=48.0, dp_heading=45.0, lessons=3), np.random.default_rng(1))
     assert r.curve_x == [0, 2, 4]
 

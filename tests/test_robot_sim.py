@@ -100,6 +100,9 @@ def test_with_door_width_widens_each_door_about_its_centre():
         d.with_door_width(20.0)
     with pytest.raises(ValueError, match="swallow"):
         d.with_door_width(200.0)
+    returned = Layout.from_dict({**d.to_dict(), "walls": [*map(list, d.walls), [132, 300, 132, 290]]})
+    with pytest.raises(ValueError, match="meets a jamb at an angle"):
+        returned.with_door_width(48.0)
 
 
 def test_place_rejects_overlap():

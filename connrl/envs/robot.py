@@ -248,7 +248,8 @@ class Layout:
 
     def with_door_width(self, width: float) -> Layout:
         """A copy whose doorways are ``width`` in wide, each about its own centre, the abutting collinear
-        wall segments cut back or extended to meet the new jambs (a sensitivity study of SPEC 5's 36 in)."""
+        wall segments cut back or extended to meet the new jambs (a sensitivity study of SPEC 5's 36 in).
+        Layouts with a wall meeting a jamb at an angle (a door return) are refused rather than guessed."""
         if not (math.isfinite(width) and width > 2 * ROBOT_RADIUS):
             raise ValueError(f"door width must be a finite number of inches above the robot's diameter "
                              f"({2 * ROBOT_RADIUS:g}), got {width!r}")
@@ -264,7 +265,8 @@ class Layout:
                         if np.allclose(w[end:end + 2], o):
                             other = np.asarray(w[2 - end:4 - end])
                             if abs(float(u[0] * (other - o)[1] - u[1] * (other - o)[0])) > 1e-9:
-                                continue  # a wall meeting the jamb at an angle stays as it is
+                                raise ValueError(f"door {name!r}: wall {tuple(w)} meets a jamb at an angle; "
+                                                 "with_door_width only moves walls in line with the door")
                             if np.dot(other - n, o - door.center) <= 0:
                                 raise ValueError(f"door {name!r} {width:g} in wide would swallow a whole wall")
                             w[end:end + 2] = [float(n[0]), float(n[1])]

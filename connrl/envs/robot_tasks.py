@@ -287,7 +287,7 @@ def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float | No
     x, y = _rejection(rng, sample, lambda p: layout.is_free(*p), "DP")
     if heading >= 180.0:
         return (x, y, _uniform_heading(rng))  # the draw order of "any heading" is kept
-    return (x, y, wrap_deg(facing[0] + float(rng.uniform(-heading, heading))))
+    return (x, y, (facing[0] + float(rng.uniform(-heading, heading))) % 360.0)
 
 
 def sample_anywhere(rng: np.random.Generator, layout: Layout):

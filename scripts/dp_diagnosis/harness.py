@@ -2,7 +2,6 @@
 
 import numpy as np
 
-from connrl.envs.robot_tasks import RobotTaskEnv
 from connrl.experiments import robot as R
 from connrl.experiments.loop import run_trial
 
@@ -16,8 +15,7 @@ class Run:
         self.p = p
         rng = np.random.default_rng(seed)
         self.rng = rng
-        self.env = RobotTaskEnv(p["task"], binary_low=p["binary_low"], max_steps=p["max_steps"])
-        self.test_env = RobotTaskEnv(p["task"], binary_low=p["binary_low"], max_steps=p["max_steps"])
+        self.env, self.test_env = R.make_env(p), R.make_env(p)
         task_rng = np.random.default_rng(rng.integers(2**63))
         self.tests = [self.test_env.sample_task(task_rng) for _ in range(p["test_tasks"])]
         self.test_seeds = task_rng.integers(2**31, size=p["test_tasks"])
