@@ -259,17 +259,16 @@ class Layout:
             u = (np.asarray(door.segment[2:]) - door.segment[:2]) / door.width
             old = (np.asarray(door.segment[:2]), np.asarray(door.segment[2:]))
             new = (door.center - u * width / 2, door.center + u * width / 2)
-            for w in walls:
-                for end in (0, 2):
-                    for o, n in zip(old, new, strict=True):
-                        if np.allclose(w[end:end + 2], o):
-                            other = np.asarray(w[2 - end:4 - end])
-                            if abs(float(u[0] * (other - o)[1] - u[1] * (other - o)[0])) > 1e-9:
-                                raise ValueError(f"door {name!r}: wall {tuple(w)} meets a jamb at an angle; "
-                                                 "with_door_width only moves walls in line with the door")
-                            if np.dot(other - n, o - door.center) <= 0:
-                                raise ValueError(f"door {name!r} {width:g} in wide would swallow a whole wall")
-                            w[end:end + 2] = [float(n[0]), float(n[1])]
+            for o, n in zip(old, new, strict=True):
+                for w, end in [(w, e) for w in walls for e in (0, 2) if np.allclose(w[e:e + 2], o)]:
+                    other = np.asarray(w[2 - end:4 - end])
+                    v = other - o
+                    if abs(float(u[0] * v[1] - u[1] * v[0])) > 1e-9:
+                        raise ValueError(f"door {name!r}: wall {tuple(w)} meets a jamb at an angle; "
+                                         "with_door_width only moves walls in line with the door")
+                    if np.dot(other - n, o - door.center) <= 0:
+                        raise ValueError(f"door {name!r} {width:g} in wide would swallow a whole wall")
+                    w[end:end + 2] = [float(n[0]), float(n[1])]
             d["doors"][name]["segment"] = [float(v) for v in (*new[0], *new[1])]
         d["walls"] = walls
         d["name"] = f"{self.name}-door{width:g}"

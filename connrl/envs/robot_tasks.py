@@ -272,22 +272,20 @@ def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float | No
         raise ValueError(f"dp_depth must be (min, max) inches with 0 <= min <= max, got {depth!r}")
     if not 0 <= heading <= 180:
         raise ValueError(f"dp_heading must be 0..180 deg (spread about facing the door), got {heading!r}")
-    facing = [0.0]
 
-    def sample():
+    def sample():  # (x, y, direction through the door in deg)
         d = doors[int(rng.integers(len(doors)))]
         x0, y0, x1, y1 = d.segment
         u = np.array([x1 - x0, y1 - y0]) / d.width
         n = np.array([-u[1], u[0]]) * (1.0 if rng.random() < 0.5 else -1.0)
         half = d.width / 2.0 if offset is None else offset
         p = d.center + u * rng.uniform(-half, half) + n * rng.uniform(*depth)
-        facing[0] = math.degrees(math.atan2(-n[1], -n[0]))
-        return (float(p[0]), float(p[1]))
+        return (float(p[0]), float(p[1]), math.degrees(math.atan2(-n[1], -n[0])))
 
-    x, y = _rejection(rng, sample, lambda p: layout.is_free(*p), "DP")
+    x, y, facing = _rejection(rng, sample, lambda p: layout.is_free(p[0], p[1]), "DP")
     if heading >= 180.0:
         return (x, y, _uniform_heading(rng))  # the draw order of "any heading" is kept
-    return (x, y, (facing[0] + float(rng.uniform(-heading, heading))) % 360.0)
+    return (x, y, (facing + float(rng.uniform(-heading, heading))) % 360.0)
 
 
 def sample_anywhere(rng: np.random.Generator, layout: Layout):

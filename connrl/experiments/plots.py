@@ -24,6 +24,15 @@ def curves_on_grid(records: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     return xs, ys
 
 
+def save_figure(fig, file: Path) -> Path:
+    """Write ``fig`` to ``file`` (format from its suffix) atomically: a reader never sees half a plot."""
+    file.parent.mkdir(parents=True, exist_ok=True)
+    tmp = file.with_name(f".{file.stem}.tmp{file.suffix}")
+    fig.savefig(tmp, format=file.suffix[1:])
+    tmp.replace(file)
+    return file
+
+
 def plot_experiment(spec: ExperimentSpec, records: list[dict], out_dir: Path) -> list[Path]:
     fig, ax = plt.subplots(figsize=(7, 4.2), dpi=120)
     n_runs = 0
@@ -59,14 +68,7 @@ def plot_experiment(spec: ExperimentSpec, records: list[dict], out_dir: Path) ->
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
-    out_dir.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for ext in ("png", "svg"):
-        p = out_dir / f"curve.{ext}"
-        tmp = out_dir / f".curve.tmp.{ext}"
-        fig.savefig(tmp, format=ext)
-        tmp.replace(p)
-        paths.append(p)
+    paths = [save_figure(fig, out_dir / f"curve.{ext}") for ext in ("png", "svg")]
     plt.close(fig)
     return paths
 

@@ -458,6 +458,8 @@ def draw_solution_paths(records: list[dict], file: Path, task: str, k: int) -> P
 
 def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     """Markdown for docs/RESULTS.md: our Ch. 5 numbers beside the thesis's, from OUT/robot-*/ records."""
+    from connrl.experiments.results import figure
+
     out_dir = Path(out_dir)
     intro = ["## Chapter 5: robot skills with QCON-T (DP, DK, WFL)", "",
              "Performance = reinforcement per step on 50 fixed greedy test tasks, tested every 10 trials. "
@@ -481,8 +483,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
         prof = summary["profile"]
         lines += [f"### {spec.name}: {spec.title} (thesis {spec.section})", "",
                   f"`connrl run {spec.name} --profile {prof} --seed {summary['base_seed']}` — "
-                  f"{summary['runs_per_variant']} runs per variant, seeds {summary['base_seed']}.."
-                  f"{summary['base_seed'] + summary['runs_per_variant'] - 1}, "
+                  f"{summary['runs_per_variant']} runs per variant, seeds {seeds[spec.name]}, "
                   f"wall {summary['timing']['wall_time_s']:.0f} s.", ""]
         dp = any(q.name == "trials_to_2.5" for q in spec.quantities)
         head = "| variant | final perf. | mean perf. |"
@@ -505,8 +506,6 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
                             f"({q['runs_reaching']}/{len(q['per_run'])}) | {_fmt(q['thesis'])} |")
             lines.append(row)
         lines.append("")
-        from connrl.experiments.results import figure
-
         panels = _PANELS.get(spec.name)
         png = (_draw_panels(spec, curves, panels, out_dir / spec.name / "panels.png") if panels
                else out_dir / spec.name / "curve.png")
@@ -525,7 +524,6 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     if not any_found:
         return "\n".join(intro + ["No Ch. 5 results yet: run `connrl run robot-teaching-dp` etc.", ""])
     from connrl.envs.robot import render_figure_5_3
-    from connrl.experiments.results import figure
 
     sim_png = out_dir / "robot-figure-5-3.png"
     render_figure_5_3(file=sim_png)
@@ -570,7 +568,7 @@ def _draw_panels(spec: ExperimentSpec, curves, panels: dict, file: Path) -> Path
     """One panel per group of variants (mean curves), shared axes, the thesis's 2.5 / 5 levels dashed."""
     import matplotlib.pyplot as plt
 
-    from connrl.experiments import plots  # noqa: F401  (selects the Agg backend)
+    from connrl.experiments.plots import save_figure  # (importing plots selects the Agg backend)
 
     n = len(panels)
     cols = 2
@@ -592,11 +590,8 @@ def _draw_panels(spec: ExperimentSpec, curves, panels: dict, file: Path) -> Path
         ax.set_ylabel("reinforcement / step")
     fig.suptitle(f"{spec.name} (mean over runs; dashed: 2.5 and 5)" if spec.y_reference else spec.name, fontsize=10)
     fig.tight_layout()
-    file.parent.mkdir(parents=True, exist_ok=True)
-    tmp = file.with_name(f".{file.name}.tmp.png")
-    fig.savefig(tmp)
+    save_figure(fig, file)
     plt.close(fig)
-    tmp.replace(file)
     return file
 
 
