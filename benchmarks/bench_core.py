@@ -27,9 +27,10 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from connrl.core.lessons import Lesson
+from connrl.core.replay import ReplayParams, replay_q  # noqa: E402
 from connrl.envs.pole import PoleBalancingEnv  # noqa: E402
 from connrl.nets import OAON, NetConfig  # noqa: E402
-from connrl.replay import Lesson, ReplayParams, replay_q  # noqa: E402
 
 
 def best_time(fn, number: int, repeat: int = 5) -> float:

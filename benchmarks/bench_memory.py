@@ -15,7 +15,7 @@ import numpy as np
 
 from connrl.envs.cup import CupCollectionEnv
 from connrl.experiments.hidden_state import ARCHITECTURES, CUP_PARAMS, make_agent, test_score
-from connrl.experiments.loop import run_trial
+from connrl.experiments.protocol import run_trial
 
 
 def main():

@@ -15,8 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 import connrl.envs  # noqa: F401  (registers the ids)
-from connrl.envs.robot import RobotSim
-from connrl.envs.robot_tasks import RobotTaskEnv
+from connrl.envs.robot import RobotSim, RobotTaskEnv
 
 
 def bench_sim(steps: int) -> float:

@@ -14,10 +14,11 @@ import time
 
 import numpy as np
 
-from connrl.agents.repairs import replay_oaon
+from connrl.core.lessons import Lesson
+from connrl.core.replay import ReplayParams, replay_q
+from connrl.core.replay_kernel import replay_oaon
 from connrl.experiments.robot import EXPERIMENTS, ROBOT_PARAMS, run_robot
 from connrl.nets import OAON, NetConfig
-from connrl.replay import Lesson, ReplayParams, replay_q
 
 
 def bench_replay(reps: int = 300) -> tuple[float, float]:

@@ -16,9 +16,9 @@ import time
 
 import numpy as np
 
-from connrl.agents.survival import SurvivalAgentParams, make_survival_agent
 from connrl.envs.survival import SurvivalEnv
-from connrl.experiments.loop import run_trial
+from connrl.experiments.protocol import run_trial
+from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 
 CONFIGS = [("AHCON", "learned"), ("AHCON-R", "learned"), ("AHCON-M", "learned"), ("AHCON-M", "perfect"),
            ("AHCON-T", "learned"), ("QCON", "learned"), ("QCON-R", "learned"), ("QCON-M", "learned"),

@@ -79,7 +79,7 @@ def _print_summary(summary: dict) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from connrl.experiments.results import fmt as _fmt
+    from connrl.report.page import fmt as _fmt
 
     table = Table(title=f"{summary['experiment']} ({summary['profile']} profile, {summary['runs_per_variant']} "
                   f"run(s) per variant, seeds from {summary['base_seed']})")
@@ -94,7 +94,7 @@ def _print_summary(summary: dict) -> None:
 
 
 def cmd_plot(args) -> int:
-    from connrl.experiments.plots import plot_from_disk
+    from connrl.report.plots import plot_from_disk
 
     spec = _get(args.name)
     try:
@@ -116,7 +116,7 @@ def cmd_show(args) -> int:
 
 
 def cmd_teach(args) -> int:
-    from connrl.teach import TEACH_TARGETS, teach
+    from connrl.tasks.teach import TEACH_TARGETS, teach
 
     if args.target not in TEACH_TARGETS:
         raise SystemExit(f"connrl: unknown teach target {args.target!r}; available: {', '.join(TEACH_TARGETS)}")
@@ -124,7 +124,7 @@ def cmd_teach(args) -> int:
 
 
 def cmd_results(args) -> int:
-    from connrl.experiments.results import write_results
+    from connrl.report.page import write_results
 
     path = write_results(Path(args.out), Path(args.doc))
     print(path)

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
-from connrl.experiments.loop import run_trial
-from connrl.exploration import TemperatureSchedule
+from connrl.core.exploration import TemperatureSchedule
+from connrl.core.lessons import Lesson
+from connrl.experiments.protocol import run_trial
 from connrl.nets import NetConfig
-from connrl.replay import Lesson
 
 TEMP = TemperatureSchedule.inverse(10, 30, 50)
 

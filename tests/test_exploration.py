@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from connrl.exploration import (
+from connrl.core.exploration import (
     StuckConfig,
     StuckDetector,
     TemperatureSchedule,

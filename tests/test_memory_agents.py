@@ -13,16 +13,17 @@ from connrl.agents.memory import (
     SensationWindow,
     WindowQ,
     model_targets,
-    recurrent_q_targets,
     replay_recurrent_q,
     window_input_size,
 )
 from connrl.agents.qcon import QCONConfig
+from connrl.core.exploration import TemperatureSchedule, boltzmann_probabilities
+from connrl.core.lessons import Lesson
+from connrl.core.replay import ReplayParams, batch_targets
+from connrl.core.returns import lambda_returns
 from connrl.envs.cup import CupCollectionEnv
-from connrl.experiments.loop import run_trial
-from connrl.exploration import TemperatureSchedule, boltzmann_probabilities
+from connrl.experiments.protocol import run_trial
 from connrl.nets import NetConfig, RecurrentNetConfig, RecurrentOAON
-from connrl.replay import Lesson, ReplayParams, lambda_returns
 
 TEMP = TemperatureSchedule.inverse(5, 30, 100)
 REPLAY = ReplayConfig(capacity=70, lessons_per_trial=LinearSchedule(3, 3), p_threshold=0.01,
@@ -118,7 +119,7 @@ def test_recurrent_q_targets_by_hand():
     actions = np.array([0, 0, 1])
     rewards = np.array([0.0, 0.0, 1.0])
     params = ReplayParams(gamma=0.9, lam=0.5, temperature=1.0, p_threshold=0.01)
-    targets, weights = recurrent_q_targets(values, actions, rewards, True, params)
+    targets, weights = batch_targets(values, actions, rewards, True, params)
     assert boltzmann_probabilities(values[1], 1.0)[0] < 0.01
     assert np.array_equal(weights, [1.0, 0.0, 1.0])
     e2 = 1.0  # terminal: u = 0, lambda 0 at the last step
@@ -126,13 +127,13 @@ def test_recurrent_q_targets_by_hand():
     e0 = 0.9 * 5.0  # lambda cut: a_1 is non-policy, so e'_0 = r_0 + gamma u_1
     assert np.allclose(targets, [e0, e1, e2])
     # a truncated lesson bootstraps from the last input; lambda_returns agrees with p_threshold 0
-    t2, w2 = recurrent_q_targets(values, actions, rewards, False, ReplayParams(gamma=0.9, lam=0.5))
+    t2, w2 = batch_targets(values, actions, rewards, False, ReplayParams(gamma=0.9, lam=0.5))
     assert np.allclose(t2, lambda_returns(rewards, values[1:].max(1), 0.9, 0.5)) and w2.all()
 
 
 def test_recurrent_q_targets_checks_shapes():
     with pytest.raises(ValueError, match="n\\+1=3"):
-        recurrent_q_targets(np.zeros((2, 2)), np.array([0, 1]), np.zeros(2), True, ReplayParams(gamma=0.9))
+        batch_targets(np.zeros((2, 2)), np.array([0, 1]), np.zeros(2), True, ReplayParams(gamma=0.9))
 
 
 def test_replay_recurrent_q_is_one_bptt_step_toward_the_targets():
@@ -141,11 +142,11 @@ def test_replay_recurrent_q_is_one_bptt_step_toward_the_targets():
     lesson = Lesson(rng.choice([-0.5, 0.5], (6, 4)), rng.integers(0, 3, 5), np.r_[0, 0, 0, 0, 1.0], True)
     params = ReplayParams(gamma=0.9, lam=0.8)
     ys, _ = net.forward_sequence(lesson.inputs, np.append(lesson.actions, 0))
-    targets, weights = recurrent_q_targets(ys[:, :, 0], lesson.actions, lesson.rewards, True, params)
+    targets, weights = batch_targets(ys[:, :, 0], lesson.actions, lesson.rewards, True, params)
     twin = RecurrentOAON(net.config, 3, np.random.default_rng(9))
     twin.load_state_dict(net.state_dict())
     used = replay_recurrent_q(net, lesson, params)
-    twin.train_sequence(lesson.inputs[:-1], lesson.actions, targets, weights)
+    twin.train_sequence(lesson.inputs[:-1], lesson.actions, targets, weights.astype(float))
     assert used == 5
     assert np.array_equal(net.w1, twin.w1) and np.array_equal(net.w2, twin.w2)
     after, _ = net.forward_sequence(lesson.inputs, np.append(lesson.actions, 0))

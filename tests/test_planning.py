@@ -4,17 +4,11 @@ and the rotated single net of the global representation (4.2.4)."""
 import numpy as np
 import pytest
 
-from connrl.agents.models import (
-    LearnedSurvivalModel,
-    PerfectSurvivalModel,
-    PlanningConfig,
-    RelaxationPlanner,
-    relaxation_ahc,
-    relaxation_q,
-)
-from connrl.agents.rotated import RotatedNet
+from connrl.core.planning import PlanningConfig, RelaxationPlanner, relaxation_ahc, relaxation_q
 from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv, rotate_observation
 from connrl.nets import OAON, NetConfig
+from connrl.nets.rotated import RotatedNet
+from connrl.tasks.survival_models import LearnedSurvivalModel, PerfectSurvivalModel
 
 PERMS = np.stack([ROTATION_PERMUTATIONS[ACTION_ROTATION[a]] for a in range(4)])
 
@@ -76,7 +70,7 @@ class CountingModel:
 class FakeAgent:
     def __init__(self, trial):
         from connrl.agents import QCONConfig
-        from connrl.exploration import TemperatureSchedule
+        from connrl.core.exploration import TemperatureSchedule
 
         self.trial = trial
         self.q = TableQ({0.0: [0, 0, 0, 0]})
@@ -172,8 +166,8 @@ def test_rotated_net_values_are_one_net_on_rotated_inputs():
 
 
 def test_qcon_plans_while_learning_but_not_at_test():
-    from connrl.agents.survival import SurvivalAgentParams, make_survival_agent
-    from connrl.experiments.loop import run_trial
+    from connrl.experiments.protocol import run_trial
+    from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 
     env = SurvivalEnv("local")
     env.reset(seed=0)

@@ -6,21 +6,11 @@ import math
 import numpy as np
 import pytest
 
+from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
+from connrl.core.lessons import Lesson, LessonMemory, LessonRecorder, recency_index
+from connrl.core.replay import ReplayParams, replay_ahc, replay_q
+from connrl.core.returns import lambda_returns, td_lambda_target
 from connrl.nets import OAON, NetConfig
-from connrl.replay import (
-    Lesson,
-    LessonFileError,
-    LessonMemory,
-    LessonRecorder,
-    ReplayParams,
-    lambda_returns,
-    load_lessons,
-    recency_index,
-    replay_ahc,
-    replay_q,
-    save_lessons,
-    td_lambda_target,
-)
 
 
 @pytest.mark.parametrize("lam", [0.0, 0.3, 1.0])

@@ -5,18 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from connrl.agents.repairs import (
-    REPAIRS,
-    TeachingConfig,
-    TeachingQCON,
-    _replay_q_with_repairs,
-    repair_step,
-    replay_oaon,
-)
+from connrl.agents.teaching import TeachingConfig, TeachingQCON
+from connrl.core.exploration import boltzmann_probabilities
+from connrl.core.lessons import Lesson
+from connrl.core.replay import REPAIRS, ReplayParams, repair_step, replay_q, replay_q_reference
+from connrl.core.replay_kernel import replay_oaon
 from connrl.experiments.robot import ROBOT_PARAMS, binary_columns, make_agent, taught_lessons
-from connrl.exploration import boltzmann_probabilities
 from connrl.nets import OAON, NetConfig
-from connrl.replay import Lesson, ReplayParams, replay_q
 
 
 def _lesson(rng, n=12, d=7, terminated=True):
@@ -37,7 +32,7 @@ def test_kernel_equals_reference_replay(hidden, terminated, p_threshold):
     lesson = _lesson(rng, terminated=terminated)
     fast, ref = _pair(hidden)
     params = ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=p_threshold, clip=None)
-    assert replay_oaon(fast, lesson, params) == replay_q(ref, lesson, params)
+    assert replay_oaon(fast, lesson, params) == replay_q_reference(ref, lesson, params)  # the plain loop
     np.testing.assert_allclose(fast.w2, ref.w2, atol=1e-12)
     np.testing.assert_allclose(fast.w1, ref.w1, atol=1e-12)
 
@@ -48,7 +43,7 @@ def test_kernel_repairs_equal_reference(repair):
     lesson = _lesson(rng)
     fast, ref = _pair(5)
     params = ReplayParams(gamma=0.9, lam=0.7)
-    assert replay_oaon(fast, lesson, params, repair) == _replay_q_with_repairs(ref, lesson, params, repair)
+    assert replay_oaon(fast, lesson, params, REPAIRS.index(repair)) == replay_q_reference(ref, lesson, params, repair)
     np.testing.assert_allclose(fast.w1, ref.w1, atol=1e-12)
     np.testing.assert_allclose(fast.w2, ref.w2, atol=1e-12)
 

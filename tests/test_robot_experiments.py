@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from connrl import cli
+from connrl.core.lesson_files import load_lessons
 from connrl.experiments import robot
 from connrl.experiments.robot import EXPERIMENTS, ROBOT_PARAMS, first_reaching, make_taught_lessons, run_robot
-from connrl.replay import load_lessons
 
 TINY = {**ROBOT_PARAMS, "trials": 4, "test_every": 2, "test_tasks": 3, "lessons_per_trial": 3}
 

@@ -12,14 +12,12 @@ from connrl.envs.robot import (
     KEYMAP,
     MOVE_BACKWARD,
     MOVE_FORWARD,
+    OBS_SIZE,
     ROBOT_RADIUS,
+    TASKS,
     TURN_LEFT_15,
     TURN_LEFT_60,
     Layout,
-)
-from connrl.envs.robot_tasks import (
-    OBS_SIZE,
-    TASKS,
     RobotTaskEnv,
     encode_sonar,
     sample_dp_start,

@@ -7,9 +7,12 @@ import numpy as np
 import pytest
 
 from connrl.agents import AHCON, QCON
-from connrl.agents.models import LearnedSurvivalModel, PerfectSurvivalModel
-from connrl.agents.rotated import RotatedNet
-from connrl.agents.survival import (
+from connrl.core.exploration import StuckConfig, TemperatureSchedule
+from connrl.core.lesson_files import LessonFileError
+from connrl.envs.survival import SurvivalEnv, rotate_observation
+from connrl.experiments.protocol import run_trial
+from connrl.nets.rotated import RotatedNet
+from connrl.tasks.survival import (
     FRAMEWORKS,
     SurvivalAgentParams,
     SurvivalExploration,
@@ -17,10 +20,7 @@ from connrl.agents.survival import (
     make_survival_agent,
     taught_lessons,
 )
-from connrl.envs.survival import SurvivalEnv, rotate_observation
-from connrl.experiments.loop import run_trial
-from connrl.exploration import StuckConfig, TemperatureSchedule
-from connrl.replay import LessonFileError
+from connrl.tasks.survival_models import LearnedSurvivalModel, PerfectSurvivalModel
 
 
 def agent_for(framework, rep="global", model="learned", lr_scale=1.0, seed=0):

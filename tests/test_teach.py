@@ -5,8 +5,8 @@ import io
 import pytest
 
 from connrl import cli
-from connrl.replay import load_lessons
-from connrl.teach import TEACH_TARGETS, play
+from connrl.core.lesson_files import load_lessons
+from connrl.tasks.teach import TEACH_TARGETS, play
 
 
 def test_play_records_steps_and_ends_on_x():

@@ -7,9 +7,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
-from connrl.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
+from connrl.core.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
+from connrl.core.lessons import Lesson
+from connrl.core.replay import ReplayParams, replay_ahc
 from connrl.nets import OAON, NetConfig
-from connrl.replay import Lesson, ReplayParams, replay_ahc
 
 
 @dataclass(frozen=True)

@@ -22,8 +22,8 @@ from typing import Protocol
 
 import numpy as np
 
-from connrl.exploration import StuckConfig, StuckDetector
-from connrl.replay import Lesson, LessonMemory, LessonRecorder
+from connrl.core.exploration import StuckConfig, StuckDetector
+from connrl.core.lessons import Lesson, LessonMemory, LessonRecorder
 
 
 class Agent(Protocol):

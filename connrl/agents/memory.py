@@ -7,7 +7,7 @@ recurrent-model. All follow the agent protocol of ``connrl.agents.base`` and lea
 - **Recurrent-Q** (7.3, Fig. 7.1b): a recurrent OAON Q-net (``connrl.nets.recurrent``). Lessons store raw
   sensations; a lesson is replayed in *batch mode* (7.5): the Q-values of the whole trial are computed
   from a zero context with the weights as they are, the TD(lambda) returns are computed backward
-  (``connrl.replay.lambda_returns``, lambda cut at non-policy actions), and one BPTT step is made on the
+  (``connrl.core.replay.batch_targets``, lambda cut at non-policy actions), and one BPTT step is made on the
   trial with the non-policy steps weighted 0 (not replayed, 3.5.1).
 - **Recurrent-model** (7.3, Fig. 7.1c): a recurrent OAON *action model* predicts the next sensation and the
   payoff; its context units, together with the current sensation, are the input of a feed-forward OAON
@@ -33,10 +33,11 @@ import numpy as np
 
 from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
 from connrl.agents.qcon import QCON, QCONConfig
-from connrl.exploration import TemperatureSchedule, boltzmann_probabilities, boltzmann_select
+from connrl.core.exploration import TemperatureSchedule, boltzmann_select
+from connrl.core.lessons import Lesson
+from connrl.core.replay import ReplayParams, batch_targets, replay_q
 from connrl.nets import OAON, NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
-from connrl.replay import Lesson, ReplayParams, lambda_returns, replay_q
 
 ON, OFF = 0.5, -0.5  # binary input encoding (5.3.2)
 
@@ -137,40 +138,14 @@ class WindowQ(QCON):
 
 # ----------------------------------------------------------------------------------------- recurrent-Q
 
-def recurrent_q_targets(values: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool,
-                        params: ReplayParams) -> tuple[np.ndarray, np.ndarray]:
-    """Batch-mode TD(lambda) targets of one lesson for a recurrent Q-net (Fig. 5.1a in batch mode, 7.5).
-
-    ``values`` (n+1, A) are the Q-values along the lesson (from a zero context, weights before the
-    update). Returns ``(targets (n,), weights (n,))``: weight 0 marks a non-policy action (P(a) < P_l
-    under the Boltzmann policy at ``params.temperature``), which is not replayed and cuts lambda for the
-    step before it (lambda is also 0 at the last step). Pure.
-    """
-    values = np.asarray(values, dtype=np.float64)
-    n = len(actions)
-    if values.shape[0] != n + 1:
-        raise ValueError(f"values must have n+1={n + 1} rows for a lesson of {n} steps, got {values.shape}")
-    if params.p_threshold > 0:
-        policy = np.array([boltzmann_probabilities(values[t], params.temperature)[actions[t]]
-                           >= params.p_threshold for t in range(n)])
-    else:
-        policy = np.ones(n, dtype=bool)
-    u = values[1:].max(axis=1)
-    if terminated:
-        u[-1] = 0.0
-    lams = np.where(np.append(policy[1:], False), params.lam, 0.0)
-    targets = lambda_returns(rewards, u, params.gamma, lams, params.clip)
-    return targets, policy.astype(np.float64)
-
-
 def replay_recurrent_q(net: RecurrentOAON, lesson: Lesson, params: ReplayParams) -> int:
     """Replay one lesson into a recurrent Q-net: one batch BPTT step; returns the experiences used."""
     acts_ext = np.append(lesson.actions, 0)  # the action at x_n does not affect the outputs at x_n
     ys, _ = net.forward_sequence(lesson.inputs, acts_ext)
-    targets, weights = recurrent_q_targets(ys[:, :, 0], lesson.actions, lesson.rewards, lesson.terminated, params)
-    if weights.any():
-        net.train_sequence(lesson.inputs[:-1], lesson.actions, targets, weights)
-    return int(weights.sum())
+    targets, policy = batch_targets(ys[:, :, 0], lesson.actions, lesson.rewards, lesson.terminated, params)
+    if policy.any():  # weight 0: a non-policy action is not replayed
+        net.train_sequence(lesson.inputs[:-1], lesson.actions, targets, policy.astype(np.float64))
+    return int(policy.sum())
 
 
 @dataclass(frozen=True)

@@ -11,9 +11,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
-from connrl.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
+from connrl.core.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
+from connrl.core.lessons import Lesson
+from connrl.core.replay import QFunction, ReplayParams, replay_q
 from connrl.nets import OAON, NetConfig
-from connrl.replay import Lesson, QFunction, ReplayParams, replay_q
 
 
 @dataclass(frozen=True)

@@ -8,10 +8,10 @@ _ENVS = {
     "connrl/PoleBalancingXTheta-v0": ("connrl.envs.pole:PoleBalancingEnv", {"observe": "x_theta"}),
     "connrl/Survival-v0": ("connrl.envs.survival:SurvivalEnv", {}),
     "connrl/CupCollection-v0": ("connrl.envs.cup:CupCollectionEnv", {}),
-    "connrl/Robot-DK-v0": ("connrl.envs.robot_tasks:RobotTaskEnv", {"task": "DK"}),
-    "connrl/Robot-DP-v0": ("connrl.envs.robot_tasks:RobotTaskEnv", {"task": "DP"}),
-    "connrl/Robot-WFL-v0": ("connrl.envs.robot_tasks:RobotTaskEnv", {"task": "WFL"}),
-    "connrl/Robot-WFR-v0": ("connrl.envs.robot_tasks:RobotTaskEnv", {"task": "WFR"}),
+    "connrl/Robot-DK-v0": ("connrl.envs.robot:RobotTaskEnv", {"task": "DK"}),
+    "connrl/Robot-DP-v0": ("connrl.envs.robot:RobotTaskEnv", {"task": "DP"}),
+    "connrl/Robot-WFL-v0": ("connrl.envs.robot:RobotTaskEnv", {"task": "WFL"}),
+    "connrl/Robot-WFR-v0": ("connrl.envs.robot:RobotTaskEnv", {"task": "WFR"}),
 }
 
 for _id, (_entry, _kwargs) in _ENVS.items():

@@ -65,12 +65,12 @@ from connrl.agents.memory import (
     window_input_size,
 )
 from connrl.agents.qcon import QCONConfig
+from connrl.core.exploration import TemperatureSchedule
 from connrl.envs.cup import INSTANCES, LEFT, OPTIMAL_STEPS, PICK_UP, RIGHT, CupCollectionEnv
 from connrl.envs.pole import PoleBalancingEnv
-from connrl.experiments.loop import run_trial
 from connrl.experiments.pole import train_until_satisfactory
+from connrl.experiments.protocol import run_trial
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
-from connrl.exploration import TemperatureSchedule
 from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
 

@@ -11,10 +11,10 @@ from __future__ import annotations
 import numpy as np
 
 from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
+from connrl.core.exploration import TemperatureSchedule
 from connrl.envs.pole import TEST_START_ANGLES_DEG, PoleBalancingEnv
-from connrl.experiments.loop import run_trial
+from connrl.experiments.protocol import run_trial
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
-from connrl.exploration import TemperatureSchedule
 from connrl.nets import NetConfig
 
 # Table B.1, Task 4 (the memoryless full-state agent reuses the window-Q column with N = 1), plus the
@@ -141,7 +141,7 @@ def results_section(out_dir, doc=None) -> str:
     """docs/RESULTS.md section: the stored summaries of pole-full and pole-full-ahc, with how to read them."""
     from pathlib import Path
 
-    from connrl.experiments.results import figure, load_summary, summary_table
+    from connrl.report.page import figure, load_summary, summary_table
 
     doc = Path(doc) if doc is not None else Path("docs/RESULTS.md")
     parts = ["## Pole balancing, full state (thesis 7.5.4, footnote 4; App. C)", "",

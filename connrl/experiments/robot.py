@@ -13,7 +13,7 @@ at the end of a lesson and after non-policy actions), T 0.05 -> 0.02 over 300 tr
 detection, on-line Q-learning during the trial and, after it, 60 lessons chosen by App. A.2 from the
 latest 100 (fewer while fewer exist) plus every taught lesson, non-policy actions (P < 2 %) not replayed.
 
-Taught lessons (3.7, 5.4) come from the scripted teachers of ``connrl.envs.robot_tasks`` (not a person):
+Taught lessons (3.7, 5.4) come from the scripted teachers of ``connrl.envs.robot`` (not a person):
 ``python -m connrl.experiments.robot make-lessons`` rewrites ``connrl/data/lessons/robot-{dp,dk,wfl}.json``
 deterministically; 3 (DP, DK) or 2 (WFL) taught lessons are the first ones of the file.
 
@@ -90,14 +90,14 @@ from pathlib import Path
 import numpy as np
 
 from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
-from connrl.agents.repairs import TeachingConfig, TeachingQCON
-from connrl.envs.robot import Layout
-from connrl.envs.robot_tasks import OBS_SIZE, RobotTaskEnv, teach
-from connrl.experiments.loop import run_trial
+from connrl.agents.teaching import TeachingConfig, TeachingQCON
+from connrl.core.exploration import StuckConfig, TemperatureSchedule
+from connrl.core.lesson_files import load_lessons, save_lessons
+from connrl.core.lessons import Lesson
+from connrl.envs.robot import OBS_SIZE, Layout, RobotTaskEnv, teach
+from connrl.experiments.protocol import run_trial
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
-from connrl.exploration import StuckConfig, TemperatureSchedule
 from connrl.nets import NetConfig
-from connrl.replay import Lesson, load_lessons, save_lessons
 
 LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
 TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5}  # lessons shipped per task (5.4.1)
@@ -181,7 +181,7 @@ def make_taught_lessons(task: str, n: int | None = None, seed: int = 0, max_trie
             continue
         reward = float(sum(s[2] for s in steps))
         out.append(Lesson.from_steps(steps, taught=True, meta={
-            "teacher": f"connrl.envs.robot_tasks.teach ({task})", "start": [round(v, 3) for v in start],
+            "teacher": f"connrl.envs.robot.teach ({task})", "start": [round(v, 3) for v in start],
             "play_seed": play_seed, "attempt": i, "steps": len(steps), "success": success, "reward": reward}))
     if len(out) < n:
         raise RuntimeError(f"the {task} teacher succeeded only {len(out)} times in {max_tries} tries")
@@ -202,7 +202,7 @@ def write_taught_lessons(seed: int = 0) -> list[Path]:
 
 
 def binary_columns(task: str) -> np.ndarray:
-    """Indices of the binary inputs of a task's observation (see connrl.envs.robot_tasks)."""
+    """Indices of the binary inputs of a task's observation (see connrl.envs.robot)."""
     if task in ("DK", "DP"):
         return np.arange(24, 52)
     return np.r_[24:28, 30:36]
@@ -458,7 +458,7 @@ def draw_solution_paths(records: list[dict], file: Path, task: str, k: int) -> P
 
 def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     """Markdown for docs/RESULTS.md: our Ch. 5 numbers beside the thesis's, from OUT/robot-*/ records."""
-    from connrl.experiments.results import figure
+    from connrl.report.page import figure
 
     out_dir = Path(out_dir)
     intro = ["## Chapter 5: robot skills with QCON-T (DP, DK, WFL)", "",
@@ -568,7 +568,7 @@ def _draw_panels(spec: ExperimentSpec, curves, panels: dict, file: Path) -> Path
     """One panel per group of variants (mean curves), shared axes, the thesis's 2.5 / 5 levels dashed."""
     import matplotlib.pyplot as plt
 
-    from connrl.experiments.plots import save_figure  # (importing plots selects the Agg backend)
+    from connrl.report.plots import save_figure  # (importing plots selects the Agg backend)
 
     n = len(panels)
     cols = 2

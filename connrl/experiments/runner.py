@@ -307,7 +307,7 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     atomic_write_text(summary_path, json.dumps(summary, indent=1, default=_json_default))
     plots = []
     if plot:
-        from connrl.experiments.plots import plot_experiment
+        from connrl.report.plots import plot_experiment
 
         plots = plot_experiment(spec, records, out / spec.name)
     return RunOutcome(summary, summary_path, plots, len(todo), reused)

@@ -29,10 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.agents.survival import SurvivalAgentParams, make_survival_agent
 from connrl.envs.survival import SurvivalEnv, environment_sets
-from connrl.experiments.loop import run_trial
+from connrl.experiments.protocol import run_trial
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
+from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 
 SURVIVAL_PARAMS = {
     "framework": "QCON",  # one of connrl.agents.survival.FRAMEWORKS
@@ -379,7 +379,7 @@ def _by_variant(recs: list[dict]) -> dict[str, list[dict]]:
 
 
 def _study_section(out: Path, name: str, fig: str, doc: Path) -> tuple[list[str], dict[str, list[dict]]]:
-    from connrl.experiments.results import figure
+    from connrl.report.page import figure
 
     summary, recs = _load_records(out, name)
     if summary is None:
@@ -466,7 +466,7 @@ _SPEEDUP_ROWS = [("QCON", "no extensions", 200), ("QCON-M (learned model)", "usi
 
 
 def _speedup(out: Path, doc: Path) -> list[str]:
-    from connrl.experiments.results import figure
+    from connrl.report.page import figure
 
     summary, recs = _load_records(out, "survival-speedup")
     source = "survival-speedup"
@@ -508,7 +508,7 @@ def _speedup(out: Path, doc: Path) -> list[str]:
 
 
 def _planning(out: Path, doc: Path) -> list[str]:
-    from connrl.experiments.results import figure
+    from connrl.report.page import figure
 
     summary, recs = _load_records(out, "survival-planning")
     if summary is None:

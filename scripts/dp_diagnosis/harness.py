@@ -3,7 +3,7 @@
 import numpy as np
 
 from connrl.experiments import robot as R
-from connrl.experiments.loop import run_trial
+from connrl.experiments.protocol import run_trial
 
 
 class Run:

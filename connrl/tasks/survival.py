@@ -27,18 +27,14 @@ import numpy as np
 
 from connrl.agents.ahcon import AHCON, AHCONConfig
 from connrl.agents.base import Exploration, LinearSchedule, ReplayConfig
-from connrl.agents.models import (
-    LearnedModelConfig,
-    LearnedSurvivalModel,
-    PerfectSurvivalModel,
-    PlanningConfig,
-    RelaxationPlanner,
-)
 from connrl.agents.qcon import QCON, QCONConfig
-from connrl.agents.rotated import RotatedNet
-from connrl.exploration import StuckConfig, TemperatureSchedule
+from connrl.core.exploration import StuckConfig, TemperatureSchedule
+from connrl.core.lesson_files import LessonFileError, load_lessons
+from connrl.core.planning import PlanningConfig, RelaxationPlanner
+from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv, scripted_teacher_lesson
 from connrl.nets import NetConfig
-from connrl.replay import LessonFileError, load_lessons
+from connrl.nets.rotated import RotatedNet
+from connrl.tasks.survival_models import LearnedModelConfig, LearnedSurvivalModel, PerfectSurvivalModel
 
 SURVIVAL_ENV_ID = "connrl/Survival-v0"
 FRAMEWORKS = ("AHCON", "AHCON-R", "AHCON-M", "AHCON-T", "QCON", "QCON-R", "QCON-M", "QCON-T")
@@ -183,8 +179,6 @@ def make_survival_agent(params: SurvivalAgentParams, env, rng: np.random.Generat
     stuck = StuckConfig(p.stuck_window, p.stuck_radius, p.stuck_boost)
     rotated = p.representation == "global"
     if rotated:
-        from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS
-
         perms = np.stack([ROTATION_PERMUTATIONS[ACTION_ROTATION[a]] for a in range(4)])
     if base == "QCON":
         cfg = QCONConfig(net=net(table["lr_q"]), temperature=temperature, gamma=p.gamma, replay=replay,
@@ -200,3 +194,37 @@ def make_survival_agent(params: SurvivalAgentParams, env, rng: np.random.Generat
     if ext == "T":
         agent.add_taught_lessons(taught_lessons(p.representation))
     return agent
+
+
+def make_taught_lessons(action_representation: str = "global", n_lessons: int = 2, seed: int = 0):
+    """Taught lessons (3.7, 4.3.1) played by the scripted teacher (``connrl.envs.survival.scripted_teacher_lesson``).
+
+    Like the thesis's teacher, who "got all the food in each of the lessons", we keep only plays in which
+    the teacher eats all 15 pieces: layout seeds 0, 1, 2, ... (play seed = `seed` + layout seed) are tried
+    in order and the first `n_lessons` complete plays are returned. Each lesson's ``meta`` records the
+    layout seed, the play seed and the food cells, so the play can be re-run exactly.
+    """
+    from connrl.core.lessons import Lesson  # lazy: the env does not depend on the replay machinery
+
+    env = SurvivalEnv(action_representation=action_representation)
+    lessons = []
+    for layout_seed in range(1000):
+        options = {"layout_seed": layout_seed}
+        env.reset(seed=seed + layout_seed, options=options)
+        food_cells = np.argwhere(env.get_state()["food"]).tolist()
+        steps, info = scripted_teacher_lesson(env, seed=seed + layout_seed, options=options)
+        if info["outcome"] != "all_food":
+            continue
+        meta = {
+            "teacher": "scripted_teacher_action(danger_radius=2)",
+            "action_representation": action_representation,
+            "layout_seed": layout_seed,
+            "play_seed": seed + layout_seed,
+            "food": food_cells,
+            "food_eaten": info["food_eaten"],
+            "outcome": info["outcome"],
+        }
+        lessons.append(Lesson.from_steps(steps, taught=True, meta=meta))
+        if len(lessons) == n_lessons:
+            return lessons
+    raise RuntimeError(f"the scripted teacher completed fewer than {n_lessons} of 1000 environments")

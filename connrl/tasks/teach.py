@@ -18,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.replay import Lesson, LessonFileError, load_lessons, save_lessons
+from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
+from connrl.core.lessons import Lesson
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,28 @@
+"""The thesis's algorithms, knowing no world: returns, lessons, App. A.2 sampling, Fig. 5.1 replay, relaxation
+planning (4.2.5) and exploration (Boltzmann, schedules, stuck detection)."""
+
+from connrl.core.exploration import (
+    StuckConfig,
+    StuckDetector,
+    TemperatureSchedule,
+    boltzmann_probabilities,
+    boltzmann_select,
+)
+from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
+from connrl.core.lessons import Lesson, LessonMemory, LessonRecorder, recency_index
+from connrl.core.replay import (
+    REPAIRS,
+    QFunction,
+    ReplayParams,
+    batch_targets,
+    repair_step,
+    replay_ahc,
+    replay_q,
+    replay_q_reference,
+)
+from connrl.core.returns import lambda_returns, td_lambda_target
+
+__all__ = ["REPAIRS", "Lesson", "LessonFileError", "LessonMemory", "LessonRecorder", "QFunction", "ReplayParams",
+           "StuckConfig", "StuckDetector", "TemperatureSchedule", "batch_targets", "boltzmann_probabilities",
+           "boltzmann_select", "lambda_returns", "load_lessons", "recency_index", "repair_step", "replay_ahc",
+           "replay_q", "replay_q_reference", "save_lessons", "td_lambda_target"]

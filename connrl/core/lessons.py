@@ -1,0 +1,117 @@
+"""Lessons, the lesson memory and recency sampling (3.5, 5.1, App. A.2).
+
+Vocabulary (3.5, 5.1): an *experience* is ``(x_t, a_t, x_{t+1}, r_t)``; a *lesson* is the sequence of
+experiences of one trial. A lesson stores the network inputs ``x_0 .. x_n`` (n+1 rows), the actions and
+rewards, and how it ended: ``terminated`` (a failure or the goal: the last next-state has value 0) or
+``truncated`` (a time limit: not a failure, so its last experience bootstraps from ``x_n``).
+Lesson files (plain JSON) are in ``connrl.core.lesson_files``; replay in ``connrl.core.replay``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class Lesson:
+    """The experiences of one trial (3.5, 5.1). ``inputs`` has one more row than ``actions``."""
+
+    inputs: np.ndarray  # (n+1, d) network inputs x_0 .. x_n
+    actions: np.ndarray  # (n,) int
+    rewards: np.ndarray  # (n,) float
+    terminated: bool  # last next-state is terminal (failure or goal): its value is 0
+    truncated: bool = False  # cut by a time limit: bootstrap from x_n
+    taught: bool = False  # a teacher's lesson (3.7): replayed with policy threshold 0
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.inputs = np.asarray(self.inputs, dtype=np.float64)
+        self.actions = np.asarray(self.actions, dtype=np.int64)
+        self.rewards = np.asarray(self.rewards, dtype=np.float64)
+        n = self.actions.shape[0]
+        if self.inputs.ndim != 2 or self.inputs.shape[0] != n + 1:
+            raise ValueError(f"a lesson of {n} experiences needs {n + 1} input rows, got {self.inputs.shape}")
+        if self.rewards.shape != (n,):
+            raise ValueError(f"rewards must have shape ({n},), got {self.rewards.shape}")
+
+    def __len__(self) -> int:
+        return int(self.actions.shape[0])
+
+    @classmethod
+    def from_steps(cls, steps, *, taught: bool = False, meta: dict | None = None) -> Lesson:
+        """Build a lesson from ``(x, a, r, y, terminated, truncated)`` tuples of consecutive steps."""
+        steps = list(steps)
+        if not steps:
+            raise ValueError("a lesson needs at least one experience")
+        inputs = [s[0] for s in steps] + [steps[-1][3]]
+        return cls(np.array(inputs), np.array([s[1] for s in steps]), np.array([s[2] for s in steps]),
+                   terminated=bool(steps[-1][4]), truncated=bool(steps[-1][5]), taught=taught,
+                   meta=dict(meta or {}))
+
+
+class LessonRecorder:
+    """Accumulates one trial's experiences into a Lesson."""
+
+    def __init__(self):
+        self.inputs: list[np.ndarray] = []
+        self.actions: list[int] = []
+        self.rewards: list[float] = []
+
+    def add(self, x: np.ndarray, a: int, r: float, y: np.ndarray) -> None:
+        if not self.inputs:
+            self.inputs.append(np.array(x, dtype=np.float64))
+        self.actions.append(int(a))
+        self.rewards.append(float(r))
+        self.inputs.append(np.array(y, dtype=np.float64))
+
+    def __len__(self) -> int:
+        return len(self.actions)
+
+    def finish(self, terminated: bool, truncated: bool) -> Lesson | None:
+        if not self.actions:
+            return None
+        lesson = Lesson(np.stack(self.inputs), np.array(self.actions), np.array(self.rewards),
+                        terminated=terminated, truncated=truncated)
+        self.__init__()
+        return lesson
+
+
+# ------------------------------------------------------------------------------------ App. A.2 sampling
+
+def recency_index(n: int, r: float) -> int:
+    """App. A.2: index (0 = oldest, n-1 = latest) of the lesson chosen by the uniform draw ``r`` in [0, 1).
+
+    ``w = min(3, 1 + 0.02 n)``, ``k = floor(n log(1 + r (e^w - 1)) / w)``: recent lessons are favoured
+    more strongly as the memory fills.
+    """
+    if n < 1:
+        raise ValueError("cannot choose a lesson from an empty memory")
+    w = min(3.0, 1.0 + 0.02 * n)
+    k = int(math.floor(n * math.log(1.0 + r * (math.exp(w) - 1.0)) / w))
+    return min(k, n - 1)
+
+
+class LessonMemory:
+    """The latest ``capacity`` experienced lessons (100 in Ch. 4, 70 in Ch. 7), oldest first."""
+
+    def __init__(self, capacity: int):
+        if capacity < 1:
+            raise ValueError(f"lesson memory capacity must be >= 1, got {capacity}")
+        self.capacity = capacity
+        self.lessons: list[Lesson] = []
+
+    def add(self, lesson: Lesson) -> None:
+        self.lessons.append(lesson)
+        if len(self.lessons) > self.capacity:
+            self.lessons.pop(0)
+
+    def __len__(self) -> int:
+        return len(self.lessons)
+
+    def sample(self, rng: np.random.Generator) -> tuple[int, Lesson]:
+        """One lesson chosen by App. A.2; returns (age, lesson) with age 0 for the latest."""
+        k = recency_index(len(self.lessons), float(rng.random()))
+        return len(self.lessons) - 1 - k, self.lessons[k]

@@ -1,0 +1,190 @@
+"""Backward TD(lambda) replay of a lesson (Fig. 5.1), with the repairs of 5.4.3.
+
+The loops apply the pure returns of ``connrl.core.returns`` to networks in the order of Fig. 5.1: backward
+from t = n-1, with lambda set to 0 at the last step and after a non-policy action, and non-policy
+experiences not replayed (3.5.1). Incremental mode updates after each experience (the default, 5.1.2);
+batch mode computes every target from the networks as they were before the lesson, then updates (7.5).
+
+``replay_q_reference`` is the readable loop of Fig. 5.1(a); ``replay_q`` runs the same loop through a
+registered compiled fast path when there is one for the Q-function's type (``FAST_PATHS``: an OAON's
+whole lesson in one Numba kernel, ``connrl.core.replay_kernel``), and the reference loop otherwise.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from connrl.core.exploration import boltzmann_probabilities
+from connrl.core.lessons import Lesson
+from connrl.core.returns import lambda_returns, td_lambda_target
+
+REPAIRS = ("none", "lower", "raise")  # 5.4.3; "none" = plain replay
+
+
+class QFunction(Protocol):
+    """What replay needs of a Q-function: all action values, and a step toward a target for one action."""
+
+    n_actions: int
+
+    def values(self, x: np.ndarray) -> np.ndarray: ...
+
+    def update(self, x: np.ndarray, a: int, target: float) -> float: ...
+
+
+@dataclass(frozen=True)
+class ReplayParams:
+    """How one lesson is replayed (Fig. 5.1, 3.5.1, 5.1.2)."""
+
+    gamma: float  # discount factor (3.2)
+    lam: float = 0.0  # recency factor lambda of TD(lambda) (5.1); Ch. 3-4 use 0
+    temperature: float = 0.0  # T of the current policy, for the non-policy test (3.5.1)
+    p_threshold: float = 0.0  # P_t: actions with P(a|x) below it are non-policy, not replayed (3.5.1)
+    batch: bool = False  # batch mode: targets from the nets as before the lesson (5.1.2, 7.5)
+    clip: float | None = None  # truncate targets above this value (4.2.4)
+
+
+def is_policy_action(merits: np.ndarray, a: int, params: ReplayParams) -> bool:
+    """3.5.1: an action is a policy action when its Boltzmann probability is at least P_t."""
+    if params.p_threshold <= 0:
+        return True
+    return bool(boltzmann_probabilities(merits, params.temperature)[a] >= params.p_threshold)
+
+
+def repair_step(q: QFunction, x: np.ndarray, a: int, mode: str) -> int:
+    """One 5.4.3 repair of the taught action ``a`` at input ``x`` (Eq. 5.6); returns the nets changed.
+
+    ``lower``: every other action valued above ``a`` is moved toward ``Q(x, a)``.
+    ``raise``: ``a`` is moved toward the largest other value when that exceeds ``Q(x, a)``.
+    """
+    if mode not in REPAIRS:
+        raise ValueError(f"repair must be one of {REPAIRS}, got {mode!r}")
+    if mode == "none":
+        return 0
+    v = np.asarray(q.values(x), dtype=np.float64)
+    others = np.delete(np.arange(v.size), a)
+    if mode == "lower":
+        changed = 0
+        for i in others:
+            if v[i] > v[a]:
+                q.update(x, int(i), float(v[a]))
+                changed += 1
+        return changed
+    best = int(others[np.argmax(v[others])])
+    if v[best] > v[a]:
+        q.update(x, a, float(v[best]))
+        return 1
+    return 0
+
+
+def batch_targets(values: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool,
+                  params: ReplayParams) -> tuple[np.ndarray, np.ndarray]:
+    """Fig. 5.1(a) in batch mode: every target of a lesson from fixed predictions (5.1.2, 7.5).
+
+    ``values`` (n+1, A) are the Q-values along the lesson before any update. Returns ``(targets (n,),
+    policy (n,) bool)``: a non-policy action is not replayed and cuts lambda for the step before it
+    (lambda is also 0 at the last step). Pure.
+    """
+    values = np.asarray(values, dtype=np.float64)
+    n = len(actions)
+    if values.shape[0] != n + 1:
+        raise ValueError(f"values must have n+1={n + 1} rows for a lesson of {n} steps, got {values.shape}")
+    policy = np.array([is_policy_action(values[t], int(actions[t]), params) for t in range(n)], dtype=bool)
+    u = values[1:].max(axis=1)
+    if terminated:
+        u[-1] = 0.0
+    lams = np.where(np.append(policy[1:], False), params.lam, 0.0)
+    return lambda_returns(rewards, u, params.gamma, lams, params.clip), policy
+
+
+def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "none") -> int:
+    """Fig. 5.1(a), the plain loop: replay a lesson backward into a Q-function; returns the experiences used.
+
+    With ``repair`` (taught lessons, 5.4.3) the repair check follows the TD update of each experience, with
+    the net as it is then (the thesis does not say when within the replay).
+    """
+    x, acts, rews = lesson.inputs, lesson.actions, lesson.rewards
+    n = len(lesson)
+    if params.batch:
+        if repair != "none":
+            raise ValueError("the 5.4.3 repairs are defined for incremental replay only")
+        targets, policy = batch_targets(np.array([q.values(x[t]) for t in range(n + 1)]), acts, rews,
+                                        lesson.terminated, params)
+        for t in range(n - 1, -1, -1):
+            if policy[t]:
+                q.update(x[t], int(acts[t]), targets[t])
+        return int(policy.sum())
+    used = 0
+    e_next, next_policy = 0.0, False
+    for t in range(n - 1, -1, -1):
+        u = 0.0 if (t == n - 1 and lesson.terminated) else float(q.values(x[t + 1]).max())
+        lam_t = params.lam if (t < n - 1 and next_policy) else 0.0
+        e = td_lambda_target(rews[t], u, e_next, params.gamma, lam_t)
+        if params.clip is not None and e > params.clip:
+            e = params.clip
+        a = int(acts[t])
+        next_policy = is_policy_action(q.values(x[t]), a, params)
+        if next_policy:
+            q.update(x[t], a, e)
+            used += 1
+        if repair != "none":
+            repair_step(q, x[t], a, repair)
+        e_next = e
+    return used
+
+
+# type of Q-function -> compiled whole-lesson replay ``fn(q, lesson, params, repair_index) -> used``
+FAST_PATHS: dict[type, Callable[..., int]] = {}
+
+
+def register_fast_path(q_type: type, fn: Callable[..., int]) -> None:
+    """Declare a compiled replay for ``q_type`` that must equal ``replay_q_reference`` (incremental mode)."""
+    FAST_PATHS[q_type] = fn
+
+
+def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "none", fast: bool = True) -> int:
+    """Fig. 5.1(a): the registered fast path for ``type(q)`` in incremental mode, else the reference loop."""
+    fn = FAST_PATHS.get(type(q)) if fast and not params.batch else None
+    if fn is None:
+        return replay_q_reference(q, lesson, params, repair)
+    if repair not in REPAIRS:
+        raise ValueError(f"repair must be one of {REPAIRS}, got {repair!r}")
+    return fn(q, lesson, params, REPAIRS.index(repair))
+
+
+def replay_ahc(v_net, policy_net, lesson: Lesson, params: ReplayParams) -> int:
+    """Fig. 5.1(b): replay a lesson backward into a V-net (one output) and a policy net (one per action).
+
+    Non-policy actions are judged by the Boltzmann probabilities of the policy net's merits (3.5.1).
+    """
+    x, acts, rews = lesson.inputs, lesson.actions, lesson.rewards
+    n = len(lesson)
+    used = 0
+    e_next, next_policy = 0.0, False
+    for t in range(n - 1, -1, -1):
+        u = 0.0 if (t == n - 1 and lesson.terminated) else float(v_net.value(x[t + 1], 0))
+        lam_t = params.lam if (t < n - 1 and next_policy) else 0.0
+        e = td_lambda_target(rews[t], u, e_next, params.gamma, lam_t)
+        if params.clip is not None and e > params.clip:
+            e = params.clip
+        a = int(acts[t])
+        next_policy = is_policy_action(policy_net.values(x[t]), a, params)
+        if next_policy:
+            v_before = v_net.update(x[t], 0, e)
+            policy_net.update_error(x[t], a, e - v_before)
+            used += 1
+        e_next = e
+    return used
+
+
+def _register_oaon() -> None:
+    from connrl.core.replay_kernel import replay_oaon
+    from connrl.nets.mlp import OAON
+
+    register_fast_path(OAON, replay_oaon)
+
+
+_register_oaon()

@@ -1,0 +1,45 @@
+"""Constants of the HEROINE robot, its actions and its sensors (5.2.1; R: docs/RECONSTRUCTION.md, "HEROINE robot world")."""
+
+from __future__ import annotations
+
+# ---------------------------------------------------------------------------------------------------
+# Constants of the robot and its sensors (5.2.1; SPEC 5)
+ROBOT_RADIUS = 12.0  # inches (Fig. 5.3 caption)
+N_RAYS = 24  # sonar / light readings per rotation, 15 deg apart (5.2.1)
+RAY_STEP_DEG = 15.0
+SONAR_MAX = 127  # sonar range 0..127 in, 1-in resolution (5.2.1)
+SONAR_ERROR = 0.10  # reading uniform in [0.9x, 1.1x] (5.2.1)
+DROPOUT_PROB = 0.25  # one reading of every 4 scans set to 127 (5.2.1)
+CONTROL_ERROR = 0.08  # "about 8% control error" (5.2.1; R: uniform on length and angle)
+DOOR_EDGE_JUMP = 24  # neighbouring readings differing by this much mark a potential door edge (R)
+LIGHT_HALF_ANGLE = 7.5  # light bit k on when the light is within +-7.5 deg of ray k (R)
+LIGHT_RANGE = 120.0  # light detectable up to this distance from the centre (R)
+
+# Actions, in the order of 5.2.1 ("turn +-15, turn +-60, move +-12").
+TURN_LEFT_15, TURN_RIGHT_15, TURN_LEFT_60, TURN_RIGHT_60, MOVE_FORWARD, MOVE_BACKWARD = range(6)
+N_ACTIONS = 6
+ACTION_NAMES = ("turn +15", "turn -15", "turn +60", "turn -60", "move +12", "move -12")
+ACTION_TURN_DEG = (15.0, -15.0, 60.0, -60.0, 0.0, 0.0)
+ACTION_MOVE_IN = (0.0, 0.0, 0.0, 0.0, 12.0, -12.0)
+
+# Keyboard teaching tool: six keys -> actions (arrow-free so it works in any terminal).
+KEYMAP = {
+    "a": TURN_LEFT_15,
+    "d": TURN_RIGHT_15,
+    "q": TURN_LEFT_60,
+    "e": TURN_RIGHT_60,
+    "w": MOVE_FORWARD,
+    "s": MOVE_BACKWARD,
+}
+
+# Collision bit order.
+FRONT, BACK, LEFT, RIGHT = range(4)
+COLLISION_SIDES = ("front", "back", "left", "right")
+
+# Segment kinds.
+SEG_WALL, SEG_OBSTACLE, SEG_CHARGER = 0, 1, 2
+
+
+_RNG_PER_SCAN = 26  # 24 sonar noise factors + dropout coin + dropout index
+
+
