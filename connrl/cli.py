@@ -66,11 +66,14 @@ def cmd_run(args) -> int:
     except KeyboardInterrupt:
         print("\ninterrupted: finished runs are saved; run the same command again to resume.", file=sys.stderr)
         return 130
+    from connrl.report.plots import plot_experiment
+
+    plots = plot_experiment(spec, outcome.records, Path(args.out) / spec.name)
     _print_summary(outcome.summary)
     print(f"\n{outcome.ran} run(s) executed, {outcome.reused} reused from earlier; "
           f"{outcome.summary['timing']['wall_time_s']:.1f} s")
     print(f"summary: {outcome.summary_path}")
-    for p in outcome.plots:
+    for p in plots:
         print(f"plot:    {p}")
     return 0
 

@@ -8,65 +8,42 @@ training trials until then (None if not within ``max_trials``).
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
+
 import numpy as np
 
-from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
-from connrl.core.exploration import TemperatureSchedule
-from connrl.envs.pole import TEST_START_ANGLES_DEG, PoleBalancingEnv
-from connrl.experiments.protocol import run_trial
+from connrl.experiments.protocol import run_trial, train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
-from connrl.nets import NetConfig
-
-# Table B.1, Task 4 (the memoryless full-state agent reuses the window-Q column with N = 1), plus the
-# choices where the thesis is silent (marked R); see docs/RESULTS.md for how they were chosen.
-POLE_PARAMS = {
-    "agent": "qcon",  # "qcon" or "ahcon"
-    "observe": "full",  # full state (x, x_dot, theta, theta_dot)
-    "hidden": 6,  # H_q (Table B.1)
-    "lr": 0.25,  # eta_q (Table B.1)
-    "init_range": 0.5,  # App. B
-    "momentum": 0.9,  # App. B
-    "gamma": 0.9,  # App. B
-    "lam": 0.7,  # Table B.1
-    "inv_t_start": 20.0,  # 1/T: 20 -> 50 (Table B.1)
-    "inv_t_end": 50.0,
-    "anneal_trials": 1000,  # trials over which 1/T moves (R)
-    "capacity": 70,  # replay only the latest 70 trials (7.5)
-    "lessons_per_trial": 70,  # lessons replayed after each trial, drawn by App. A.2 from the latest 70 (R)
-    "p_threshold": 1e-4,  # P_l for the latest lesson (App. B)
-    "p_threshold_oldest": 1e-7,  # P_l for the oldest lesson (App. B)
-    "online": True,  # also learn on-line from each step (Fig. 3.4)
-    "train_max_steps": 2000,  # training trials are cut here (truncated, bootstrapped) (R)
-    "start_x": 1.2,  # training start ranges (R)
-    "start_theta": 0.06,
-    "test_steps": 5001,  # "balanced for over 5000 steps" (7.5.4)
-    "max_trials": 1000,  # 7.5.4: "not always found within 1000 trials"
-}
+from connrl.tasks.pole import make_agent, make_envs, satisfactory
 
 
-def make_agent(p: dict, n_inputs: int, rng: np.random.Generator):
-    net = NetConfig(n_inputs, p["hidden"], value_range=1.0, init_range=p["init_range"], lr=p["lr"],
-                    momentum=p["momentum"] if p["hidden"] > 0 else 0.0)
-    temp = TemperatureSchedule.inverse(p["inv_t_start"], p["inv_t_end"], p["anneal_trials"])
-    replay = ReplayConfig(capacity=p["capacity"], lessons_per_trial=LinearSchedule(p["lessons_per_trial"],
-                                                                                    p["lessons_per_trial"]),
-                          p_threshold=p["p_threshold"], p_threshold_oldest=p["p_threshold_oldest"])
-    if p["agent"] == "qcon":
-        return QCON(QCONConfig(net=net, temperature=temp, gamma=p["gamma"], lam=p["lam"], online=p["online"],
-                               replay=replay), 2, rng)
-    if p["agent"] == "ahcon":
-        return AHCON(AHCONConfig(v_net=net, policy_net=net, temperature=temp, gamma=p["gamma"], lam=p["lam"],
-                                 online=p["online"], replay=replay), 2, rng)
-    raise ValueError(f"agent must be 'qcon' or 'ahcon', got {p['agent']!r}")
+@dataclass(frozen=True)
+class PoleParams:
+    """Table B.1, Task 4 (the memoryless full-state agent reuses the window-Q column with N = 1), plus the
+    choices where the thesis is silent (R; docs/RECONSTRUCTION.md, "Pole balancing" and "Learners and
+    protocols"); see docs/RESULTS.md for how they were chosen."""
 
-
-def satisfactory(env: PoleBalancingEnv, agent, test_steps: int) -> bool:
-    """7.5.4: balanced for more than 5000 steps from each of the 7 test starts (stops at the first failure)."""
-    for deg in TEST_START_ANGLES_DEG:
-        stats = run_trial(env, agent, trial=0, learning=False, options={"theta_deg": deg}, max_steps=test_steps)
-        if stats.terminated:
-            return False
-    return True
+    agent: str = "qcon"  # "qcon" or "ahcon"
+    observe: str = "full"  # full state (x, x_dot, theta, theta_dot)
+    hidden: int = 6  # H_q (Table B.1)
+    lr: float = 0.25  # eta_q (Table B.1)
+    init_range: float = 0.5  # App. B
+    momentum: float = 0.9  # App. B
+    gamma: float = 0.9  # App. B
+    lam: float = 0.7  # Table B.1
+    inv_t_start: float = 20.0  # 1/T: 20 -> 50 (Table B.1)
+    inv_t_end: float = 50.0
+    anneal_trials: int = 1000  # trials over which 1/T moves (R)
+    capacity: int = 70  # replay only the latest 70 trials (7.5)
+    lessons_per_trial: int = 70  # lessons replayed after each trial, drawn by App. A.2 from the latest 70 (R)
+    p_threshold: float = 1e-4  # P_l for the latest lesson (App. B)
+    p_threshold_oldest: float | None = 1e-7  # P_l for the oldest lesson (App. B)
+    online: bool = True  # also learn on-line from each step (Fig. 3.4)
+    train_max_steps: int = 2000  # training trials are cut here (truncated, bootstrapped) (R)
+    start_x: float = 1.2  # training start ranges (R)
+    start_theta: float = 0.06
+    test_steps: int = 5001  # "balanced for over 5000 steps" (7.5.4)
+    max_trials: int = 1000  # 7.5.4: "not always found within 1000 trials"
 
 
 def train_until_satisfactory(train_env, test_env, agent, max_trials: int, test_steps: int, progress) -> RunResult:
@@ -75,29 +52,30 @@ def train_until_satisfactory(train_env, test_env, agent, max_trials: int, test_s
     The curve is 0 before the run's first satisfactory test and 1 from then on, so its mean over runs is the
     fraction of runs solved by each trial.
     """
-    rows, solved_at = [], None
-    for k in range(max_trials):
+    rows, last = [], {}
+
+    def train(k):
         stats = run_trial(train_env, agent, trial=k, learning=True)
+        last.update(train_steps=stats.steps, train_failed=stats.terminated)
+
+    def test(n):
         ok = satisfactory(test_env, agent, test_steps)
-        rows.append({"trial": k + 1, "train_steps": stats.steps, "train_failed": stats.terminated,
-                     "satisfactory": ok})
-        progress(k + 1, max_trials)
-        if ok:
-            solved_at = k + 1
-            break
+        rows.append({"trial": n, **last, "satisfactory": ok})
+        return ok
+
+    trained = train_and_test(max_trials, train, test, stop=bool, progress=progress)
+    solved_at = trained if rows and rows[-1]["satisfactory"] else None
     progress(max_trials, max_trials)
     xs = list(range(1, max_trials + 1))
     ys = [float(solved_at is not None and x >= solved_at) for x in xs]
     return RunResult(xs, ys, {"trials_to_satisfactory": solved_at}, rows)
 
 
-def run_pole(p: dict, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
-    train_env = PoleBalancingEnv(observe=p["observe"], max_steps=p["train_max_steps"], start_x=p["start_x"],
-                                 start_theta=p["start_theta"])
-    test_env = PoleBalancingEnv(observe=p["observe"], max_steps=p["test_steps"])
+def run_pole(p: PoleParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
+    train_env, test_env = make_envs(p, p.observe)
     train_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, train_env.observation_space.shape[0], rng)
-    return train_until_satisfactory(train_env, test_env, agent, p["max_trials"], p["test_steps"], progress)
+    return train_until_satisfactory(train_env, test_env, agent, p.max_trials, p.test_steps, progress)
 
 
 _QUANTITY = Quantity("trials_to_satisfactory", "training trials until the greedy policy balances > 5000 steps "
@@ -114,7 +92,7 @@ EXPERIMENTS = [
         title="Memoryless QCON-R on full-state pole balancing",
         section="7.5.4 fn. 4",
         run="connrl.experiments.pole:run_pole",
-        params=POLE_PARAMS,
+        params=PoleParams(),
         profiles=_PROFILES,
         variants=(Variant("QCON-R", {"agent": "qcon"}, {"trials_to_satisfactory": 119}),),
         quantities=(_QUANTITY,),
@@ -127,7 +105,7 @@ EXPERIMENTS = [
         title="Memoryless AHCON-R on full-state pole balancing (no thesis number; compare with pole-full)",
         section="7.5.4 fn. 4, 3.3",
         run="connrl.experiments.pole:run_pole",
-        params={**POLE_PARAMS, "p_threshold": 0.2, "p_threshold_oldest": None},
+        params=replace(PoleParams(), p_threshold=0.2, p_threshold_oldest=None),
         profiles=_PROFILES,
         variants=(Variant("AHCON-R", {"agent": "ahcon"}),),
         quantities=(_QUANTITY,),
@@ -135,40 +113,3 @@ EXPERIMENTS = [
         y_label="fraction of runs with a satisfactory policy",
     ),
 ]
-
-
-def results_section(out_dir, doc=None) -> str:
-    """docs/RESULTS.md section: the stored summaries of pole-full and pole-full-ahc, with how to read them."""
-    from pathlib import Path
-
-    from connrl.report.page import figure, load_summary, summary_table
-
-    doc = Path(doc) if doc is not None else Path("docs/RESULTS.md")
-    parts = ["## Pole balancing, full state (thesis 7.5.4, footnote 4; App. C)", "",
-             "Memoryless agents see (x, x_dot, theta, theta_dot). After every training trial the greedy policy is "
-             "tested from the 7 starts of 7.5.4; a run reports the training trials until it balances > 5000 steps "
-             "from all of them. Parameters: Table B.1, Task 4, with N = 1 (`POLE_PARAMS` in "
-             "`connrl/experiments/pole.py`).", ""]
-    for spec in EXPERIMENTS:
-        summary = load_summary(Path(out_dir), spec.name)
-        if summary is None:
-            continue
-        parts += [f"### {spec.name}: {spec.title}", "", summary_table(summary), "",
-                  figure(Path(out_dir) / spec.name / "curve.png", doc, spec.name), ""]
-    parts += [
-        "Where the thesis is silent we chose, and say so: the number of lessons replayed after each trial "
-        "(70, drawn by App. A.2's recency rule from the latest 70 trials that 7.5 says are kept), the length of "
-        "the 1/T schedule (1000 trials), the training start ranges and the input scaling (see the docstring of "
-        "`connrl/envs/pole.py`). In exploratory runs (not part of this page) replaying only 12 lessons per trial "
-        "also learned, but more slowly and with a heavier tail of slow runs; the number of replayed lessons was "
-        "the setting that mattered most. The AHCON-R counterpart has no thesis number (the thesis reports only "
-        "Q-learning here); it uses P_t = 0.2 as Ch. 4 does for AHC agents. It does not learn this task: with a "
-        "reward of -1 on failure and 0 otherwise, V is negative almost everywhere, so an ordinary step's TD error "
-        "gamma V(y) - V(x) ~ (gamma - 1) V(x) is positive; the action taken most often is reinforced on almost every "
-        "step (and again in every replay), its merit saturates at the top of the sigmoid, the policy becomes "
-        "deterministic and the other action is never tried. Inspecting the merits (`policy.values`) during a run "
-        "shows one action at +1 and the other near -1 within about ten trials. QCON has no such bias because "
-        "its targets bootstrap from max_a Q(y, a) per action.",
-        "",
-    ]
-    return "\n".join(parts)

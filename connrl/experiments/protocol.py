@@ -1,44 +1,35 @@
-"""The trial loop shared by every experiment: one trial of an agent in an environment."""
+"""The protocol every experiment shares: one trial of an agent in an environment, and the train-and-test loop.
+
+The thesis measures learning the same way in every chapter: training trials (stochastic actions, learning
+on) interleaved with tests of the greedy policy (T = 0, learning off). ``train_and_test`` is that loop; a
+chapter supplies what one training trial and one test are.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Callable
+
+from connrl.core.rollout import TrialStats, run_trial
+
+__all__ = ["TrialStats", "run_trial", "train_and_test"]
 
 
-@dataclass
-class TrialStats:
-    steps: int
-    total_reward: float
-    terminated: bool
-    truncated: bool
-    info: dict = field(default_factory=dict)
-
-
-def run_trial(env, agent, *, trial: int, learning: bool, seed: int | None = None, options: dict | None = None,
-              max_steps: int | None = None, on_step=None) -> TrialStats:
-    """Play one trial. With ``learning`` the agent observes each step and replays after the trial;
-    without it the agent acts greedily (T = 0) and nothing is learned (the thesis's test phase).
-    ``max_steps`` stops a test early (counted as truncated); ``on_step(info)`` sees every step.
-    """
-    obs, info = env.reset(seed=seed, options=options)
-    agent.begin_trial(obs, info, trial=trial, learning=learning)
-    steps, total = 0, 0.0
-    terminated = truncated = False
-    while True:
-        a = agent.act(obs, info, greedy=not learning)
-        obs, r, terminated, truncated, info = env.step(a)
-        steps += 1
-        total += float(r)
-        if learning:
-            agent.observe(a, r, obs, terminated, truncated, info)
-        if on_step is not None:
-            on_step(info)
-        if terminated or truncated:
-            break
-        if max_steps is not None and steps >= max_steps:
-            truncated = True
-            break
-    agent.end_trial()
-    if learning:
-        agent.learn()
-    return TrialStats(steps, total, bool(terminated), bool(truncated), info)
+def train_and_test(trials: int, train: Callable[[int], object], test: Callable[[int], object], *,
+                   test_every: int = 1, test_first: bool = False, test_last: bool = True,
+                   stop: Callable[[object], bool] | None = None,
+                   progress: Callable[[int, int], None] = lambda done, total: None) -> int:
+    """Train ``trials`` trials (``train(k)``, k = 0..trials-1) and test after every ``test_every``-th one
+    (``test(n)`` with n the trials trained so far); also before the first (``test_first``) and after the last
+    (``test_last``). Stops early when ``stop(test result)`` is true. Returns the trials trained."""
+    if test_first:
+        test(0)
+    for k in range(trials):
+        train(k)
+        n = k + 1
+        if test_every and (n % test_every == 0 or (test_last and n == trials)):
+            result = test(n)
+            if stop is not None and stop(result):
+                progress(n, trials)
+                return n
+        progress(n, trials)
+    return trials

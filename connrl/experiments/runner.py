@@ -3,7 +3,7 @@
 Layout of ``OUT/NAME/``::
 
     summary.json                   every reproduced quantity: per-run values, mean, the thesis's value
-    curve.png, curve.svg           learning curves, mean and spread over runs
+    curve.png, curve.svg           learning curves, mean and spread over runs (``connrl.report.plots``)
     runs/PROFILE-HASH/VARIANT/seed-S.csv   the run's learning curve and rows
     runs/PROFILE-HASH/VARIANT/seed-S.json  metadata: params, seed, versions, git commit, wall time, metrics
 
@@ -33,7 +33,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from connrl.experiments.spec import ExperimentSpec, RunResult, load_callable
+from connrl.experiments.spec import ExperimentSpec, RunResult, as_dict, load_callable, qualified_name
 from connrl.storage import atomic_write_text
 
 
@@ -44,9 +44,10 @@ class Job:
     experiment: str
     run_ref: str  # "module:function"
     variant: str
-    params: dict
+    params: dict  # plain data (stored in the record); the run function gets an instance of params_type
     seed: int
     path: str  # where its records go (without suffix)
+    params_type: str = ""  # "module:Class" of the spec's parameter dataclass
 
 
 def variant_slug(label: str) -> str:
@@ -59,15 +60,15 @@ def params_hash(params: dict) -> str:
 
 def make_jobs(spec: ExperimentSpec, profile: str, runs: int | None, seed: int, out: Path) -> list[Job]:
     base, n = spec.resolve(profile, runs)
-    root = out / spec.name / "runs" / f"{profile}-{params_hash(base)}"
+    root = out / spec.name / "runs" / f"{profile}-{params_hash(as_dict(base))}"
     jobs = []
     for v in spec.variants:
-        params = {**base, **v.params}
+        params = as_dict(spec.variant_params(base, v))
         for i in range(n):
             # seed s + i for run i: variants share seeds (common random numbers for comparisons)
             s = seed + i
             path = root / variant_slug(v.label) / f"seed-{s}"
-            jobs.append(Job(spec.name, spec.run, v.label, params, s, str(path)))
+            jobs.append(Job(spec.name, spec.run, v.label, params, s, str(path), qualified_name(spec.params)))
     return jobs
 
 
@@ -92,6 +93,7 @@ def _init_worker(q, tick=None):
 def execute_job(job: Job) -> dict:
     """Run one job in this process and write its records; returns the metadata record."""
     fn = load_callable(job.run_ref)
+    params = load_callable(job.params_type)(**job.params)
     rng = np.random.default_rng(job.seed)
     last = [0.0]
 
@@ -104,7 +106,7 @@ def execute_job(job: Job) -> dict:
                 _progress_tick()
 
     t0 = time.perf_counter()
-    result: RunResult = fn(dict(job.params), rng, progress)
+    result: RunResult = fn(params, rng, progress)
     wall = time.perf_counter() - t0
     record = {
         "experiment": job.experiment,
@@ -282,14 +284,14 @@ def summarize(spec: ExperimentSpec, profile: str, seed: int, records: list[dict]
 class RunOutcome:
     summary: dict
     summary_path: Path
-    plots: list[Path]
+    records: list[dict]
     ran: int
     reused: int
 
 
 def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | None = None, seed: int = 0,
-                   out: Path | str = "runs", workers: int | None = None, show_progress: bool = True,
-                   plot: bool = True) -> RunOutcome:
+                   out: Path | str = "runs", workers: int | None = None,
+                   show_progress: bool = True) -> RunOutcome:
     out = Path(out)
     jobs = make_jobs(spec, profile, runs, seed, out)
     records, todo = [], []
@@ -305,12 +307,7 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     summary = summarize(spec, profile, seed, records, wall)
     summary_path = out / spec.name / "summary.json"
     atomic_write_text(summary_path, json.dumps(summary, indent=1, default=_json_default))
-    plots = []
-    if plot:
-        from connrl.report.plots import plot_experiment
-
-        plots = plot_experiment(spec, records, out / spec.name)
-    return RunOutcome(summary, summary_path, plots, len(todo), reused)
+    return RunOutcome(summary, summary_path, records, len(todo), reused)
 
 
 def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str) -> list[dict]:
@@ -377,3 +374,13 @@ class _Progress:
         self.progress.advance(self.total)
         if job.path in self.tasks:
             self.progress.remove_task(self.tasks.pop(job.path))
+
+
+def stored_runs(spec: ExperimentSpec, out: Path) -> tuple[dict | None, list[dict]]:
+    """The summary of the latest ``connrl run`` of ``spec`` under ``out`` and the run records it names."""
+    p = Path(out) / spec.name / "summary.json"
+    if not p.exists():
+        return None, []
+    summary = json.loads(p.read_text())
+    jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], Path(out))
+    return summary, [r for r in (load_record(j) for j in jobs) if r is not None]

@@ -1,16 +1,20 @@
 """Declarative experiment specs: one per thesis figure or table.
 
-A spec names the run function (``"module:function"``, so worker processes can import it), the parameters
-of each profile, the variants (the curves of a figure or the rows of a table) and the quantities a run
-reports, each with the thesis's reference value. The runner turns a spec into independent runs
-(variant x seed), executes them in parallel, and writes per-run records, ``summary.json`` and a plot.
+A spec names the run function (``"module:function"``, so worker processes can import it), its parameters
+as a frozen dataclass (the full profile), each profile's overrides, the variants (the curves of a figure or
+the rows of a table, as overrides) and the quantities a run reports, each with the thesis's reference value.
+Overrides are applied with ``dataclasses.replace``; a key the parameter class does not have is refused when
+the spec is built, with the allowed keys in the message. The runner turns a spec into independent runs
+(variant x seed), executes them in parallel, and writes per-run records and ``summary.json``.
 
-A run function has the signature ``run(params: dict, rng: numpy.random.Generator, progress) -> RunResult``
-where ``progress(done, total)`` may be called to drive the live display.
+A run function has the signature ``run(params, rng: numpy.random.Generator, progress) -> RunResult`` where
+``params`` is an instance of the spec's parameter class and ``progress(done, total)`` may be called to drive
+the live display.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -49,13 +53,28 @@ class RunResult:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
+def override(params, changes: Mapping[str, Any], where: str = "parameters"):
+    """``dataclasses.replace(params, **changes)``, refusing a key the parameter class does not have."""
+    allowed = [f.name for f in dataclasses.fields(params)]
+    unknown = sorted(set(changes) - set(allowed))
+    if unknown:
+        raise ValueError(f"{where}: unknown parameter(s) {', '.join(map(repr, unknown))}; allowed: "
+                         f"{', '.join(allowed)}")
+    return dataclasses.replace(params, **changes)
+
+
+def as_dict(params) -> dict[str, Any]:
+    """The plain-data form of a parameter set, as stored in run records and hashed into run folders."""
+    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
+
+
 @dataclass(frozen=True)
 class ExperimentSpec:
     name: str  # CLI name, e.g. "pole-full"
     title: str  # one line, e.g. "Memoryless QCON-R on full-state pole balancing"
     section: str  # thesis section, e.g. "7.5.4 fn. 4"
     run: str  # "module:function" of the run function
-    params: Mapping[str, Any]  # parameters of the full profile
+    params: Any  # a frozen parameter dataclass: the full profile
     profiles: Mapping[str, Mapping[str, Any]]  # profile -> overrides, each with "runs"
     variants: tuple[Variant, ...]
     quantities: tuple[Quantity, ...]
@@ -66,14 +85,20 @@ class ExperimentSpec:
     x_reference: Mapping[str, float] = field(default_factory=dict)  # vertical lines on the plot
 
     def __post_init__(self):
+        if not dataclasses.is_dataclass(self.params) or isinstance(self.params, type):
+            raise TypeError(f"experiment {self.name}: params must be a parameter dataclass instance")
         missing = [p for p in PROFILES if p not in self.profiles]
         if missing:
             raise ValueError(f"experiment {self.name}: profiles {missing} are missing")
         for p, over in self.profiles.items():
             if "runs" not in over:
                 raise ValueError(f"experiment {self.name}: profile {p!r} must set 'runs'")
+            base = override(self.params, {k: v for k, v in over.items() if k != "runs"},
+                            f"experiment {self.name}, profile {p!r}")
+            for v in self.variants:
+                override(base, v.params, f"experiment {self.name}, variant {v.label!r}")
 
-    def resolve(self, profile: str, runs: int | None = None) -> tuple[dict, int]:
+    def resolve(self, profile: str, runs: int | None = None) -> tuple[Any, int]:
         """Parameters and run count for a profile (``runs`` overrides the profile's)."""
         if profile not in self.profiles:
             raise ValueError(f"unknown profile {profile!r}; allowed: {', '.join(self.profiles)}")
@@ -83,7 +108,11 @@ class ExperimentSpec:
             if runs < 1:
                 raise ValueError(f"--runs must be >= 1, got {runs}")
             n = runs
-        return {**self.params, **over}, n
+        return override(self.params, over, f"experiment {self.name}, profile {profile!r}"), n
+
+    def variant_params(self, base, variant: Variant):
+        """The parameters of one variant on top of a resolved profile."""
+        return override(base, variant.params, f"experiment {self.name}, variant {variant.label!r}")
 
     def run_function(self) -> Callable:
         return load_callable(self.run)
@@ -92,3 +121,9 @@ class ExperimentSpec:
 def load_callable(ref: str) -> Callable:
     module, _, attr = ref.partition(":")
     return getattr(importlib.import_module(module), attr)
+
+
+def qualified_name(obj) -> str:
+    """``"module:QualName"`` of a class, for ``load_callable`` in a worker process."""
+    cls = obj if isinstance(obj, type) else type(obj)
+    return f"{cls.__module__}:{cls.__qualname__}"

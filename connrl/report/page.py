@@ -1,8 +1,9 @@
 """``connrl results``: docs/RESULTS.md from the stored ``OUT/NAME/summary.json`` files.
 
 Every number on the page comes from a summary written by ``connrl run``; the page says which command,
-profile, runs and seeds produced it. Chapters may add analysis through ``results_section(out_dir, doc)``;
-they put their figures in ``doc``'s folder.
+profile, runs and seeds produced it. Each chapter's section is a module of ``connrl.report`` (``SECTIONS``)
+with ``EXPERIMENTS`` (the experiment module it reports) and ``results_section(out_dir, doc)``; figures go
+in ``doc``'s folder. Hand-written paragraphs live in ``docs/notes/*.md`` and are included with ``note``.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import shutil
 import time
 from pathlib import Path
 
-from connrl.experiments.registry import SPEC_MODULES, all_experiments
+from connrl.experiments.registry import all_experiments
 from connrl.storage import atomic_write_text
 
 
@@ -56,6 +57,18 @@ def figure(png: Path, doc: Path, name: str) -> str:
     return f"![{name}](figures/{dest.name})"
 
 
+NOTES_DIR = Path(__file__).resolve().parents[2] / "docs" / "notes"
+SECTIONS = ("connrl.report.pole", "connrl.report.survival", "connrl.report.hidden_state", "connrl.report.robot")
+
+
+def note(name: str) -> str:
+    """The hand-written paragraph(s) of ``docs/notes/NAME.md``, without a trailing newline."""
+    path = NOTES_DIR / f"{name}.md"
+    if not path.exists():
+        return f"(note `docs/notes/{name}.md` not found: the notes ship with the source tree)"
+    return path.read_text().strip()
+
+
 def load_summary(out: Path, name: str) -> dict | None:
     p = out / name / "summary.json"
     return json.loads(p.read_text()) if p.exists() else None
@@ -71,21 +84,14 @@ def write_results(out: Path, doc: Path) -> Path:
         "",
     ]
     covered = set()
-    for mod in SPEC_MODULES:
-        try:
-            module = importlib.import_module(mod)
-        except ModuleNotFoundError as exc:
-            if exc.name == mod:
-                continue
-            raise
-        section = getattr(module, "results_section", None)
-        names = [s.name for s in module.EXPERIMENTS]
-        if section is not None:
-            text = section(out, doc)
-            if text:
-                parts += [text, ""]
-                covered.update(names)
-                continue
+    for mod in SECTIONS:
+        module = importlib.import_module(mod)
+        names = [s.name for s in importlib.import_module(module.EXPERIMENTS).EXPERIMENTS]
+        text = module.results_section(out, doc)
+        if text:
+            parts += [text, ""]
+            covered.update(names)
+            continue
         for name in names:
             summary = load_summary(out, name)
             if summary is None:

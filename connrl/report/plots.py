@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import matplotlib
@@ -11,6 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from connrl.experiments.runner import stored_runs  # noqa: E402
 from connrl.experiments.spec import ExperimentSpec  # noqa: E402
 
 
@@ -75,12 +75,7 @@ def plot_experiment(spec: ExperimentSpec, records: list[dict], out_dir: Path) ->
 
 def plot_from_disk(spec: ExperimentSpec, out: Path) -> list[Path]:
     """Redraw the plot of the latest ``connrl run`` from the run records named in summary.json."""
-    summary_path = out / spec.name / "summary.json"
-    if not summary_path.exists():
-        raise FileNotFoundError(f"{summary_path} not found: run `connrl run {spec.name}` first")
-    summary = json.loads(summary_path.read_text())
-    from connrl.experiments.runner import load_record, make_jobs
-
-    jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], out)
-    records = [r for r in (load_record(j) for j in jobs) if r is not None]
+    summary, records = stored_runs(spec, out)
+    if summary is None:
+        raise FileNotFoundError(f"{out / spec.name / 'summary.json'} not found: run `connrl run {spec.name}` first")
     return plot_experiment(spec, records, out / spec.name)

@@ -31,7 +31,14 @@ from connrl.agents.qcon import QCON, QCONConfig
 from connrl.core.exploration import StuckConfig, TemperatureSchedule
 from connrl.core.lesson_files import LessonFileError, load_lessons
 from connrl.core.planning import PlanningConfig, RelaxationPlanner
-from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv, scripted_teacher_lesson
+from connrl.core.rollout import run_trial
+from connrl.envs.survival import (
+    ACTION_ROTATION,
+    ROTATION_PERMUTATIONS,
+    SurvivalEnv,
+    environment_sets,
+    scripted_teacher_lesson,
+)
 from connrl.nets import NetConfig
 from connrl.nets.rotated import RotatedNet
 from connrl.tasks.survival_models import LearnedModelConfig, LearnedSurvivalModel, PerfectSurvivalModel
@@ -228,3 +235,49 @@ def make_taught_lessons(action_representation: str = "global", n_lessons: int = 
         if len(lessons) == n_lessons:
             return lessons
     raise RuntimeError(f"the scripted teacher completed fewer than {n_lessons} of 1000 environments")
+
+
+# ------------------------------------------------------------------------------------------- tests (4.3)
+
+def test_plays(env: SurvivalEnv, agent, layouts: list[int]) -> dict:
+    """Greedy plays (learning off, T = 0) on the test environments; seeds fixed per environment so every
+    test point sees the same enemy random streams (common random numbers)."""
+    food, outcomes = [], {"all_food": 0, "killed": 0, "starved": 0}
+    for k in layouts:
+        stats = run_trial(env, agent, trial=0, learning=False, seed=k, options={"layout_seed": k})
+        food.append(stats.info["food_eaten"])
+        outcomes[stats.info["outcome"]] = outcomes.get(stats.info["outcome"], 0) + 1
+    return {"food": float(np.mean(food)), "food_per_env": food, **outcomes}
+
+
+def evaluate(agent, representation: str, seed: int, n_envs: int, progress=lambda d: None) -> dict:
+    """4.3.4: greedy plays on ``n_envs`` fresh random environments; outcome shares and the food histogram.
+    The first play is also recorded step by step (``example_play``) for ``connrl.report.survival.render_play``."""
+    env = SurvivalEnv(representation)
+    _, layouts = environment_sets(seed, 0, n_envs)
+    food, outcomes = np.zeros(16, dtype=np.int64), {"all_food": 0, "killed": 0, "starved": 0}
+    example = []
+    for i, k in enumerate(layouts):
+        record = None
+        if i == 0:
+            def record(info):
+                example.append(_frame(env))
+            env.reset(seed=k, options={"layout_seed": k})
+            example.append(_frame(env))
+        stats = run_trial(env, agent, trial=0, learning=False, seed=k, options={"layout_seed": k}, on_step=record)
+        food[stats.info["food_eaten"]] += 1
+        outcomes[stats.info["outcome"]] += 1
+        if i % 200 == 0:
+            progress(i)
+    n = float(n_envs)
+    return {"eval_food": float(np.dot(np.arange(16), food) / n),
+            "eval_all_food_pct": 100 * outcomes["all_food"] / n, "eval_killed_pct": 100 * outcomes["killed"] / n,
+            "eval_starved_pct": 100 * outcomes["starved"] / n, "histogram_pct": (100 * food / n).tolist(),
+            "example_play": example}
+
+
+def _frame(env: SurvivalEnv) -> dict:
+    s = env.get_state()
+    return {"agent": list(s["agent"]), "enemies": s["enemies"].tolist(), "food": np.argwhere(s["food"]).tolist(),
+            "energy": s["energy"], "orientation": s["orientation"], "food_eaten": s["food_eaten"],
+            "steps": s["steps"], "outcome": s["outcome"]}

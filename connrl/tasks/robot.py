@@ -1,0 +1,161 @@
+"""Ch. 5 wiring: the robot task worlds of a parameter set, the scripted teachers' taught lessons (3.7, 5.4), and
+QCON-T (5.3) with its taught lessons; ``evaluate`` is the greedy test of 5.4.
+
+Builders take the experiment's parameters (``connrl.experiments.robot.RobotParams``) by attribute.
+"""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents.teaching import TeachingConfig, TeachingQCON
+from connrl.core.exploration import StuckConfig, TemperatureSchedule
+from connrl.core.lesson_files import load_lessons, save_lessons
+from connrl.core.lessons import Lesson
+from connrl.core.rollout import run_trial
+from connrl.envs.robot import OBS_SIZE, Layout, RobotTaskEnv, teach
+from connrl.nets import NetConfig
+
+LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
+TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5}  # lessons shipped per task (5.4.1)
+DEFAULT_GEOMETRY = {"door_width": 36.0, "dock_tolerance": 30.0}  # what the shipped taught lessons were made in
+
+
+def lesson_path(task: str) -> Path:
+    return LESSON_DIR / f"robot-{task.lower()}.json"
+
+
+def make_env(p) -> RobotTaskEnv:
+    """The task environment of a parameter set (the layout's doors widened when ``door_width`` asks)."""
+    layout = Layout.load("default")
+    if p.door_width != DEFAULT_GEOMETRY["door_width"]:
+        layout = layout.with_door_width(p.door_width)
+    return RobotTaskEnv(p.task, layout=layout, binary_low=p.binary_low, max_steps=p.max_steps,
+                        dp_heading=p.dp_heading, dock_tolerance=p.dock_tolerance)
+
+
+def make_taught_lessons(task: str, n: int | None = None, seed: int = 0, max_tries: int = 200,
+                        env: RobotTaskEnv | None = None) -> list[Lesson]:
+    """Demonstrations by the scripted teacher of ``task`` from start poses drawn with ``seed``.
+
+    DP and DK keep only demonstrations that reach the goal (the thesis's "positive examples", 5.4.1);
+    WFL keeps every 30-step demonstration. Deterministic given ``seed``. ``env`` (default: the task on
+    the default layout) sets the geometry the teacher demonstrates in.
+    """
+    n = TAUGHT_COUNTS[task] if n is None else n
+    env = RobotTaskEnv(task) if env is None else env
+    rng = np.random.default_rng(seed)
+    out: list[Lesson] = []
+    for i in range(max_tries):
+        if len(out) == n:
+            break
+        start = env.sample_task(rng)
+        play_seed = int(rng.integers(2**31))
+        steps = teach(env, start, seed=play_seed)
+        success = bool(steps[-1][4])
+        if task in ("DP", "DK") and not success:
+            continue
+        reward = float(sum(s[2] for s in steps))
+        out.append(Lesson.from_steps(steps, taught=True, meta={
+            "teacher": f"connrl.envs.robot.teach ({task})", "start": [round(v, 3) for v in start],
+            "play_seed": play_seed, "attempt": i, "steps": len(steps), "success": success, "reward": reward}))
+    if len(out) < n:
+        raise RuntimeError(f"the {task} teacher succeeded only {len(out)} times in {max_tries} tries")
+    return out
+
+
+def write_taught_lessons(seed: int = 0) -> list[Path]:
+    """Regenerate connrl/data/lessons/robot-{dp,dk,wfl}.json (``connrl make-lessons robot``)."""
+    paths = []
+    for task in TAUGHT_COUNTS:
+        lessons = make_taught_lessons(task, seed=seed)
+        p = lesson_path(task)
+        save_lessons(p, lessons, env_id=f"connrl/Robot-{task}-v0", env_kwargs={},
+                     source=f"connrl.experiments.robot.make_taught_lessons({task!r}, n={len(lessons)}, "
+                            f"seed={seed}): scripted teacher, not a person")
+        paths.append(p)
+    return paths
+
+
+def binary_columns(task: str) -> np.ndarray:
+    """Indices of the binary inputs of a task's observation (see connrl.envs.robot)."""
+    if task in ("DK", "DP"):
+        return np.arange(24, 52)
+    return np.r_[24:28, 30:36]
+
+
+@functools.lru_cache(maxsize=8)
+def _demonstrated(task: str, door_width: float, dock_tolerance: float) -> tuple[Lesson, ...]:
+    """The shipped lessons' recipe (seed 0, starts with any heading, 30 steps) in another geometry; cached
+    per process (callers copy the inputs before changing them)."""
+    env = make_env(SimpleNamespace(task=task, door_width=door_width, dock_tolerance=dock_tolerance, binary_low=-0.5,
+                                   max_steps=30, dp_heading=180.0))
+    return tuple(make_taught_lessons(task, seed=0, env=env))
+
+
+def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: float = 36.0,
+                   dock_tolerance: float = 30.0) -> list[Lesson]:
+    """The first ``n`` taught lessons of ``task``, re-encoded for ``binary_low`` (files use -0.5/+0.5).
+
+    In the geometry of the shipped lessons (DEFAULT_GEOMETRY) they are read from the file; in another one
+    the same scripted teacher demonstrates afresh there (same seed and starts, deterministic).
+    """
+    if n == 0:
+        return []
+    if task != "DK":
+        dock_tolerance = DEFAULT_GEOMETRY["dock_tolerance"]  # only docking depends on it
+    if (door_width, dock_tolerance) != (DEFAULT_GEOMETRY["door_width"], DEFAULT_GEOMETRY["dock_tolerance"]):
+        lessons = _demonstrated(task, float(door_width), float(dock_tolerance))
+        where = f"the teacher made {len(lessons)} with {door_width:g}-in doors, docking within {dock_tolerance:g} deg"
+    else:
+        lessons = load_lessons(lesson_path(task), env_id=f"connrl/Robot-{task}-v0", input_dim=OBS_SIZE[task],
+                               n_actions=6)
+        where = f"the file has {len(lessons)}"
+    if n > len(lessons):
+        raise ValueError(f"{task}: {n} taught lessons asked for, {where}")
+    out = []
+    for lesson in lessons[:n]:
+        x = lesson.inputs.copy()
+        x[:, binary_columns(task)] += binary_low + 0.5
+        out.append(Lesson(x, lesson.actions, lesson.rewards, lesson.terminated, lesson.truncated, True,
+                          dict(lesson.meta)))
+    return out
+
+
+
+def make_agent(p, rng: np.random.Generator) -> TeachingQCON:
+    """QCON-T of 5.3 from the run's parameters (``connrl.experiments.robot.RobotParams``) (``linear_output``: single-layer nets with a linear output unit)."""
+    n_in = OBS_SIZE[p.task]
+    hidden = int(round(p.hidden_fraction * n_in))
+    net = NetConfig(n_in, hidden, value_range=p.value_range, init_range=p.init_range, lr=p.lr,
+                    momentum=p.momentum, linear_output=bool(p.linear_output) and hidden == 0)
+    replay = ReplayConfig(capacity=p.capacity,
+                          lessons_per_trial=LinearSchedule(p.lessons_per_trial, p.lessons_per_trial),
+                          p_threshold=p.p_threshold)
+    cfg = QCONConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials),
+                     gamma=p.gamma, lam=p.lam, online=p.online, replay=replay,
+                     stuck=StuckConfig(p.stuck_window, p.stuck_radius, p.stuck_boost))
+    agent = TeachingQCON(cfg, 6, rng, TeachingConfig(repair=p.repair, merit_scale=p.value_range))
+    agent.add_taught_lessons(taught_lessons(p.task, p.lessons, p.binary_low, p.door_width,
+                                            p.dock_tolerance))
+    return agent
+
+
+
+def evaluate(env: RobotTaskEnv, agent, tasks, seeds, max_steps: int, paths: list | None = None) -> float:
+    """Greedy test on fixed tasks: total reinforcement / total steps (5.4)."""
+    total, steps = 0.0, 0
+    for i, (start, s) in enumerate(zip(tasks, seeds, strict=True)):
+        stats = run_trial(env, agent, trial=0, learning=False, seed=int(s), options={"start": start},
+                          max_steps=max_steps)
+        total += stats.total_reward
+        steps += stats.steps
+        if paths is not None and i < len(paths):
+            paths[i] = {"poses": [[round(v, 2) for v in pose] for pose in env.trace],
+                        "success": bool(stats.info.get("success")), "reward": stats.total_reward}
+    return total / max(steps, 1)
