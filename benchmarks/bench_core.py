@@ -27,8 +27,8 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from connrl.core.lessons import Lesson
-from connrl.core.replay import ReplayParams, replay_q  # noqa: E402
+from connrl.core.lessons import Lesson  # noqa: E402
+from connrl.core.replay import ReplayParams, replay_q, replay_q_reference  # noqa: E402
 from connrl.envs.pole import PoleBalancingEnv  # noqa: E402
 from connrl.nets import OAON, NetConfig  # noqa: E402
 
@@ -137,10 +137,13 @@ def main() -> list[tuple[str, float, str]]:
     q = OAON(NetConfig(145, 30, lr=0.05, momentum=0.9), 4, rng)
     lesson = Lesson(rng.choice([-0.5, 0.5], (101, 145)), rng.integers(0, 4, 100), np.zeros(100), terminated=True)
     params = ReplayParams(gamma=0.9, lam=0.7, temperature=0.05, p_threshold=0.01)
-    t_rep = best_time(lambda: replay_q(q, lesson, params), 20)
+    t_rep = best_time(lambda: replay_q(q, lesson, params), 20)  # the registered fast path (compiled kernel)
+    t_ref = best_time(lambda: replay_q_reference(q, lesson, params), 3)  # Fig. 5.1(a) as a plain Python loop
     # per step: values(x_{t+1}) and values(x_t) for 4 nets (forward only), one update
     fl_rep = 100 * (2 * 4 * 2 * (30 * 146 + 31) + update_flops(145, 30))
-    add("backward replay of a 100-step lesson (4 OAON 145-30-1 nets, lam 0.7)", t_rep, fl_rep)
+    add("backward replay of a 100-step lesson (4 OAON 145-30-1 nets, lam 0.7): reference loop", t_ref, fl_rep)
+    add("backward replay of a 100-step lesson (4 OAON 145-30-1 nets, lam 0.7): compiled kernel", t_rep, fl_rep,
+        ("the reference loop", t_ref))
 
     env = PoleBalancingEnv(max_steps=10**9)
     env.reset(seed=0)

@@ -14,14 +14,15 @@ import time
 import numpy as np
 
 from connrl.envs.cup import CupCollectionEnv
-from connrl.experiments.hidden_state import ARCHITECTURES, CUP_PARAMS, make_agent, test_score
+from connrl.experiments.hidden_state import CupParams
 from connrl.experiments.protocol import run_trial
+from connrl.tasks.hidden_state import ARCHITECTURES, make_agent, test_score
 
 
 def main():
     print(f"{'architecture':18} {'act (greedy)':>14} {'trial+replay+test':>19}")
     for arch in ARCHITECTURES:
-        p = {**CUP_PARAMS, "arch": arch}
+        p = CupParams(arch=arch)
         rng = np.random.default_rng(0)
         env, test_env = CupCollectionEnv(), CupCollectionEnv()
         env.reset(seed=0)

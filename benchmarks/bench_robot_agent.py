@@ -2,7 +2,7 @@
 
     python benchmarks/bench_robot_agent.py [--trials 60] [--task DP]
 
-Prints: one 30-step lesson replayed by the Numba kernel vs the reference ``replay_q`` (52-16-1 OAON x 6),
+Prints: one 30-step lesson replayed by the Numba kernel vs the plain loop ``replay_q_reference`` (52-16-1 OAON x 6),
 and the wall time per trial of ``run_robot`` (training trial + 60 replayed lessons + taught lessons + the
 amortised test of 50 tasks every 10 trials), from which the time of the full Ch. 5 protocol follows.
 """
@@ -15,9 +15,9 @@ import time
 import numpy as np
 
 from connrl.core.lessons import Lesson
-from connrl.core.replay import ReplayParams, replay_q
+from connrl.core.replay import ReplayParams, replay_q_reference
 from connrl.core.replay_kernel import replay_oaon
-from connrl.experiments.robot import EXPERIMENTS, ROBOT_PARAMS, run_robot
+from connrl.experiments.robot import EXPERIMENTS, RobotParams, run_robot
 from connrl.nets import OAON, NetConfig
 
 
@@ -34,7 +34,7 @@ def bench_replay(reps: int = 300) -> tuple[float, float]:
     fast = (time.perf_counter() - t) / reps
     t = time.perf_counter()
     for _ in range(reps // 10):
-        replay_q(net, lesson, params)
+        replay_q_reference(net, lesson, params)
     ref = (time.perf_counter() - t) / (reps // 10)
     return fast, ref
 
@@ -45,9 +45,9 @@ def main() -> None:
     ap.add_argument("--task", default="DP", choices=("DP", "DK", "WFL"))
     args = ap.parse_args()
     fast, ref = bench_replay()
-    print(f"replay of a 30-step lesson: kernel {fast * 1e6:8.0f} us   reference replay_q {ref * 1e6:8.0f} us")
-    run_robot({**ROBOT_PARAMS, "trials": 2, "test_tasks": 2}, np.random.default_rng(0))  # compile
-    p = {**ROBOT_PARAMS, "task": args.task, "lessons": 10 if args.task != "WFL" else 5, "trials": args.trials}
+    print(f"replay of a 30-step lesson: kernel {fast * 1e6:8.0f} us   reference loop {ref * 1e6:8.0f} us")
+    run_robot(RobotParams(trials=2, test_tasks=2), np.random.default_rng(0))  # compile
+    p = RobotParams(task=args.task, lessons=10 if args.task != "WFL" else 5, trials=args.trials)
     t = time.perf_counter()
     run_robot(p, np.random.default_rng(0))
     per_trial = (time.perf_counter() - t) / args.trials

@@ -1,4 +1,4 @@
-"""Command line: ``connrl list | run | plot | teach | results``."""
+"""Command line: ``connrl list | run | show | plot | results | sweep | teach | make-lessons``."""
 
 from __future__ import annotations
 
@@ -126,6 +126,49 @@ def cmd_teach(args) -> int:
     return teach(args.target, out=Path(args.out) if args.out else None, seed=args.seed)
 
 
+def cmd_sweep(args) -> int:
+    import numpy as np
+
+    from connrl.experiments.runner import run_experiment
+    from connrl.experiments.sweep import parse_seeds, sweep_spec
+    from connrl.report.plots import plot_experiment
+
+    spec = _get(args.name)
+    try:
+        first, stop = parse_seeds(args.seeds)
+        sweep = sweep_spec(spec, args.set or [], args.variant)
+    except ValueError as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+    try:
+        outcome = run_experiment(sweep, profile="full", runs=stop - first, seed=first, out=Path(args.out),
+                                 workers=args.workers, show_progress=not args.quiet)
+    except KeyboardInterrupt:
+        print("\ninterrupted: finished runs are saved; run the same command again to resume.", file=sys.stderr)
+        return 130
+    plots = plot_experiment(sweep, outcome.records, Path(args.out) / sweep.name)
+    print(sweep.title)
+    _print_summary(outcome.summary)
+    curves = [r["curve_y"] for r in sorted(outcome.records, key=lambda r: r["seed"])]
+    if curves and len({len(c) for c in curves}) == 1 and curves[0]:
+        xs, mean = outcome.records[0]["curve_x"], np.mean(curves, axis=0)
+        idx = np.unique(np.linspace(0, len(xs) - 1, min(11, len(xs))).round().astype(int))
+        print("mean curve: " + ", ".join(f"{xs[i]:g}: {mean[i]:.3g}" for i in idx))
+    print(f"\n{outcome.ran} run(s) executed, {outcome.reused} reused; summary: {outcome.summary_path}")
+    for p in plots:
+        print(f"plot:    {p}")
+    return 0
+
+
+def cmd_make_lessons(args) -> int:
+    if args.world == "robot":
+        from connrl.tasks.robot import write_taught_lessons
+    else:
+        from connrl.tasks.survival import write_taught_lessons
+    for path in write_taught_lessons(seed=args.seed):
+        print(path)
+    return 0
+
+
 def cmd_results(args) -> int:
     from connrl.report.page import write_results
 
@@ -174,6 +217,30 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", default=None, help="lesson file to write (default: lessons/TARGET-<time>.json)")
     s.add_argument("--seed", type=_seed, default=0, help="environment seed (default 0)")
     s.set_defaults(func=cmd_teach)
+
+    s = sub.add_parser("sweep", help="run an experiment's setting with overrides over many seeds",
+                       description="Run the experiment's full-profile parameters (or one variant's) with --set "
+                       "overrides, one run per seed A..B-1, seeded as `connrl run` seeds its runs. Unknown keys "
+                       "are refused before any compute. Runs are stored and resumable under "
+                       "OUT/sweep-NAME-HASH/.")
+    s.add_argument("name", help="experiment name (see `connrl list`)")
+    s.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a parameter; VALUE is JSON (1, 0.5, true, null, [10, 30], {\"hq\": 12}) "
+                   "or a plain string; repeat for several")
+    s.add_argument("--seeds", required=True, metavar="A:B", help="seeds A..B-1, one run each (e.g. 100:107)")
+    s.add_argument("--variant", default=None, help="start from this variant's parameters (its label)")
+    s.add_argument("--out", default="runs", help="output directory (default ./runs)")
+    s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")
+    s.add_argument("--quiet", action="store_true", help="no live progress display")
+    s.set_defaults(func=cmd_sweep)
+
+    s = sub.add_parser("make-lessons", help="regenerate the shipped taught lessons",
+                       description="Rewrite connrl/data/lessons/ for a world from its scripted teacher "
+                       "(deterministic: the same seed gives the same files).")
+    s.add_argument("world", choices=("robot", "survival"), help="robot: robot-{dp,dk,wfl}.json; survival: "
+                   "survival-{global,local}.json")
+    s.add_argument("--seed", type=_seed, default=0, help="teacher seed (default 0, the shipped files)")
+    s.set_defaults(func=cmd_make_lessons)
 
     s = sub.add_parser("results", help="write docs/RESULTS.md from stored summaries",
                        description="Collect every OUT/*/summary.json into a Markdown results page.")

@@ -8,7 +8,7 @@ from connrl import cli
 from connrl.experiments.registry import all_experiments
 
 
-@pytest.mark.parametrize("sub", ["list", "run", "plot", "show", "teach", "results"])
+@pytest.mark.parametrize("sub", ["list", "run", "plot", "show", "teach", "results", "sweep", "make-lessons"])
 def test_every_command_has_help(sub, capsys):
     with pytest.raises(SystemExit) as e:
         cli.main([sub, "--help"])
@@ -56,3 +56,51 @@ def test_every_experiment_runs_on_the_tiny_profile(name, tmp_path, capsys):
     assert (tmp_path / name / "curve.png").exists()
     assert cli.main(["plot", name, "--out", str(tmp_path)]) == 0
     assert cli.main(["show", name, "--out", str(tmp_path)]) == 0
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--set", "lr=0.1", "--set", "learning_rate=0.1", "--seeds", "100:101"],
+     "unknown parameter(s) 'learning_rate'; allowed: task, lessons"),
+    (["--set", "lr", "--seeds", "100:101"], "--set expects key=value, got 'lr'"),
+    (["--seeds", "7"], "--seeds expects A:B"),
+    (["--seeds", "5:5"], "0 <= A < B"),
+    (["--variant", "11 lessons", "--seeds", "0:1"], "has no variant '11 lessons'; variants: 'no teaching'"),
+])
+def test_sweep_refuses_bad_input_before_any_run(args, message, tmp_path):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["sweep", "robot-teaching-dp", "--out", str(tmp_path), "--quiet", *args])
+    assert message in str(e.value) and str(e.value).count("\n") == 0
+    assert not any(tmp_path.iterdir())
+
+
+def test_sweep_runs_one_run_per_seed_like_the_run_function(tmp_path, capsys):
+    """Seeds A..B-1, each run seeded default_rng(seed) from the experiment's parameters plus the overrides."""
+    import dataclasses
+
+    import numpy as np
+
+    from connrl.experiments.pole import PoleParams, run_pole
+
+    assert cli.main(["sweep", "pole-full", "--set", "max_trials=3", "--set", "test_steps=200", "--set", "lr=1",
+                     "--seeds", "5:7", "--out", str(tmp_path), "--workers", "1", "--quiet"]) == 0
+    summary = json.loads(next(tmp_path.glob("sweep-pole-full-*/summary.json")).read_text())
+    (variant,) = summary["variants"].values()
+    assert variant["seeds"] == [5, 6]
+    p = dataclasses.replace(PoleParams(), max_trials=3, test_steps=200, lr=1.0)
+    direct = [run_pole(p, np.random.default_rng(s)).curve_y for s in (5, 6)]
+    records = sorted((json.loads(f.read_text()) for f in tmp_path.rglob("seed-*.json")), key=lambda r: r["seed"])
+    assert [r["curve_y"] for r in records] == direct and records[0]["params"]["lr"] == 1.0
+    assert "mean curve" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("world, files", [("robot", ["robot-dk.json", "robot-dp.json", "robot-wfl.json"]),
+                                          ("survival", ["survival-global.json", "survival-local.json"])])
+def test_make_lessons_rewrites_the_shipped_files_exactly(world, files, tmp_path, monkeypatch, capsys):
+    from connrl.tasks import robot, survival
+
+    shipped = robot.LESSON_DIR
+    monkeypatch.setattr(robot, "LESSON_DIR", tmp_path)
+    monkeypatch.setattr(survival, "LESSON_DIR", tmp_path)
+    assert cli.main(["make-lessons", world]) == 0
+    for name in files:
+        assert (tmp_path / name).read_bytes() == (shipped / name).read_bytes(), name

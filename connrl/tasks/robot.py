@@ -76,7 +76,7 @@ def write_taught_lessons(seed: int = 0) -> list[Path]:
         lessons = make_taught_lessons(task, seed=seed)
         p = lesson_path(task)
         save_lessons(p, lessons, env_id=f"connrl/Robot-{task}-v0", env_kwargs={},
-                     source=f"connrl.experiments.robot.make_taught_lessons({task!r}, n={len(lessons)}, "
+                     source=f"connrl.tasks.robot.make_taught_lessons({task!r}, n={len(lessons)}, "
                             f"seed={seed}): scripted teacher, not a person")
         paths.append(p)
     return paths

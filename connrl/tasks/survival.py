@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from importlib import resources
+from pathlib import Path
 
 import numpy as np
 
@@ -29,7 +29,8 @@ from connrl.agents.ahcon import AHCON, AHCONConfig
 from connrl.agents.base import Exploration, LinearSchedule, ReplayConfig
 from connrl.agents.qcon import QCON, QCONConfig
 from connrl.core.exploration import StuckConfig, TemperatureSchedule
-from connrl.core.lesson_files import LessonFileError, load_lessons
+from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
+from connrl.core.lessons import Lesson
 from connrl.core.planning import PlanningConfig, RelaxationPlanner
 from connrl.core.rollout import run_trial
 from connrl.envs.survival import (
@@ -44,6 +45,7 @@ from connrl.nets.rotated import RotatedNet
 from connrl.tasks.survival_models import LearnedModelConfig, LearnedSurvivalModel, PerfectSurvivalModel
 
 SURVIVAL_ENV_ID = "connrl/Survival-v0"
+LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
 FRAMEWORKS = ("AHCON", "AHCON-R", "AHCON-M", "AHCON-T", "QCON", "QCON-R", "QCON-M", "QCON-T")
 MODELS = ("learned", "perfect")
 
@@ -138,9 +140,21 @@ class SurvivalExploration(Exploration):
         return self.base
 
 
+def write_taught_lessons(seed: int = 0) -> list[Path]:
+    """Regenerate connrl/data/lessons/survival-{global,local}.json (``connrl make-lessons survival``)."""
+    paths = []
+    for representation in ("global", "local"):
+        path = LESSON_DIR / f"survival-{representation}.json"
+        save_lessons(path, make_taught_lessons(representation, 2, seed), env_id=SURVIVAL_ENV_ID,
+                     env_kwargs={"action_representation": representation},
+                     source=f"connrl.tasks.survival.make_taught_lessons({representation!r}, n_lessons=2, seed={seed})")
+        paths.append(path)
+    return paths
+
+
 def taught_lessons(representation: str) -> list:
     """The two shipped taught lessons for a representation (4.3.1), checked against the task."""
-    path = resources.files("connrl") / "data" / "lessons" / f"survival-{representation}.json"
+    path = LESSON_DIR / f"survival-{representation}.json"
     return load_survival_lessons(path, representation)
 
 
@@ -211,8 +225,6 @@ def make_taught_lessons(action_representation: str = "global", n_lessons: int = 
     in order and the first `n_lessons` complete plays are returned. Each lesson's ``meta`` records the
     layout seed, the play seed and the food cells, so the play can be re-run exactly.
     """
-    from connrl.core.lessons import Lesson  # lazy: the env does not depend on the replay machinery
-
     env = SurvivalEnv(action_representation=action_representation)
     lessons = []
     for layout_seed in range(1000):

@@ -1,9 +1,11 @@
-"""Diagnostic harness mirroring connrl.experiments.robot.run_robot (same RNG order) with hooks."""
+"""Diagnostic harness: a ``connrl.experiments.robot.RobotRun`` (the steps ``run_robot`` takes, in its
+random-number order) with hooks for looking inside."""
 
 import numpy as np
 
-from connrl.experiments import robot as R
-from connrl.experiments.protocol import run_trial
+from connrl.experiments.robot import RobotParams, RobotRun
+from connrl.experiments.spec import override
+from connrl.tasks.robot import make_taught_lessons
 
 
 class Run:
@@ -11,26 +13,21 @@ class Run:
         self.trunc_terminal = bool(over.pop("trunc_terminal", 0))
         lesson_seed = over.pop("lesson_seed", None)
         lesson_fn = over.pop("lesson_fn", None)
-        p = {**R.ROBOT_PARAMS, **over}
+        p = override(RobotParams(), over, "harness")
         self.p = p
-        rng = np.random.default_rng(seed)
-        self.rng = rng
-        self.env, self.test_env = R.make_env(p), R.make_env(p)
-        task_rng = np.random.default_rng(rng.integers(2**63))
-        self.tests = [self.test_env.sample_task(task_rng) for _ in range(p["test_tasks"])]
-        self.test_seeds = task_rng.integers(2**31, size=p["test_tasks"])
-        self.agent = R.make_agent(p, rng)
-        if lesson_seed is not None or lesson_fn is not None:
+        self.run = RobotRun(p, np.random.default_rng(seed))
+        self.env, self.test_env, self.agent = self.run.env, self.run.test_env, self.run.agent
+        self.tests, self.test_seeds = self.run.tests, self.run.test_seeds
+        if lesson_seed is not None or lesson_fn is not None:  # drawing them uses no run random numbers
             if lesson_fn is not None:
                 import importlib
 
                 mod, fn = lesson_fn.split(":")
-                lessons = getattr(importlib.import_module(mod), fn)(p["lessons"], int(lesson_seed or 0))
+                lessons = getattr(importlib.import_module(mod), fn)(p.lessons, int(lesson_seed or 0))
             else:
-                lessons = R.make_taught_lessons(p["task"], p["lessons"], seed=int(lesson_seed))
+                lessons = make_taught_lessons(p.task, p.lessons, seed=int(lesson_seed))
             self.agent.book.taught = []
             self.agent.add_taught_lessons(lessons)
-        self.env.reset(seed=int(rng.integers(2**31)))
         self.k = 0
         self.train_log = []
 
@@ -38,7 +35,7 @@ class Run:
         for _ in range(n):
             if self.trunc_terminal:
                 self._patch()
-            st = run_trial(self.env, self.agent, trial=self.k, learning=True, on_step=on_step)
+            st = self.run.train(self.k, on_step=on_step)
             self.train_log.append((st.steps, st.total_reward, bool(st.info.get("success"))))
             self.k += 1
 
@@ -65,7 +62,7 @@ class Run:
         ag.observe = observe
 
     def perf(self):
-        return R.evaluate(self.test_env, self.agent, self.tests, self.test_seeds, self.p["max_steps"])
+        return self.run.test()
 
     def detailed_test(self):
         """Greedy tests with per-step records: obs, action, reward, collision, q."""
@@ -75,7 +72,7 @@ class Run:
             obs, info = env.reset(seed=int(s), options={"start": start})
             ag.begin_trial(obs, info, trial=0, learning=False)
             recs = []
-            for _t in range(self.p["max_steps"]):
+            for _t in range(self.p.max_steps):
                 q = ag.q.values(np.asarray(obs, dtype=np.float64))
                 a = ag.act(obs, info, greedy=True)
                 nobs, r, term, trunc, info = env.step(a)
