@@ -181,7 +181,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="connrl", description="Reproduce Lin (1993), Reinforcement Learning for "
                                 "Robots Using Neural Networks, and use its techniques on Gymnasium tasks.")
     sub = p.add_subparsers(dest="command", required=True)
+    _add_experiment_commands(sub)
+    _add_tool_commands(sub)
+    return p
 
+
+def _add_experiment_commands(sub) -> None:
+    """list, run, plot, show."""
     s = sub.add_parser("list", help="list the experiments", description="List every experiment with its "
                        "thesis section and run counts.")
     s.set_defaults(func=cmd_list)
@@ -218,6 +224,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=_seed, default=0, help="environment seed (default 0)")
     s.set_defaults(func=cmd_teach)
 
+
+def _add_tool_commands(sub) -> None:
+    """sweep, make-lessons, teach, results."""
     s = sub.add_parser("sweep", help="run an experiment's setting with overrides over many seeds",
                        description="Run the experiment's full-profile parameters (or one variant's) with --set "
                        "overrides, one run per seed A..B-1, seeded as `connrl run` seeds its runs. Unknown keys "
@@ -247,7 +256,6 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", default="runs", help="directory holding the experiments' outputs (default ./runs)")
     s.add_argument("--doc", default="docs/RESULTS.md", help="Markdown file to write (default docs/RESULTS.md)")
     s.set_defaults(func=cmd_results)
-    return p
 
 
 def main(argv: list[str] | None = None) -> int:

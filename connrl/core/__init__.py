@@ -24,6 +24,7 @@ from connrl.core.returns import lambda_returns, td_lambda_target
 from connrl.core.rollout import TrialStats, run_trial
 
 __all__ = ["REPAIRS", "Lesson", "LessonFileError", "LessonMemory", "LessonRecorder", "QFunction", "ReplayParams",
-           "StuckConfig", "StuckDetector", "TemperatureSchedule", "TrialStats", "batch_targets", "boltzmann_probabilities",
+           "StuckConfig", "StuckDetector", "TemperatureSchedule", "TrialStats", "batch_targets",
+           "boltzmann_probabilities",
            "boltzmann_select", "lambda_returns", "load_lessons", "recency_index", "repair_step", "replay_ahc",
            "replay_q", "replay_q_reference", "run_trial", "save_lessons", "td_lambda_target"]

@@ -54,8 +54,8 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
                      p_threshold, clip, has_clip, scale, lr, momentum, repair, linear):
     """Fig. 5.1(a) in incremental mode over a whole lesson; same arithmetic as ``replay_q_reference``.
 
-    ``repair`` (5.4.3, for taught lessons; see ``connrl.core.replay.repair_step``): 0 none; 1 *lower*: every other action
-    valued above the taught one is moved toward it; 2 *raise*: the taught action is moved toward the largest
+    ``repair`` (5.4.3, for taught lessons; see ``connrl.core.replay.repair_step``): 0 none; 1 *lower*: every other
+    action valued above the taught one is moved toward it; 2 *raise*: the taught action is moved toward the largest
     other value. The check follows the TD update of each experience, with the net as it is then.
     """
     n = actions.shape[0]

@@ -5,7 +5,7 @@ The agent lives in a corridor of 11 cells (0-10) with walls beyond both ends and
 cells 3 and 7. It cannot sense the cup in its own cell, only cups in the two neighbouring cells, so after
 the first cup is collected every cell on the way to the second one looks the same (all bits off): the
 direction to walk is a *hidden state* that only history (which instance the trial started in) reveals.
-There are two task instances (SPEC §4, reconstruction of the lost Fig. 7.4)::
+There are two task instances (our reconstruction of the lost Fig. 7.4; docs/RECONSTRUCTION.md, "Cup collection")::
 
     cell:   0 1 2 3 4 5 6 7 8 9 10
     Inst A: . . I C . . . C . . .     start senses "cup right"
@@ -59,7 +59,8 @@ Agent at cell 2 (instance A) or cell 8 (instance B), cups at cells 3 and 7, coll
 holding a cup) and ``control_error_occurred`` (on steps).
 
 ## Differences from the thesis
-- Fig. 7.4 is lost; the corridor length, cup cells and start cells are SPEC §4's reconstruction, chosen to
+- Fig. 7.4 is lost; the corridor length, cup cells and start cells are our reconstruction
+  (docs/RECONSTRUCTION.md), chosen to
   match every number the text states (two instances, one cup visible at the start, 7 optimal steps each).
 - The thesis does not say how a failed action (control error) interacts with the collision bits; here an
   action that fails has no effect at all, so it moves nothing, picks up nothing and senses no collision.
@@ -75,9 +76,9 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-N_CELLS = 11  # cells 0..10; walls beyond both ends (SPEC §4)
-CUP_CELLS = (3, 7)  # both instances (SPEC §4)
-START_CELLS = {"A": 2, "B": 8}  # instance -> agent start cell (SPEC §4)
+N_CELLS = 11  # cells 0..10; walls beyond both ends (R)
+CUP_CELLS = (3, 7)  # both instances (R)
+START_CELLS = {"A": 2, "B": 8}  # instance -> agent start cell (R)
 INSTANCES = ("A", "B")  # a test of the thesis's measure runs one episode from each (7.5.1)
 OPTIMAL_STEPS = 7  # per instance; 14 for both (7.5.1; verified by search in tests/test_cup_env.py)
 LEFT, RIGHT, PICK_UP = 0, 1, 2

@@ -31,6 +31,8 @@ failure; learning bootstraps through it).
 ``start_x``, ``start_theta`` (training start ranges).
 
 ## Differences from the thesis
+Every reconstructed quantity, with the passage behind it: docs/RECONSTRUCTION.md, "Pole balancing".
+
 - The ranges of the random training starts are not given (7.5.4); we use x in +-1.2 m and theta in
   +-0.06 rad (about +-3.4 degrees, just beyond the largest test start and the 3.3-degree limit).
 - The input scaling is not given; see Observation Space.

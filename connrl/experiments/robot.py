@@ -7,7 +7,8 @@ performance is the total reinforcement over the 50 tests divided by the steps th
 also has a fixed simulator seed, so the sensing and control noise of a test is the same at every test
 (less noise in the curve; the thesis does not say how it handled this).
 
-Agent (5.3): ``connrl.agents.teaching.TeachingQCON`` (built by ``connrl.tasks.robot.make_agent``): six OAON Q-nets (hidden = round(0.3 x inputs):
+Agent (5.3): ``connrl.agents.teaching.TeachingQCON`` (built by ``connrl.tasks.robot.make_agent``): six OAON
+Q-nets (hidden = round(0.3 x inputs):
 16 for DP/DK, 11 for WF), lr 0.05, momentum 0.9, init +-0.5, Q in +-100, gamma 0.9, lambda 0.7 (set to 0
 at the end of a lesson and after non-policy actions), T 0.05 -> 0.02 over 300 trials on Q/100, stuck
 detection, on-line Q-learning during the trial and, after it, 60 lessons chosen by App. A.2 from the
@@ -66,7 +67,7 @@ class RobotParams:
     test_tasks: int = 50  # fixed test tasks per run (5.4)
     paths: int = 0  # greedy solution paths recorded at the end of the run (Figs. 5.5-5.7)
     linear_output: bool = False  # single-layer nets only: linear output unit (7.4's linear OAON; diagnostic)
-    door_width: float = 36.0  # doorway width, in (SPEC 5, R); others: sensitivity study (robot-dp-geometry)
+    door_width: float = 36.0  # doorway width, in (R); others: sensitivity study (robot-dp-geometry)
     dp_heading: float = 180.0  # DP starts face within +-this many deg of the door (180 = any heading, 5.4)
     dock_tolerance: float = 30.0  # DK: a head-on charger contact within this many deg docks (R; robot-dk-geometry)
 
@@ -203,15 +204,15 @@ EXPERIMENTS = [
            Variant("WFL single-layer", {"task": "WFL", "lessons": 5, "lr": 0.03})], _Q,
           description="compare with the multi-layer curves of robot-teaching-* (10/10/5 lessons)"),
     _spec("robot-dp-geometry", "Sensitivity of DP to the reconstructed geometry: door width and start heading "
-          "(not a thesis figure)", "5.4.1, 5.6; SPEC 5 (R)", {"task": "DP"},
+          "(not a thesis figure)", "5.4.1, 5.6; R", {"task": "DP"},
           [Variant(f"{w:g}-in doors, {h}, {n} lessons", {"door_width": w, "dp_heading": hd, "lessons": n},
                    {"trials_to_2.5": {0: 280, 3: 20, 10: 10}[n], **({"trials_to_5": 65} if n == 10 else {})})
            for w in (36.0, 48.0) for h, hd in (("any heading", 180.0), ("facing +-45", 45.0))
            for n in (0, 3, 10)], _DP_Q,
-          description="the thesis does not give the door width (SPEC 5 reconstructs 36 in for a 24-in body) nor "
+          description="the thesis does not give the door width (we reconstruct 36 in for a 24-in body) nor "
                       "the start headings beyond 'near a door'; thesis numbers are its Fig. 5.4a / 5.6 values"),
     _spec("robot-dk-geometry", "Sensitivity of DK to the reconstructed docking tolerance, multi- vs single-layer "
-          "(not a thesis figure)", "5.4.1, 5.4.4; SPEC 5 (R)", {"task": "DK"},
+          "(not a thesis figure)", "5.4.1, 5.4.4; R", {"task": "DK"},
           [Variant(f"{tol:g} deg, {arch}, {n} lessons",
                    {"dock_tolerance": tol, "lessons": n, **over})
            for tol in (30.0, 10.0)

@@ -58,83 +58,89 @@ _TASK_NOTES = {1: ["cups-task1"], 3: ["cups-task3"]}  # docs/notes/NAME.md
 
 def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     """Markdown for docs/RESULTS.md: Ch. 7 numbers beside the thesis's, from OUT/NAME/summary.json."""
-    lines = ["## Chapter 7: hidden state (window-Q, recurrent-Q, recurrent-model)", ""]
-    found = False
+    parts = []
     for task, (name, fig, section, title) in CUP_FIGURES.items():
         s = _load(out_dir, name)
-        if s is None:
-            continue
-        found = True
-        lines += [f"### {title} ({fig}, {section})", "",
-                  f"Command: {_cmd(s)} (profile `{s['profile']}`, {s['runs_per_variant']} runs per variant, "
-                  f"seeds from {s['base_seed']}).", "",
-                  "| architecture | runs reaching 14 | first trial at 14 (mean) | steps after last trial "
-                  "(per run) | optimal in last 100 tests | mean steps, last 100 | wasted pick-ups per test, "
-                  "last 100 | thesis |",
-                  "|---|---|---|---|---|---|---|---|"]
-        for label, v in s["variants"].items():
-            q = v["quantities"]
-            tto = q["trials_to_optimal"]
-            thesis = {1: "optimal 14 (λ=0.8); λ=0 much worse", 2: "little impact on window-Q and recurrent-Q; "
-                      "recurrent-model oscillates", 3: "window-Q optimal in 3/5; recurrent-Q always; "
-                      "recurrent-model oscillates"}[task]
-            if task == 1 and "lambda=0" in label and "0.8" not in label:
-                thesis = "much worse than λ=0.8"
-            finals = ", ".join(_fmt(x) for x in q["final_steps"]["per_run"])
-            wasted = q.get("wasted_pickups_last100", {}).get("mean")
-            lines.append(f"| {label} | {tto['runs_reaching']}/{len(tto['per_run'])} | {_fmt(tto['mean'])} | "
-                         f"{finals} | {_fmt(q['optimal_last100']['mean'], 2)} | "
-                         f"{_fmt(q['mean_steps_last100']['mean'], 2)} | {_fmt(wasted, 2)} | {thesis} |")
-        lines.append("")
-        for name in _TASK_NOTES.get(task, []):
-            lines += [note(name), ""]
+        if s is not None:
+            parts += _cup_table(s, task, fig, section, title)
     s = _load(out_dir, "cup-robustness") or _load(out_dir, "cup-task1")  # Task 1 runs probe too (lambda=0.8)
     if s is not None:
-        found = True
-        lines += ["### Robustness probe (7.5.1)", "", f"Command: {_cmd(s)}.", "",
-                  "| architecture | share of interruptions resumed optimally (per run; — = policy not optimal) "
-                  "| thesis |", "|---|---|---|"]
-        thesis = {"window-Q": "not robust (follows its recent actions)",
-                  "recurrent-Q": "between the two", "recurrent-model": "robust (acts on the world state)"}
-        for label, v in s["variants"].items():
-            arch = label.split(" ")[0]
-            if label not in (arch, f"{arch} lambda=0.8"):
-                continue
-            per = ", ".join(_fmt(x, 2) for x in v["quantities"]["robust_fraction"]["per_run"])
-            lines.append(f"| {arch} | {per} | {thesis.get(arch, '')} |")
-        lines.append("")
+        parts += _robustness_table(s)
     s = _load(out_dir, "pole-hidden")
     if s is not None:
-        found = True
-        spec = next(e for e in _SPECS if e.name == "pole-hidden")
-        limit = spec.resolve(s["profile"])[0].trials
-        n_runs = s["runs_per_variant"]
-        lines += ["### Task 4: pole balancing from (x, θ) (Table 7.1)", "", f"Command: {_cmd(s)}.", "",
-                  "Table 7.1's measure is the mean of the best 5 of 6 runs; a run without a satisfactory policy "
-                  f"within {limit} trials counts as {limit} (marked ≥). With more than 6 runs stored, the "
-                  "first 6 (seeds in order) give the protocol's number, and the expected value of that number "
-                  "over every 6-run subset of all runs shows how much it depends on which 6 seeds are drawn.",
-                  "", "| architecture | trials per run | satisfactory | best 5 of first 6 | best 5 of 6, "
-                  f"mean over all 6-subsets of {n_runs} (5-95 %) | thesis | thesis within 5-95 % |",
-                  "|---|---|---|---|---|---|---|"]
-        for label, v in s["variants"].items():
-            q = v["quantities"]["trials_to_satisfactory"]
-            runs = q["per_run"]
-            mean, n_fail = best_k_mean(runs[:6], 5, fail_value=limit)
-            per = ", ".join(_fmt(x) if x is not None else f">{limit}" for x in runs)
-            shown = ("≥ " if n_fail else "") + _fmt(mean)
-            spread, inside = "—", "—"
-            if len(runs) > 6:
-                m, lo, hi = best5_of_6_distribution(runs, limit)
-                spread = f"{_fmt(m)} ({_fmt(lo)}-{_fmt(hi)})"
-                if q["thesis"] is not None:
-                    inside = "yes" if lo <= q["thesis"] <= hi else "no"
-            ok = sum(x is not None for x in runs)
-            lines.append(f"| {label} | {per} | {ok}/{len(runs)} | {shown} | {spread} | {_fmt(q['thesis'])} "
-                         f"| {inside} |")
-        lines += ["", "When some runs fail, the protocol's number depends strongly on which six seeds are drawn: "
-                  "each failure among the best five adds (1000 - its replacement) / 5. The subset spread is the "
-                  "fairer comparison with the thesis's single draw.", ""]
-    if not found:
-        lines += ["No Chapter 7 results stored yet: run `connrl run cup-task1 --profile full` etc.", ""]
-    return "\n".join(lines)
+        parts += _pole_table(s)
+    if not parts:
+        parts = ["No Chapter 7 results stored yet: run `connrl run cup-task1 --profile full` etc.", ""]
+    return "\n".join(["## Chapter 7: hidden state (window-Q, recurrent-Q, recurrent-model)", ""] + parts)
+
+
+def _cup_table(s: dict, task: int, fig: str, section: str, title: str) -> list[str]:
+    lines = [f"### {title} ({fig}, {section})", "",
+             f"Command: {_cmd(s)} (profile `{s['profile']}`, {s['runs_per_variant']} runs per variant, "
+             f"seeds from {s['base_seed']}).", "",
+             "| architecture | runs reaching 14 | first trial at 14 (mean) | steps after last trial "
+             "(per run) | optimal in last 100 tests | mean steps, last 100 | wasted pick-ups per test, "
+             "last 100 | thesis |",
+             "|---|---|---|---|---|---|---|---|"]
+    for label, v in s["variants"].items():
+        q = v["quantities"]
+        tto = q["trials_to_optimal"]
+        thesis = {1: "optimal 14 (λ=0.8); λ=0 much worse", 2: "little impact on window-Q and recurrent-Q; "
+                  "recurrent-model oscillates", 3: "window-Q optimal in 3/5; recurrent-Q always; "
+                  "recurrent-model oscillates"}[task]
+        if task == 1 and "lambda=0" in label and "0.8" not in label:
+            thesis = "much worse than λ=0.8"
+        finals = ", ".join(_fmt(x) for x in q["final_steps"]["per_run"])
+        wasted = q.get("wasted_pickups_last100", {}).get("mean")
+        lines.append(f"| {label} | {tto['runs_reaching']}/{len(tto['per_run'])} | {_fmt(tto['mean'])} | "
+                     f"{finals} | {_fmt(q['optimal_last100']['mean'], 2)} | "
+                     f"{_fmt(q['mean_steps_last100']['mean'], 2)} | {_fmt(wasted, 2)} | {thesis} |")
+    lines.append("")
+    for name in _TASK_NOTES.get(task, []):
+        lines += [note(name), ""]
+    return lines
+
+
+def _robustness_table(s: dict) -> list[str]:
+    lines = ["### Robustness probe (7.5.1)", "", f"Command: {_cmd(s)}.", "",
+             "| architecture | share of interruptions resumed optimally (per run; — = policy not optimal) "
+             "| thesis |", "|---|---|---|"]
+    thesis = {"window-Q": "not robust (follows its recent actions)",
+              "recurrent-Q": "between the two", "recurrent-model": "robust (acts on the world state)"}
+    for label, v in s["variants"].items():
+        arch = label.split(" ")[0]
+        if label not in (arch, f"{arch} lambda=0.8"):
+            continue
+        per = ", ".join(_fmt(x, 2) for x in v["quantities"]["robust_fraction"]["per_run"])
+        lines.append(f"| {arch} | {per} | {thesis.get(arch, '')} |")
+    return lines + [""]
+
+
+def _pole_table(s: dict) -> list[str]:
+    spec = next(e for e in _SPECS if e.name == "pole-hidden")
+    limit = spec.resolve(s["profile"])[0].trials
+    n_runs = s["runs_per_variant"]
+    lines = ["### Task 4: pole balancing from (x, θ) (Table 7.1)", "", f"Command: {_cmd(s)}.", "",
+             "Table 7.1's measure is the mean of the best 5 of 6 runs; a run without a satisfactory policy "
+             f"within {limit} trials counts as {limit} (marked ≥). With more than 6 runs stored, the "
+             "first 6 (seeds in order) give the protocol's number, and the expected value of that number "
+             "over every 6-run subset of all runs shows how much it depends on which 6 seeds are drawn.",
+             "", "| architecture | trials per run | satisfactory | best 5 of first 6 | best 5 of 6, "
+             f"mean over all 6-subsets of {n_runs} (5-95 %) | thesis | thesis within 5-95 % |",
+             "|---|---|---|---|---|---|---|"]
+    for label, v in s["variants"].items():
+        q = v["quantities"]["trials_to_satisfactory"]
+        runs = q["per_run"]
+        mean, n_fail = best_k_mean(runs[:6], 5, fail_value=limit)
+        per = ", ".join(_fmt(x) if x is not None else f">{limit}" for x in runs)
+        shown = ("≥ " if n_fail else "") + _fmt(mean)
+        spread, inside = "—", "—"
+        if len(runs) > 6:
+            m, lo, hi = best5_of_6_distribution(runs, limit)
+            spread = f"{_fmt(m)} ({_fmt(lo)}-{_fmt(hi)})"
+            if q["thesis"] is not None:
+                inside = "yes" if lo <= q["thesis"] <= hi else "no"
+        ok = sum(x is not None for x in runs)
+        lines.append(f"| {label} | {per} | {ok}/{len(runs)} | {shown} | {spread} | {_fmt(q['thesis'])} "
+                     f"| {inside} |")
+    return lines + ["", note("pole-hidden-subsets"), ""]

@@ -46,6 +46,33 @@ def draw_solution_paths(records: list[dict], file: Path, task: str, k: int) -> P
     return file
 
 
+def _variant_table(spec: ExperimentSpec, summary: dict, recs: list[dict], curves: dict) -> list[str]:
+    """One row per variant (final and mean performance; for DP the 5.6 levels); fills ``curves``."""
+    lines = []
+    dp = any(q.name == "trials_to_2.5" for q in spec.quantities)
+    head = "| variant | final perf. | mean perf. |"
+    if dp:
+        head += " to 2.5 (mean curve) | to 2.5 (per run, reached) | thesis | to 5 (mean curve) " \
+                "| to 5 (per run, reached) | thesis |"
+    lines += [head, "|" + "---|" * (head.count("|") - 1)]
+    for v in spec.variants:
+        vr = [r for r in recs if r["variant"] == v.label]
+        if not vr:
+            continue
+        xs, ys = mean_curve(vr)
+        curves[(spec.name, v.label)] = (xs, ys, len(vr))
+        qs = summary["variants"][v.label]["quantities"]
+        row = f"| {v.label} | {_fmt(qs['final_performance']['mean'])} | {_fmt(qs['mean_performance']['mean'])} |"
+        if dp:
+            for level in THRESHOLDS:
+                q = qs[quantity_name(level)]
+                row += (f" {_fmt(first_reaching(list(xs), list(ys), level))} | {_fmt(q['mean'], 0)} "
+                        f"({q['runs_reaching']}/{len(q['per_run'])}) | {_fmt(q['thesis'])} |")
+        lines.append(row)
+    lines.append("")
+    return lines
+
+
 def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     """Markdown for docs/RESULTS.md: our Ch. 5 numbers beside the thesis's, from OUT/robot-*/ records."""
     out_dir = Path(out_dir)
@@ -68,27 +95,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
                   f"`connrl run {spec.name} --profile {prof} --seed {summary['base_seed']}` — "
                   f"{summary['runs_per_variant']} runs per variant, seeds {seeds[spec.name]}, "
                   f"wall {summary['timing']['wall_time_s']:.0f} s.", ""]
-        dp = any(q.name == "trials_to_2.5" for q in spec.quantities)
-        head = "| variant | final perf. | mean perf. |"
-        if dp:
-            head += " to 2.5 (mean curve) | to 2.5 (per run, reached) | thesis | to 5 (mean curve) " \
-                    "| to 5 (per run, reached) | thesis |"
-        lines += [head, "|" + "---|" * (head.count("|") - 1)]
-        for v in spec.variants:
-            vr = [r for r in recs if r["variant"] == v.label]
-            if not vr:
-                continue
-            xs, ys = mean_curve(vr)
-            curves[(spec.name, v.label)] = (xs, ys, len(vr))
-            qs = summary["variants"][v.label]["quantities"]
-            row = f"| {v.label} | {_fmt(qs['final_performance']['mean'])} | {_fmt(qs['mean_performance']['mean'])} |"
-            if dp:
-                for level in THRESHOLDS:
-                    q = qs[quantity_name(level)]
-                    row += (f" {_fmt(first_reaching(list(xs), list(ys), level))} | {_fmt(q['mean'], 0)} "
-                            f"({q['runs_reaching']}/{len(q['per_run'])}) | {_fmt(q['thesis'])} |")
-            lines.append(row)
-        lines.append("")
+        lines += _variant_table(spec, summary, recs, curves)
         panels = _PANELS.get(spec.name)
         png = (_draw_panels(spec, curves, panels, out_dir / spec.name / "panels.png") if panels
                else out_dir / spec.name / "curve.png")
@@ -170,9 +177,6 @@ def _geometry_notes(curves, seeds: dict[str, str]) -> list[str]:
         n = first_reaching(*curve("robot-dp-geometry", label), level)
         return "not reached" if n is None else f"trial {n:g}"
 
-    def final(exp, label):
-        return float(np.mean(curve(exp, label)[1][-3:]))
-
     def at(label, trial):
         xs, ys = curve("robot-dp-geometry", label)
         return float(ys[xs.index(trial)]) if trial in xs else float("nan")
@@ -197,9 +201,21 @@ def _geometry_notes(curves, seeds: dict[str, str]) -> list[str]:
                 row(3, 2.5) + ". Without teaching (thesis 280): " + row(0, 2.5) + ". The facing starts apply to "
                 "the 50 test tasks as well, so they make the test easier too, not only the learning. The best of "
                 f"these geometries ({best}, by mean performance with 10 lessons) scores {best10:.2f} at trial 10 "
-                f"with 10 lessons (SPEC geometry {spec10:.2f}; thesis 2.5), so {verdict}; the order of the "
+                f"with 10 lessons (reconstructed default geometry {spec10:.2f}; thesis 2.5), so {verdict}; the order "
+                "of the "
                 "teaching conditions (mean performance, 10 > 3 > 0 lessons) "
                 + ("holds in every geometry." if ordered else "does not hold in every geometry."), ""]
+    return out + _docking_notes(curves, seeds)
+
+
+def _docking_notes(curves, seeds: dict[str, str]) -> list[str]:
+    """Generated sentences on robot-dk-geometry (empty when it was not run)."""
+    out = []
+
+    def final(exp, label):
+        xs, ys, _ = curves[(exp, label)]
+        return float(np.mean(np.asarray(ys)[-3:]))
+
     dk = [f"{t} deg, {a}, {n} lessons" for t in (30, 10) for a in ("multi-layer", "single-layer") for n in (0, 10)]
     if all(("robot-dk-geometry", k) in curves for k in dk):
         f = {k: final("robot-dk-geometry", k) for k in dk}

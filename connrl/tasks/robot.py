@@ -129,7 +129,8 @@ def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: floa
 
 
 def make_agent(p, rng: np.random.Generator) -> TeachingQCON:
-    """QCON-T of 5.3 from the run's parameters (``connrl.experiments.robot.RobotParams``) (``linear_output``: single-layer nets with a linear output unit)."""
+    """QCON-T of 5.3 from the run's parameters (``connrl.experiments.robot.RobotParams``); ``linear_output``:
+    single-layer nets with a linear output unit."""
     n_in = OBS_SIZE[p.task]
     hidden = int(round(p.hidden_fraction * n_in))
     net = NetConfig(n_in, hidden, value_range=p.value_range, init_range=p.init_range, lr=p.lr,

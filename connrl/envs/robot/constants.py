@@ -1,9 +1,10 @@
-"""Constants of the HEROINE robot, its actions and its sensors (5.2.1; R: docs/RECONSTRUCTION.md, "HEROINE robot world")."""
+"""Constants of the HEROINE robot, its actions and its sensors (5.2.1; R: docs/RECONSTRUCTION.md, "HEROINE robot
+world")."""
 
 from __future__ import annotations
 
 # ---------------------------------------------------------------------------------------------------
-# Constants of the robot and its sensors (5.2.1; SPEC 5)
+# Constants of the robot and its sensors (5.2.1; R: docs/RECONSTRUCTION.md, "HEROINE robot world")
 ROBOT_RADIUS = 12.0  # inches (Fig. 5.3 caption)
 N_RAYS = 24  # sonar / light readings per rotation, 15 deg apart (5.2.1)
 RAY_STEP_DEG = 15.0

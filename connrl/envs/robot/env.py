@@ -1,4 +1,5 @@
-"""``RobotTaskEnv``: the elementary tasks DK, DP, WFL, WFR as one Gymnasium environment (see ``connrl.envs.robot.tasks``)."""
+"""``RobotTaskEnv``: the elementary tasks DK, DP, WFL, WFR as one Gymnasium environment (the full description is
+the docstring of ``connrl.envs.robot.tasks``)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Observation encoding, reinforcement and start regions of the four elementary robot tasks of thesis Ch. 5 on the HEROINE simulator: DK, DP, WFL, WFR.
+"""Observation encoding, reinforcement and start regions of the four elementary robot tasks of thesis Ch. 5 on
+the HEROINE simulator: DK, DP, WFL, WFR.
 
 Description:
     ``RobotTaskEnv(task=...)`` wraps :class:`connrl.envs.robot.RobotSim` as one of the elementary tasks
@@ -67,7 +68,8 @@ info:
     (5.3.4); "success", "collision" (bools); "collision_side" ("front"/"back"/"left"/"right"/None);
     "room" (room name); "compass" (heading deg).
 
-Differences from the thesis:
+Differences from the thesis (each quantity with its thesis passage: docs/RECONSTRUCTION.md, "HEROINE robot
+world"):
     - The success conditions of DK and DP, the parallelism measure and its 8/9/10 thresholds, the side
       rays used for clearance, and the start regions are our reconstructions: the thesis states the
       reinforcement values but not these details.
@@ -79,7 +81,7 @@ Differences from the thesis:
       subgoals on either side of a door). We read "in front of" as the centre within the doorway's span
       along the wall (+-18 in) and 24..72 in out, any heading. An earlier version allowed +-48 in along
       the wall: there the robot starts beside the door, behind a jamb, and must first manoeuvre onto the
-      door's axis, since the 36-in door (SPEC 5) leaves only +-6 in of slack for the 24-in body. Measured
+      door's axis, since the 36-in door (R) leaves only +-6 in of slack for the 24-in body. Measured
       (2000 starts): a uniformly random policy passes in 0.3% of trials with both old choices, 0.9% with
       the new success rule, 1.6% now; turning to the door and driving at it passes from 30% of the old
       starts and 79% of the new ones (500 starts).

@@ -5,7 +5,8 @@ Description
 The 25x25 cell world of thesis 4.1 (docs/RECONSTRUCTION.md, "Survival world", gives the reconstructed
 Fig. 4.1 cell for cell). There are four kinds of objects: the agent ("I"), food ("$"), enemies ("E") and
 obstacles ("O"). Each step the agent walks to one of the four adjacent cells (into an obstacle: it stays
-put, a *collision*). Then each enemy, in turn, stays with probability 0.2 or else moves with the probabilities of App. A.1: it favours
+put, a *collision*). Then each enemy, in turn, stays with probability 0.2 or else moves with the probabilities
+of App. A.1: it favours
 directions pointing at the agent, more strongly the closer the agent is (:func:`enemy_move_probabilities`).
 The agent has two conflicting goals: eat as much food as possible and avoid the enemies. It sees only a
 local area through three sensor arrays (food, enemy, obstacle), plus its energy level and a little history.
@@ -114,7 +115,7 @@ Differences from the thesis
   enemy-to-agent vector, in degrees). ``T(dist)`` is used exactly as printed, including its jump at 4.
 * The thesis does not say whether enemies may share a cell or stand on food; here they may do both (food
   is never eaten by enemies). An enemy with no free neighbour stays.
-* Energy above 82 would switch every energy unit of SPEC's code off; the code saturates instead
+* Energy above 82 would switch every energy unit of the reconstructed code off; the code saturates instead
   (energy is capped at 80 *for the code only*; the real energy is not capped).
 * The order within a step (move, eat, check contact / all food / starvation, then enemies move one by one)
   is not spelled out in the thesis; when the last piece of food is eaten the play ends before enemies move.

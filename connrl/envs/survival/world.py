@@ -12,7 +12,8 @@ import numpy as np
 
 # ------------------------------------------------------------------------------------------------ world
 GRID_SIZE = 25
-# SPEC.md section 2 (R): Lin 1992 Fig. 2 transcription, 8-fold symmetric; row 0 = north; "I" = agent start,
+# R (docs/RECONSTRUCTION.md, "Survival world"): Lin 1992 Fig. 2 transcription, 8-fold symmetric;
+# row 0 = north; "I" = agent start,
 # "E" = enemy starts. Only "O" matters for the grid itself.
 GRID_MAP = (
     "OOOOOO.............OOOOOO",
@@ -99,7 +100,7 @@ assert [len(SENSOR_OFFSETS[k]) for k in ("food", "enemy", "obstacle")] == [52, 3
 _PAD = 12  # farthest cell any sensor sees: Y sensor at L1 10 plus its radius 2
 _W = GRID_SIZE + 2 * _PAD  # width of the padded grids the kernels index with flat offsets
 _MAX_CODED_ENERGY = 80
-# (81, 16) table: coarse code of energy 0..80 (SPEC (R): centres 0, 5, ..., 75, on when |E - 5k| < 7.5)
+# (81, 16) table: coarse code of energy 0..80 (R: centres 0, 5, ..., 75, on when |E - 5k| < 7.5)
 _ENERGY_CODE = np.where(
     np.abs(np.arange(_MAX_CODED_ENERGY + 1)[:, None] - 5.0 * np.arange(N_ENERGY_UNITS)[None, :]) < 7.5,
     0.5,
