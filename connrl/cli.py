@@ -218,7 +218,8 @@ def _add_experiment_commands(sub) -> None:
     s.set_defaults(func=cmd_show)
 
     s = sub.add_parser("teach", help="record a taught lesson by playing", description="Play a task from the "
-                       "keyboard and save the trial as a taught lesson (JSON lesson file, see connrl.replay).")
+                       "keyboard and save the trial as a taught lesson (JSON lesson file, see "
+                       "connrl.core.lesson_files).")
     s.add_argument("target", help="what to teach (e.g. survival, robot-dp)")
     s.add_argument("--out", default=None, help="lesson file to write (default: lessons/TARGET-<time>.json)")
     s.add_argument("--seed", type=_seed, default=0, help="environment seed (default 0)")

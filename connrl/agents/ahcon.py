@@ -52,7 +52,7 @@ class AHCON(LessonAgent):
         self.learning = True
         self._x: np.ndarray | None = None
         self.last_probabilities: np.ndarray | None = None
-        # relaxation planning with an action model (AHCON-M, 3.6.1): connrl.agents.models.RelaxationPlanner
+        # relaxation planning with an action model (AHCON-M, 3.6.1): connrl.core.planning.RelaxationPlanner
         self.planner = planner
 
     def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:

@@ -1,6 +1,6 @@
 """QCON (Fig. 3.4) and its replay / teaching extensions: QCON-R (3.5) and QCON-T (3.7).
 
-The Q-function is any object with ``values(x)`` and ``update(x, a, target)`` (``connrl.replay.QFunction``);
+The Q-function is any object with ``values(x)`` and ``update(x, a, target)`` (``connrl.core.replay.QFunction``);
 by default one network per action (OAON, 3.4). Ch. 4's "global" agents pass a single rotated net instead.
 """
 
@@ -54,7 +54,7 @@ class QCON(LessonAgent):
         self._x: np.ndarray | None = None
         self._q_x: np.ndarray | None = None
         self.last_probabilities: np.ndarray | None = None
-        # relaxation planning with an action model (QCON-M, 3.6.2): connrl.agents.models.RelaxationPlanner
+        # relaxation planning with an action model (QCON-M, 3.6.2): connrl.core.planning.RelaxationPlanner
         self.planner = planner
 
     def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:

@@ -8,7 +8,7 @@ points north. Whatever is learned for one direction carries over to the other th
 ``RotatedNet(config, permutations, rng)`` takes the rotations as index permutations of the input units
 (``permutations[a]`` gives, for each input unit of the rotated observation, the unit of the original one it
 reads; for the survival task ``connrl.envs.survival.ROTATION_PERMUTATIONS[ACTION_ROTATION[a]]``). It offers
-the Q-function interface of ``connrl.replay.QFunction`` (``values``, ``value``, ``update``, ``update_error``)
+the Q-function interface of ``connrl.core.replay.QFunction`` (``values``, ``value``, ``update``, ``update_error``)
 so QCON, AHCON (as the policy net) and the replay loops use it unchanged.
 
 All four action values come from one Numba call that reads the input through the permutations, so no

@@ -7,10 +7,11 @@ A framework is QCON or AHCON plus options, not a class of its own (3.1):
 * ``-T``: ``-R`` plus the two taught lessons of ``connrl/data/lessons``, each replayed after a play with a
   probability falling 0.5 -> 0.1, with P_t = 0 (4.2.7);
 * ``-M``: relaxation planning (Figs. 3.5, 3.6) on the promising actions (P > 2%) with the learned model
-  (no planning in the first 10 plays) or the perfect model (the simulator), see ``connrl.agents.models``.
+  (no planning in the first 10 plays) or the perfect model (the simulator), see ``connrl.core.planning``
+  and ``connrl.tasks.survival_models``.
 
 Representations (4.2.3-4.2.4): ``"global"`` uses ONE Q-net (or policy net) whose inputs are rotated for
-the four actions (:class:`connrl.agents.rotated.RotatedNet`); ``"local"`` uses one net per action (OAON).
+the four actions (:class:`connrl.nets.rotated.RotatedNet`); ``"local"`` uses one net per action (OAON).
 V-nets always have one output. Every net: 145-30-1, momentum 0.9, initial weights in +-0.1, outputs +-1;
 V and Q targets above 1 are truncated to 1 (4.2.4). Learning rates and temperatures: Table 4.1 (Study 2
 doubles the learning rates). Stuck detection raises T while the agent stays in a small area without eating

@@ -3,7 +3,7 @@
 The terminal UI shows the environment's ANSI (or a text summary of its) rendering and reads one key per
 line (type the key and Enter): it works in any terminal, over ssh and under tmux. ``x`` ends the trial
 early (kept as a lesson cut by a time limit), ``u`` quits without saving. The lesson is saved with
-``connrl.replay.save_lessons`` (versioned JSON), appending to the file if it already exists.
+``connrl.core.lesson_files.save_lessons`` (versioned JSON), appending to the file if it already exists.
 
 Each target names a registered environment, its constructor arguments and the key map of its actions.
 Chapters add targets to ``TEACH_TARGETS``.
