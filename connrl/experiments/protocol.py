@@ -20,7 +20,8 @@ def train_and_test(trials: int, train: Callable[[int], object], test: Callable[[
                    progress: Callable[[int, int], None] = lambda done, total: None) -> int:
     """Train ``trials`` trials (``train(k)``, k = 0..trials-1) and test after every ``test_every``-th one
     (``test(n)`` with n the trials trained so far); also before the first (``test_first``) and after the last
-    (``test_last``). Stops early when ``stop(test result)`` is true. Returns the trials trained."""
+    (``test_last``). ``test_every=0`` trains without tests after any trial (``test_last`` included). Stops early
+    when ``stop(test result)`` is true. Returns the trials trained."""
     if test_first:
         test(0)
     for k in range(trials):

@@ -137,9 +137,7 @@ def teach(target: str, *, out: Path | None = None, seed: int = 0) -> int:
 
 def _has_ansi(t: TeachTarget) -> bool:
     import gymnasium as gym
+    from gymnasium.envs.registration import load_env_creator
 
-    spec = gym.spec(t.env_id)
-    from connrl.experiments.spec import load_callable
-
-    cls = load_callable(spec.entry_point)
+    cls = load_env_creator(gym.spec(t.env_id).entry_point)
     return "ansi" in getattr(cls, "metadata", {}).get("render_modes", [])

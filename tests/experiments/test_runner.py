@@ -1,37 +1,13 @@
 """Runner: determinism, resume after interruption, atomic records, summary.json contents, parallel workers."""
 
+import dataclasses
 import json
 
-import numpy as np
 import pytest
 
 from connrl.experiments import runner
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
-
-
-def toy_run(params, rng, progress):
-    draws = rng.random(params["n"])
-    progress(params["n"], params["n"])
-    return RunResult(list(range(params["n"])), list(np.cumsum(draws)), {"total": float(draws.sum())},
-                     rows=[{"i": i, "draw": float(d)} for i, d in enumerate(draws)])
-
-
-CALLS = []
-
-
-def counting_run(params, rng, progress):
-    CALLS.append(params["n"])
-    if params.get("explode_at") == len(CALLS):
-        raise KeyboardInterrupt
-    return toy_run(params, rng, progress)
-
-
-def spec(run="tests.test_runner:toy_run"):
-    return ExperimentSpec(
-        name="toy", title="toy", section="-", run=run, params={"n": 5},
-        profiles={"tiny": {"runs": 2}, "quick": {"runs": 3}, "full": {"runs": 4, "n": 7}},
-        variants=(Variant("a", {}, {"total": 2.0}), Variant("b/c", {"n": 6})),
-        quantities=(Quantity("total", "sum of draws", "higher"),))
+from connrl.report.plots import plot_experiment
+from tests.experiments.toy import CALLS, ToyParams, spec
 
 
 def strip_timing(summary):
@@ -45,11 +21,14 @@ def test_same_seed_same_summary_and_layout(tmp_path):
     s = json.loads(o1.summary_path.read_text())
     q = s["variants"]["a"]["quantities"]["total"]
     assert len(q["per_run"]) == 2 and q["thesis"] == 2.0 and s["variants"]["a"]["seeds"] == [4, 5]
+    assert not list((tmp_path / "1" / "toy").glob("curve.*"))  # the runner does not plot (the CLI does) ...
+    plot_experiment(spec(), o1.records, tmp_path / "1" / "toy")  # ... from the records it returns
     assert (tmp_path / "1" / "toy" / "curve.png").exists() and (tmp_path / "1" / "toy" / "curve.svg").exists()
     csvs = sorted(p.name for p in (tmp_path / "1" / "toy").rglob("seed-*.csv"))
     assert csvs == ["seed-4.csv", "seed-4.csv", "seed-5.csv", "seed-5.csv"]
     meta = json.loads(next((tmp_path / "1" / "toy").rglob("seed-4.json")).read_text())
     assert meta["seed"] == 4 and "git_commit" in meta["environment"] and meta["wall_time_s"] >= 0
+    assert meta["params"] in ({"n": 5, "explode_at": None}, {"n": 6, "explode_at": None})  # plain data
 
 
 def test_different_seed_differs(tmp_path):
@@ -61,8 +40,8 @@ def test_different_seed_differs(tmp_path):
 
 def test_interrupted_run_keeps_finished_runs_and_resumes(tmp_path):
     CALLS.clear()
-    s = spec("tests.test_runner:counting_run")
-    interrupted = ExperimentSpec(**{**s.__dict__, "params": {"n": 5, "explode_at": 3}})
+    counting = spec("tests.experiments.toy:counting_run")
+    interrupted = dataclasses.replace(counting, params=ToyParams(explode_at=3))
     with pytest.raises(KeyboardInterrupt):
         runner.run_experiment(interrupted, profile="tiny", out=tmp_path, workers=1, show_progress=False)
     done = list((tmp_path / "toy").rglob("seed-*.json"))
@@ -79,14 +58,10 @@ def test_parallel_workers_give_the_same_numbers(tmp_path):
     assert strip_timing(serial.summary) == strip_timing(par.summary)
 
 
-def test_runs_override_and_unknown_profile():
-    assert spec().resolve("full") == ({"n": 7}, 4)
-    assert spec().resolve("quick", runs=9)[1] == 9
-    with pytest.raises(ValueError, match="unknown profile 'huge'; allowed: tiny, quick, full"):
-        spec().resolve("huge")
-
-
-def test_spec_requires_every_profile():
-    with pytest.raises(ValueError, match="missing"):
-        ExperimentSpec(name="x", title="x", section="-", run="m:f", params={}, profiles={"tiny": {"runs": 1}},
-                       variants=(), quantities=())
+def test_stored_runs_finds_the_records_again(tmp_path):
+    out = runner.run_experiment(spec(), profile="tiny", seed=2, out=tmp_path, workers=1, show_progress=False)
+    summary, records = runner.stored_runs(spec(), tmp_path)
+    assert summary == out.summary
+    key = lambda r: (r["variant"], r["seed"])  # noqa: E731
+    assert sorted(records, key=key) == sorted(out.records, key=key)
+    assert runner.stored_runs(spec(), tmp_path / "elsewhere") == (None, [])

@@ -1,4 +1,4 @@
-"""QCON and AHCON: the on-line updates of Figs. 3.2/3.4, the protocol, replay wiring, any Gymnasium task."""
+"""What every lesson agent shares: lessons filed and replayed, taught lessons, configs, any Gymnasium task."""
 
 import gymnasium as gym
 import numpy as np
@@ -7,7 +7,7 @@ import pytest
 from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
 from connrl.core.exploration import TemperatureSchedule
 from connrl.core.lessons import Lesson
-from connrl.experiments.protocol import run_trial
+from connrl.core.rollout import run_trial
 from connrl.nets import NetConfig
 
 TEMP = TemperatureSchedule.inverse(10, 30, 50)
@@ -16,44 +16,6 @@ TEMP = TemperatureSchedule.inverse(10, 30, 50)
 def qcon(n_inputs=4, n_actions=2, replay=None, seed=0, **kw):
     cfg = QCONConfig(net=NetConfig(n_inputs, 5, lr=0.2, init_range=0.5), temperature=TEMP, replay=replay, **kw)
     return QCON(cfg, n_actions, np.random.default_rng(seed))
-
-
-def test_qcon_online_update_is_fig_3_4():
-    agent = qcon(online=True)
-    x, y = np.array([0.5, -0.5, 0.2, 0.1]), np.array([0.1, 0.2, -0.3, 0.4])
-    agent.begin_trial(x)
-    a = agent.act(x)
-    q_before = agent.q.values(x)
-    expected = 0.3 + 0.9 * agent.q.values(y).max()  # u' = r + gamma max_k Q(y, k)
-    twin = qcon(online=True)
-    twin.q.update(x, a, expected)
-    agent.observe(a, 0.3, y, False, False)
-    np.testing.assert_allclose(agent.q.values(x), twin.q.values(x))
-    assert agent.q.values(x)[1 - a] == q_before[1 - a]
-
-
-def test_terminal_step_has_no_future_and_targets_are_clipped():
-    agent = qcon(target_clip=1.0)
-    twin = qcon(target_clip=1.0)
-    x, y = np.ones(4) * 0.5, -np.ones(4) * 0.5
-    agent.begin_trial(x)
-    a = agent.act(x)
-    agent.observe(a, 3.0, y, True, False)
-    twin.q.update(x, a, 1.0)  # r = 3 -> clipped to 1, no bootstrap
-    np.testing.assert_allclose(agent.q.values(x), twin.q.values(x))
-
-
-def test_ahcon_online_update_is_fig_3_2():
-    cfg = AHCONConfig(v_net=NetConfig(4, 3, lr=0.3), policy_net=NetConfig(4, 3, lr=0.3), temperature=TEMP)
-    agent = AHCON(cfg, 2, np.random.default_rng(0))
-    x, y = np.array([0.5, -0.5, 0.2, 0.1]), np.array([0.1, 0.2, -0.3, 0.4])
-    agent.begin_trial(x)
-    a = agent.act(x)
-    e, ep = agent.v.value(x, 0), 0.2 + 0.9 * agent.v.value(y, 0)
-    merit = agent.policy.value(x, a)
-    agent.observe(a, 0.2, y, False, False)
-    assert (agent.v.value(x, 0) - e) * (ep - e) > 0  # V moved toward e'
-    assert (agent.policy.value(x, a) - merit) * (ep - e) > 0  # merit of a moved with the TD error
 
 
 def test_lessons_are_filed_only_for_learning_trials_and_replayed():

@@ -56,7 +56,7 @@ def test_optimal_policy_takes_7_steps_per_instance_14_for_both():
     n_a, path_a = _bfs_steps("A")
     n_b, path_b = _bfs_steps("B")
     assert (n_a, n_b) == (7, 7) and n_a + n_b == 14 == len(INSTANCES) * OPTIMAL_STEPS
-    assert path_a == [RIGHT, PICK_UP, RIGHT, RIGHT, RIGHT, RIGHT, PICK_UP]  # SPEC §4
+    assert path_a == [RIGHT, PICK_UP, RIGHT, RIGHT, RIGHT, RIGHT, PICK_UP]  # docs/RECONSTRUCTION.md, "Cup collection"
     assert path_b == [LEFT, PICK_UP, LEFT, LEFT, LEFT, LEFT, PICK_UP]
     # the env executes the plans: reward 1 only on the last pick-up, terminated (not truncated)
     env = CupCollectionEnv()

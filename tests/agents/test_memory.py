@@ -1,5 +1,5 @@
-"""Memory architectures of Ch. 7: window encoding, batch TD(lambda) targets for recurrent Q-nets, and that
-what an agent sees while acting is exactly what replay reconstructs."""
+"""Memory architectures of Ch. 7: window encoding, recurrent-Q replay, and that what an agent sees while
+acting is exactly what replay reconstructs."""
 
 import numpy as np
 import pytest
@@ -17,15 +17,16 @@ from connrl.agents.memory import (
     window_input_size,
 )
 from connrl.agents.qcon import QCONConfig
-from connrl.core.exploration import TemperatureSchedule, boltzmann_probabilities
+from connrl.core.exploration import TemperatureSchedule
 from connrl.core.lessons import Lesson
 from connrl.core.replay import ReplayParams, batch_targets
-from connrl.core.returns import lambda_returns
+from connrl.core.rollout import run_trial
 from connrl.envs.cup import CupCollectionEnv
-from connrl.experiments.protocol import run_trial
 from connrl.nets import NetConfig, RecurrentNetConfig, RecurrentOAON
 
 TEMP = TemperatureSchedule.inverse(5, 30, 100)
+
+
 REPLAY = ReplayConfig(capacity=70, lessons_per_trial=LinearSchedule(3, 3), p_threshold=0.01,
                       p_threshold_oldest=1e-5)
 
@@ -109,31 +110,6 @@ def test_window_q_sees_the_same_window_in_learning_and_test_trials():
     agent = window_agent()  # the lessons store the windowed inputs that were acted on
     _scripted_inputs(agent, actions, learning=True)
     assert np.array_equal(agent.book.memory.lessons[-1].inputs[:-1], learn)
-
-
-# ----------------------------------------------------------------------------------------- recurrent-Q
-
-def test_recurrent_q_targets_by_hand():
-    # 3 steps; the action at t=1 is non-policy (prob below threshold): weight 0 and lambda cut at t=0.
-    values = np.array([[0.2, 0.1], [0.0, 5.0], [0.3, 0.6], [0.4, 0.9]])
-    actions = np.array([0, 0, 1])
-    rewards = np.array([0.0, 0.0, 1.0])
-    params = ReplayParams(gamma=0.9, lam=0.5, temperature=1.0, p_threshold=0.01)
-    targets, weights = batch_targets(values, actions, rewards, True, params)
-    assert boltzmann_probabilities(values[1], 1.0)[0] < 0.01
-    assert np.array_equal(weights, [1.0, 0.0, 1.0])
-    e2 = 1.0  # terminal: u = 0, lambda 0 at the last step
-    e1 = 0.9 * (0.5 * 0.6 + 0.5 * e2)  # u_2 = max Q(x_2) = 0.6
-    e0 = 0.9 * 5.0  # lambda cut: a_1 is non-policy, so e'_0 = r_0 + gamma u_1
-    assert np.allclose(targets, [e0, e1, e2])
-    # a truncated lesson bootstraps from the last input; lambda_returns agrees with p_threshold 0
-    t2, w2 = batch_targets(values, actions, rewards, False, ReplayParams(gamma=0.9, lam=0.5))
-    assert np.allclose(t2, lambda_returns(rewards, values[1:].max(1), 0.9, 0.5)) and w2.all()
-
-
-def test_recurrent_q_targets_checks_shapes():
-    with pytest.raises(ValueError, match="n\\+1=3"):
-        batch_targets(np.zeros((2, 2)), np.array([0, 1]), np.zeros(2), True, ReplayParams(gamma=0.9))
 
 
 def test_replay_recurrent_q_is_one_bptt_step_toward_the_targets():

@@ -1,15 +1,11 @@
-"""Ch. 7 experiments: the test measure, the robustness probe against scripted agents, Table 7.1's summary,
-Table B.1's parameters, determinism, and a tiny CLI smoke run of every experiment."""
-
-import json
+"""Ch. 7 wiring: the cup test measure, the robustness probe against scripted agents, Table B.1's parameters."""
 
 import numpy as np
 import pytest
 
-from connrl import cli
 from connrl.envs.cup import LEFT, PICK_UP, RIGHT, CupCollectionEnv
-from connrl.experiments import hidden_state as hs
-from connrl.experiments.registry import get_experiment
+from connrl.experiments.hidden_state import CupParams, PoleHiddenParams
+from connrl.tasks import hidden_state as hs
 
 
 class Oracle:
@@ -70,59 +66,19 @@ def test_probe_tells_a_state_based_policy_from_a_habit():
     assert (r["position"], r["optimal"], r["steps"]) == (2, 6, 6)
 
 
-def test_best_5_of_6():
-    assert hs.best_k_mean([300, 100, 200, 400, 500, 600]) == (300.0, 0)
-    assert hs.best_k_mean([300, None, 200, 400, 500, 600]) == (400.0, 0)  # the failed run is dropped
-    assert hs.best_k_mean([None, None, 200, 400, 500, 600], fail_value=1000) == (540.0, 1)
-    assert hs.best_k_mean([None, None, 200, 400, 500, 600]) == (None, 1)
-
-
-def test_best5_of_6_distribution_enumerates_every_subset():
-    # 6 runs: the only subset is the runs themselves
-    assert hs.best5_of_6_distribution([300, 100, 200, 400, 500, 600], 1000) == (300.0, 300.0, 300.0)
-    # 7 runs, one failed (counts 1000, so it is never among the best five): 6 subsets drop a finished run
-    # and keep the other five; the 7th drops the failure and keeps the best five of the six finished runs
-    m, lo, hi = hs.best5_of_6_distribution([100, 200, 300, 400, 500, 600, None], 1000)
-    subsets = [(200 + 300 + 400 + 500 + 600) / 5, (100 + 300 + 400 + 500 + 600) / 5,
-               (100 + 200 + 400 + 500 + 600) / 5, (100 + 200 + 300 + 500 + 600) / 5,
-               (100 + 200 + 300 + 400 + 600) / 5, (100 + 200 + 300 + 400 + 500) / 5,
-               (100 + 200 + 300 + 400 + 500) / 5]
-    assert m == pytest.approx(np.mean(subsets))
-    assert lo == pytest.approx(np.percentile(subsets, 5)) and hi == pytest.approx(np.percentile(subsets, 95))
-
-
 def test_table_b1_parameters_reach_the_nets():
     rng = np.random.default_rng(0)
-    p = {**hs.CUP_PARAMS, "task": 2, "arch": "recurrent-model"}
-    agent = hs.make_agent(p, 6, 3, rng)
+    agent = hs.make_agent(CupParams(task=2, arch="recurrent-model"), 6, 3, rng)
     m = agent.model.config
     assert (m.n_hidden, m.n_context, m.n_outputs, m.lr, m.feedback, m.decay) == (26, 18, 7, 0.02, 1.5, 0.9)
     assert (agent.q.config.n_inputs, agent.q.config.n_hidden, agent.q.config.lr) == (24, 11, 0.2)
-    agent = hs.make_agent({**hs.CUP_PARAMS, "task": 3, "arch": "window-Q", "lam": 0.0}, 4, 3, rng)
+    agent = hs.make_agent(CupParams(task=3, arch="window-Q", lam=0.0), 4, 3, rng)
     assert (agent.config.net.n_hidden, agent.config.net.lr, agent.config.lam) == (0, 0.01, 0.0)
     assert agent.config.net.n_inputs == 4 * 6 + 3 * 5
     assert agent.config.replay.threshold_for_age(0) == pytest.approx(0.01)
     assert agent.config.replay.threshold_for_age(69) == pytest.approx(1e-5)
-    agent = hs.make_agent({**hs.POLE_PARAMS, "arch": "recurrent-Q"}, 2, 2, rng)
+    agent = hs.make_agent(PoleHiddenParams(arch="recurrent-Q"), 2, 2, rng)
     assert (agent.net.config.n_context, agent.net.config.n_hidden, agent.config.lam) == (2, 10, 0.7)
     assert agent.explore.schedule(0) == pytest.approx(1 / 20) and agent.explore.schedule(999) == pytest.approx(1 / 50)
     with pytest.raises(ValueError, match="arch must be one of"):
-        hs.make_agent({**hs.CUP_PARAMS, "arch": "lstm"}, 4, 3, rng)
-
-
-def test_run_cup_is_deterministic():
-    p = {**hs.CUP_PARAMS, "arch": "recurrent-model", "trials": 4, "lessons_per_trial": 3,
-         "model_lessons_per_trial": 3, "task": 3}
-    a = hs.run_cup(p, np.random.default_rng(7))
-    b = hs.run_cup(p, np.random.default_rng(7))
-    assert a.curve_y == b.curve_y and a.rows == b.rows
-    assert all(14 <= y <= 60 for y in a.curve_y)
-
-
-@pytest.mark.parametrize("name", [s.name for s in hs.EXPERIMENTS])
-def test_cli_tiny(tmp_path, name):
-    assert cli.main(["run", name, "--profile", "tiny", "--out", str(tmp_path), "--workers", "1", "--quiet"]) == 0
-    summary = json.loads((tmp_path / name / "summary.json").read_text())
-    assert set(summary["variants"]) == {v.label for v in get_experiment(name).variants}
-    md = hs.results_section(tmp_path, tmp_path / "RESULTS.md")
-    assert "Command: `connrl run " + name in md
+        hs.make_agent(CupParams(arch="lstm"), 4, 3, rng)

@@ -1,4 +1,4 @@
-"""HEROINE simulator: layouts, sensors on hand-built scenes, collisions, control error, determinism."""
+"""HEROINE simulator: sensors on hand-built scenes, collisions, control error, determinism."""
 
 import math
 
@@ -19,90 +19,8 @@ from connrl.envs.robot import (
     Layout,
     RobotSim,
     collision_side,
-    render_figure_5_3,
-    render_frame,
-    render_paths,
 )
-
-
-def box_layout(obstacles=(), light=(191.0, 191.0), inner_walls=(), doors=None, size=200):
-    """A square room (plus optional inner walls) with the charger tucked in the NE corner."""
-    s = size
-    return Layout.from_dict({
-        "name": "test", "size": [s, s],
-        "rooms": {"R": [0, 0, s, s]} if doors is None else {"S": [0, 0, s, 100], "N": [0, 100, s, s]},
-        "walls": [[0, 0, s, 0], [s, 0, s, s], [s, s, 0, s], [0, s, 0, 0], *inner_walls],
-        "doors": doors or {},
-        "obstacles": list(obstacles),
-        "charger": {"box": [s - 18, s - 18, s, s], "light": list(light)},
-    })
-
-
-def exact_sim(layout, pose, seed=0):
-    sim = RobotSim(layout, np.random.default_rng(seed), sensor_noise=False, control_noise=False)
-    sim.place(*pose)
-    return sim
-
-
-# --- layouts --------------------------------------------------------------------------------------
-def test_default_layout_matches_spec():
-    L = Layout.load("default")
-    assert L.size == (360.0, 420.0)
-    assert L.rooms == {"A": (0, 0, 180, 300), "B": (180, 0, 360, 300), "C": (0, 300, 360, 420)}
-    assert L.doors["A"].segment == (96, 300, 132, 300) and L.doors["B"].segment == (228, 300, 264, 300)
-    assert all(d.width == 36 for d in L.doors.values())
-    assert set(L.obstacles) == {(72, 150, 120, 174), (132, 36, 168, 72), (252, 168, 300, 192)}
-    assert L.charger == (0, 0, 18, 18) and L.light == (9, 9)
-    for name, loc in L.locations.items():
-        assert L.is_free(loc[0], loc[1]), name
-    assert L.room_at(*L.locations["L1"][:2]) == "B" and L.room_at(*L.locations["L2"][:2]) == "A"
-    assert L.light_visible(*L.locations["L2"][:2])  # Fig. 5.3(d): light seen from L2
-
-
-def test_changed_layout_differs_as_in_8_4():
-    d, c = Layout.load("default"), Layout.load("changed")
-    assert c.charger != d.charger and c.charger[0] == 0  # moved along A's west wall
-    assert all(c.doors[k].segment != d.doors[k].segment for k in "AB")
-    in_a = [o for o in c.obstacles if o[2] <= 180]
-    in_b = [o for o in c.obstacles if o[0] >= 180]
-    assert len(in_a) == 3 and len(in_b) == 2
-    assert not set(in_a) & set(d.obstacles)  # both A obstacles moved
-    for name, loc in c.locations.items():
-        assert c.is_free(loc[0], loc[1]), name
-
-
-def test_layout_errors_are_clear():
-    with pytest.raises(ValueError, match="unknown layout 'nope'"):
-        Layout.load("nope")
-    with pytest.raises(ValueError, match="missing keys"):
-        Layout.from_dict({"name": "x"})
-    with pytest.raises(ValueError, match="obstacle 0"):
-        box_layout(obstacles=[[10, 10, 5, 20]])
-
-
-def test_layout_round_trips_through_dict():
-    L = Layout.load("default")
-    assert Layout.from_dict(L.to_dict()) == L
-
-
-def test_with_door_width_widens_each_door_about_its_centre():
-    d = Layout.load("default")
-    w = d.with_door_width(48.0)
-    assert {k: v.segment for k, v in w.doors.items()} == {"A": (90.0, 300.0, 138.0, 300.0),
-                                                          "B": (222.0, 300.0, 270.0, 300.0)}
-    walls_300 = sorted(x for x in w.walls if x[1] == x[3] == 300.0)
-    assert walls_300 == [(0.0, 300.0, 90.0, 300.0), (138.0, 300.0, 222.0, 300.0), (270.0, 300.0, 360.0, 300.0)]
-    assert [x for x in w.walls if x not in walls_300] == [x for x in d.walls if not x[1] == x[3] == 300.0]
-    assert d.with_door_width(36.0).walls == d.walls  # the reconstruction's own width changes nothing
-    # a centre just outside the old jambs' reach is blocked at 36 in and free at 48 in
-    assert not d.is_free(103.0, 300.0) and w.is_free(103.0, 300.0)
-    with pytest.raises(ValueError, match="door width"):
-        d.with_door_width(20.0)
-    with pytest.raises(ValueError, match="swallow"):
-        d.with_door_width(200.0)
-    returned = Layout.from_dict({**d.to_dict(), "walls": [*map(list, d.walls), [132, 300, 132, 290]]})
-    with pytest.raises(ValueError, match="meets a jamb at an angle"):
-        returned.with_door_width(48.0)
+from tests.envs.robot_scenes import box_layout, exact_sim
 
 
 def test_place_rejects_overlap():
@@ -285,24 +203,3 @@ def test_invalid_action_is_rejected():
     sim = exact_sim(box_layout(), (100, 100, 0))
     with pytest.raises(ValueError, match="action must be an integer in 0..5"):
         sim.apply(6)
-
-
-# --- rendering ------------------------------------------------------------------------------------
-def test_render_frame_and_paths(tmp_path):
-    L = Layout.load("default")
-    sim = exact_sim(L, L.locations["L3"])
-    img = render_frame(L, sim.pose, reading=sim.sense(), rays=True, title="t")
-    assert img.dtype == np.uint8 and img.ndim == 3 and img.shape[2] == 3
-    f = tmp_path / "paths.png"
-    img = render_paths(L, [[(300, 60, 90), (300, 72, 90)], [(60, 72), (70, 80)]], labels=["a", "b"], file=f)
-    assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and img.shape[2] == 3
-    with pytest.raises(ValueError, match="path 0"):
-        render_paths(L, [[]])
-
-
-def test_figure_5_3_panels(tmp_path):
-    img = render_figure_5_3(file=tmp_path / "f.png", dpi=40)
-    assert img.ndim == 3 and img.shape[2] == 3 and (tmp_path / "f.png").stat().st_size > 0
-    np.testing.assert_array_equal(img, render_figure_5_3(dpi=40))  # same seed, same readings
-    with pytest.raises(ValueError, match="no location 'L3'"):
-        render_figure_5_3(box_layout(), dpi=40)

@@ -9,8 +9,8 @@ import pytest
 from connrl.agents import AHCON, QCON
 from connrl.core.exploration import StuckConfig, TemperatureSchedule
 from connrl.core.lesson_files import LessonFileError
+from connrl.core.rollout import run_trial
 from connrl.envs.survival import SurvivalEnv, rotate_observation
-from connrl.experiments.protocol import run_trial
 from connrl.nets.rotated import RotatedNet
 from connrl.tasks.survival import (
     FRAMEWORKS,

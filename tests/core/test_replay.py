@@ -1,0 +1,337 @@
+"""Fig. 5.1 replay: order, non-policy actions, batch mode, Fig. 5.1(b), the 5.4.3 repairs, and the
+compiled OAON kernel against the plain Python loop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from connrl.core import replay as replay_module
+from connrl.core.exploration import boltzmann_probabilities
+from connrl.core.lessons import Lesson
+from connrl.core.replay import (
+    REPAIRS,
+    ReplayParams,
+    batch_targets,
+    repair_step,
+    replay_ahc,
+    replay_q,
+    replay_q_reference,
+)
+from connrl.core.replay_kernel import replay_oaon
+from connrl.core.returns import lambda_returns
+from connrl.nets import OAON, NetConfig
+
+
+class TableQ:
+    """A tabular Q-function with an exact update (lr 1) to check the order of Fig. 5.1."""
+
+    def __init__(self, n_states, n_actions, init=0.0):
+        self.n_actions = n_actions
+        self.table = np.full((n_states, n_actions), init)
+        self.updates = []
+
+    def values(self, x):
+        return self.table[int(x[0])].copy()
+
+    def update(self, x, a, target):
+        before = self.table[int(x[0]), a]
+        self.table[int(x[0]), a] = target
+        self.updates.append((int(x[0]), a, target))
+        return before
+
+
+def chain_lesson(n, terminated=True, final_reward=1.0):
+    inputs = np.arange(n + 1, dtype=float)[:, None]
+    rewards = np.zeros(n)
+    rewards[-1] = final_reward
+    return Lesson(inputs, np.zeros(n, dtype=int), rewards, terminated=terminated, truncated=not terminated)
+
+
+def test_incremental_backward_replay_propagates_in_one_pass():
+    # backward order + incremental mode: the goal reward reaches the first state in one replay (3.5)
+    q = TableQ(5, 2)
+    replay_q(q, chain_lesson(4), ReplayParams(gamma=0.9, lam=0.0))
+    assert [u[0] for u in q.updates] == [3, 2, 1, 0]
+    np.testing.assert_allclose(q.table[:4, 0], [0.9**3, 0.9**2, 0.9, 1.0])
+
+
+def test_truncated_lesson_bootstraps_from_its_last_state():
+    q = TableQ(4, 2)
+    q.table[3] = [0.5, 0.2]
+    replay_q(q, chain_lesson(3, terminated=False, final_reward=0.0), ReplayParams(gamma=0.9))
+    assert q.table[2, 0] == pytest.approx(0.9 * 0.5)
+    q2 = TableQ(4, 2)
+    q2.table[3] = [0.5, 0.2]
+    replay_q(q2, chain_lesson(3, terminated=True, final_reward=0.0), ReplayParams(gamma=0.9))
+    assert q2.table[2, 0] == 0.0  # a terminal last state is worth 0
+
+
+def test_non_policy_actions_are_not_replayed_and_cut_lambda():
+    # state 1's action 0 is clearly worse than action 1: with a high P_t it is a non-policy action
+    q = TableQ(4, 2)
+    q.table[1] = [0.0, 5.0]
+    lesson = chain_lesson(3)
+    replay_q(q, lesson, ReplayParams(gamma=1.0, lam=1.0, temperature=1.0, p_threshold=0.2))
+    assert (1, 0, pytest.approx(1.0)) not in q.updates
+    assert [u[0] for u in q.updates] == [2, 0]
+    # x_0's target ignores e'_1 (lambda cut) and uses max Q(x_1) = 5
+    assert q.table[0, 0] == pytest.approx(5.0)
+
+
+def test_batch_mode_equals_lambda_returns_of_the_frozen_values():
+    q = TableQ(5, 2)
+    q.table[:, 0] = [0.1, 0.2, 0.3, 0.4, 0.5]
+    lesson = chain_lesson(4)
+    u = np.array([0.2, 0.3, 0.4, 0.0])
+    expected = lambda_returns(lesson.rewards, u, 0.9, 0.6)
+    replay_q(q, lesson, ReplayParams(gamma=0.9, lam=0.6, batch=True))
+    np.testing.assert_allclose(q.table[:4, 0], expected)
+
+
+def test_incremental_equals_batch_when_nothing_learns():
+    rng = np.random.default_rng(0)
+    cfg = NetConfig(3, 4, lr=1e-12, momentum=0.0)
+    inputs = rng.normal(size=(6, 3))
+    lesson = Lesson(inputs, rng.integers(0, 2, 5), rng.normal(size=5), terminated=True)
+    a, b = PlainQ(OAON(cfg, 2, np.random.default_rng(1))), PlainQ(OAON(cfg, 2, np.random.default_rng(1)))
+    ta, tb = [], []
+    a.update = lambda x, act, t, f=a.update: (ta.append(t), f(x, act, t))[1]
+    b.update = lambda x, act, t, f=b.update: (tb.append(t), f(x, act, t))[1]
+    replay_q(a, lesson, ReplayParams(gamma=0.9, lam=0.7))
+    replay_q(b, lesson, ReplayParams(gamma=0.9, lam=0.7, batch=True))
+    np.testing.assert_allclose(ta, tb, rtol=1e-9)
+
+
+def test_replay_ahc_moves_v_toward_the_return_and_policy_by_the_td_error():
+    rng = np.random.default_rng(0)
+    v = OAON(NetConfig(1, 3, lr=0.5, momentum=0.0), 1, rng)
+    pol = OAON(NetConfig(1, 3, lr=0.5, momentum=0.0), 2, rng)
+    lesson = Lesson(np.array([[0.5], [-0.5]]), np.array([1]), np.array([1.0]), terminated=True)
+    v0, m0, m_other = v.value([0.5], 0), pol.value([0.5], 1), pol.value([0.5], 0)
+    assert replay_ahc(v, pol, lesson, ReplayParams(gamma=0.9)) == 1
+    assert v.value([0.5], 0) > v0 and pol.value([0.5], 1) > m0  # return 1 beats the prediction
+    assert pol.value([0.5], 0) == m_other  # OAON: the other action's net is untouched
+
+
+# ---------------------------------------------------------------------------- batch targets (5.1.2, 7.5)
+
+def test_batch_targets_by_hand():
+    # 3 steps; the action at t=1 is non-policy (prob below threshold): not replayed and lambda cut at t=0.
+    values = np.array([[0.2, 0.1], [0.0, 5.0], [0.3, 0.6], [0.4, 0.9]])
+    actions = np.array([0, 0, 1])
+    rewards = np.array([0.0, 0.0, 1.0])
+    params = ReplayParams(gamma=0.9, lam=0.5, temperature=1.0, p_threshold=0.01)
+    targets, policy = batch_targets(values, actions, rewards, True, params)
+    assert boltzmann_probabilities(values[1], 1.0)[0] < 0.01
+    assert policy.dtype == bool and policy.tolist() == [True, False, True]
+    e2 = 1.0  # terminal: u = 0, lambda 0 at the last step
+    e1 = 0.9 * (0.5 * 0.6 + 0.5 * e2)  # u_2 = max Q(x_2) = 0.6
+    e0 = 0.9 * 5.0  # lambda cut: a_1 is non-policy, so e'_0 = r_0 + gamma u_1
+    assert np.allclose(targets, [e0, e1, e2])
+    # a truncated lesson bootstraps from the last input; lambda_returns agrees with p_threshold 0
+    t2, w2 = batch_targets(values, actions, rewards, False, ReplayParams(gamma=0.9, lam=0.5))
+    assert np.allclose(t2, lambda_returns(rewards, values[1:].max(1), 0.9, 0.5)) and w2.all()
+
+
+def test_batch_targets_checks_shapes():
+    with pytest.raises(ValueError, match="n\\+1=3"):
+        batch_targets(np.zeros((2, 2)), np.array([0, 1]), np.zeros(2), True, ReplayParams(gamma=0.9))
+
+
+# ---------------------------------------------------------------------------------- the repairs of 5.4.3
+
+class _Table:
+    """A tabular Q-function (for exact repair arithmetic): update sets Q(a) += 0.5 (target - Q(a))."""
+
+    n_actions = 3
+
+    def __init__(self, v):
+        self.v = np.array(v, dtype=float)
+        self.calls = []
+
+    def values(self, x):
+        return self.v.copy()
+
+    def update(self, x, a, target):
+        self.calls.append((a, target))
+        before = self.v[a]
+        self.v[a] += 0.5 * (target - before)
+        return before
+
+
+def test_lower_repair_lowers_every_overvalued_other_action():
+    q = _Table([1.0, 5.0, 3.0])
+    assert repair_step(q, None, 0, "lower") == 2
+    assert q.calls == [(1, 1.0), (2, 1.0)]  # error Q(x,a1) - Q(x,a_i) through net a_i (5.4.3)
+    np.testing.assert_allclose(q.v, [1.0, 3.0, 2.0])
+
+
+def test_raise_repair_raises_taught_action_to_the_best_other():
+    q = _Table([1.0, 5.0, 3.0])
+    assert repair_step(q, None, 0, "raise") == 1
+    assert q.calls == [(0, 5.0)]
+    np.testing.assert_allclose(q.v, [3.0, 5.0, 3.0])
+
+
+def test_no_repair_when_condition_holds():
+    for mode in REPAIRS:
+        q = _Table([6.0, 5.0, 3.0])
+        assert repair_step(q, None, 0, mode) == 0
+        assert q.calls == []
+    with pytest.raises(ValueError, match="repair must be one of"):
+        repair_step(_Table([0, 0, 0]), None, 0, "sideways")
+
+
+# ------------------------------------------------------------------- the compiled kernel vs the plain loop
+#
+# ``replay_oaon`` (connrl.core.replay_kernel) is compared with ``replay_q_reference``, the readable loop of
+# Fig. 5.1(a), never with ``replay_q`` on an OAON: that dispatches to the kernel itself.
+
+def _lesson(rng, n=12, d=7, terminated=True):
+    return Lesson(rng.uniform(-0.5, 1.0, (n + 1, d)), rng.integers(0, 4, n), rng.choice([0.0, -10.0, 100.0], n),
+                  terminated=terminated, truncated=not terminated)
+
+
+def _pair(hidden, d=7, n_actions=4, **kw):
+    kw = {"value_range": 100.0, "init_range": 0.5, "lr": 0.05, "momentum": 0.9 if hidden else 0.0, **kw}
+    cfg = NetConfig(d, hidden, **kw)
+    return OAON(cfg, n_actions, np.random.default_rng(3)), OAON(cfg, n_actions, np.random.default_rng(3))
+
+
+def _assert_same_nets(fast, ref):
+    np.testing.assert_allclose(fast.w2, ref.w2, atol=1e-12)
+    np.testing.assert_allclose(fast.w1, ref.w1, atol=1e-12)
+    np.testing.assert_allclose(fast.d2, ref.d2, atol=1e-12)  # momentum terms too
+    np.testing.assert_allclose(fast.d1, ref.d1, atol=1e-12)
+
+
+@pytest.mark.parametrize("hidden", [5, 0])
+@pytest.mark.parametrize("terminated", [True, False])
+@pytest.mark.parametrize("p_threshold", [0.0, 0.2])
+def test_kernel_equals_reference_replay(hidden, terminated, p_threshold):
+    rng = np.random.default_rng(0)
+    lesson = _lesson(rng, terminated=terminated)
+    fast, ref = _pair(hidden)
+    params = ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=p_threshold, clip=None)
+    used = replay_oaon(fast, lesson, params)
+    assert used == replay_q_reference(ref, lesson, params)  # the plain loop
+    assert (used < len(lesson)) == (p_threshold > 0)  # P_t > 0 left some non-policy experiences out
+    _assert_same_nets(fast, ref)
+
+
+@pytest.mark.parametrize("repair", ["lower", "raise"])
+@pytest.mark.parametrize("hidden", [5, 0])
+@pytest.mark.parametrize("terminated, p_threshold", [(True, 0.0), (False, 0.0), (True, 0.2), (False, 0.2)])
+def test_kernel_repairs_equal_reference(repair, hidden, terminated, p_threshold):
+    rng = np.random.default_rng(1)
+    lesson = _lesson(rng, terminated=terminated)
+    fast, ref = _pair(hidden)
+    params = ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=p_threshold)
+    assert replay_oaon(fast, lesson, params, REPAIRS.index(repair)) == replay_q_reference(ref, lesson, params, repair)
+    _assert_same_nets(fast, ref)
+    plain, _ = _pair(hidden)
+    replay_q_reference(plain, lesson, params)
+    assert not np.allclose(plain.w2, ref.w2)  # the repairs did change the nets
+
+
+def test_kernel_first_update_target_is_td_lambda_return():
+    # one-step terminated lesson: target = r; the update moves Q(x0, a0) toward r exactly as OAON.update does
+    x = np.array([[0.3, -0.2], [0.1, 0.4]])
+    lesson = Lesson(x, np.array([1]), np.array([100.0]), terminated=True)
+    fast, ref = _pair(3, d=2, n_actions=2)
+    replay_oaon(fast, lesson, ReplayParams(gamma=0.9, lam=0.7))
+    ref.update(x[0], 1, 100.0)
+    np.testing.assert_array_equal(fast.w2, ref.w2)
+
+
+@pytest.mark.parametrize("hidden, p_threshold, clip, terminated, temperature, linear", [
+    (5, 0.0, None, True, 0.3, False), (5, 0.3, 1.0, False, 0.3, False), (0, 0.2, None, True, 0.3, False),
+    (0, 0.2, 0.5, False, 0.3, True),  # the linear perceptron of 7.4, clipped targets
+    (5, 0.2, None, False, 0.0, False),  # T = 0: only greedy actions (ties shared) are policy actions
+])
+def test_compiled_replay_matches_the_python_loop(hidden, p_threshold, clip, terminated, temperature, linear):
+    rng = np.random.default_rng(5)
+    lesson = Lesson(rng.normal(size=(31, 6)), rng.integers(0, 3, 30), rng.normal(size=30), terminated=terminated)
+    params = ReplayParams(gamma=0.9, lam=0.7, temperature=temperature, p_threshold=p_threshold, clip=clip)
+    cfg = NetConfig(6, hidden, lr=0.1, momentum=0.9 if hidden else 0.0, init_range=0.5, linear_output=linear)
+    fast, slow = OAON(cfg, 3, np.random.default_rng(1)), OAON(cfg, 3, np.random.default_rng(1))
+    n_fast = replay_oaon(fast, lesson, params)
+    n_slow = replay_q_reference(slow, lesson, params)
+    assert n_fast == n_slow
+    np.testing.assert_allclose(fast.w2, slow.w2, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(fast.w1, slow.w1, rtol=1e-9, atol=1e-12)
+
+
+# ------------------------------------------------------------------------------------- dispatch of replay_q
+
+def test_the_oaon_kernel_is_the_registered_fast_path():
+    assert replay_module.FAST_PATHS[OAON] is replay_oaon
+
+
+@pytest.mark.parametrize("repair", REPAIRS)
+def test_replay_q_on_an_oaon_uses_the_registered_fast_path(monkeypatch, repair):
+    calls = []
+
+    def spy(q, lesson, params, repair_index):
+        calls.append((q, lesson, params, repair_index))
+        return 123
+
+    monkeypatch.setitem(replay_module.FAST_PATHS, OAON, spy)
+    monkeypatch.setattr(replay_module, "replay_q_reference", _must_not_run)
+    net, _ = _pair(5)
+    lesson = _lesson(np.random.default_rng(0))
+    params = ReplayParams(gamma=0.9, lam=0.7)
+    assert replay_q(net, lesson, params, repair) == 123
+    assert calls == [(net, lesson, params, REPAIRS.index(repair))]
+    with pytest.raises(ValueError, match="repair must be one of"):
+        replay_q(net, lesson, params, "sideways")
+    assert len(calls) == 1
+
+
+def _must_not_run(*args, **kwargs):
+    raise AssertionError("the reference loop ran")
+
+
+def _fast_path_must_not_run(*args, **kwargs):
+    raise AssertionError("the fast path ran")
+
+
+@pytest.mark.parametrize("how", ["fast=False", "batch", "other type"])
+def test_replay_q_falls_back_to_the_reference_loop(monkeypatch, how):
+    calls = []
+
+    def reference(q, lesson, params, repair="none"):
+        calls.append((q, lesson, params, repair))
+        return 7
+
+    monkeypatch.setitem(replay_module.FAST_PATHS, OAON, _fast_path_must_not_run)
+    monkeypatch.setattr(replay_module, "replay_q_reference", reference)
+    net, _ = _pair(5)
+    lesson = _lesson(np.random.default_rng(0))
+    params = ReplayParams(gamma=0.9, lam=0.7, batch=how == "batch")
+    q = PlainQ(net) if how == "other type" else net
+    assert replay_q(q, lesson, params, "none", fast=how != "fast=False") == 7
+    assert calls == [(q, lesson, params, "none")]
+
+
+def test_replay_q_without_fast_path_equals_the_reference_loop():
+    lesson = _lesson(np.random.default_rng(2), terminated=False)
+    params = ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=0.2)
+    slow, ref = _pair(5)
+    assert replay_q(slow, lesson, params, "lower", fast=False) == replay_q_reference(ref, lesson, params, "lower")
+    np.testing.assert_array_equal(slow.w1, ref.w1)
+    np.testing.assert_array_equal(slow.w2, ref.w2)
+
+
+class PlainQ:
+    """Hides the OAON type so replay_q has no fast path for it and runs the reference loop."""
+
+    def __init__(self, net):
+        self.net, self.n_actions = net, net.n_nets
+
+    def values(self, x):
+        return self.net.values(x)
+
+    def update(self, x, a, t):
+        return self.net.update(x, a, t)

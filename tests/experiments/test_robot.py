@@ -1,0 +1,80 @@
+"""Ch. 5 experiments: specs, the run function's protocol and determinism."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from connrl.experiments.robot import EXPERIMENTS, RobotParams, first_reaching, run_robot
+from connrl.experiments.spec import as_dict
+
+TINY = RobotParams(trials=4, test_every=2, test_tasks=3, lessons_per_trial=3)
+
+
+def test_specs_cover_chapter_5():
+    names = {s.name for s in EXPERIMENTS}
+    assert names == {"robot-teaching-dp", "robot-teaching-dk", "robot-teaching-wfl", "robot-lambda-dp",
+                     "robot-lambda-wfl", "robot-repairs-3", "robot-repairs-10", "robot-single-layer",
+                     "robot-dp-geometry", "robot-dk-geometry"}
+    for s in EXPERIMENTS:
+        params, runs = s.resolve("full")
+        assert runs == 7 and params.trials == 300 and params.test_every == 10 and params.test_tasks == 50
+    dp = next(s for s in EXPERIMENTS if s.name == "robot-teaching-dp")
+    assert {v.label: v.thesis.get("trials_to_2.5") for v in dp.variants} == {
+        "no teaching": 280, "3 lessons": 20, "10 lessons": 10}
+    lam = next(s for s in EXPERIMENTS if s.name == "robot-lambda-dp")
+    assert [v.thesis.get("trials_to_5") for v in lam.variants] == [280, 140, 65, None, None]
+    single = next(s for s in EXPERIMENTS if s.name == "robot-single-layer")
+    assert single.params.hidden_fraction == 0 and single.params.binary_low == 0.0
+    assert [v.params["lr"] for v in single.variants] == [0.04, 0.04, 0.03]  # 5.4.4
+
+
+def _variant_params(name: str, label: str) -> dict:
+    spec = next(s for s in EXPERIMENTS if s.name == name)
+    params, _ = spec.resolve("full")
+    v = next(v for v in spec.variants if v.label == label)
+    return {k: x for k, x in as_dict(spec.variant_params(params, v)).items() if k != "paths"}
+
+
+def test_geometry_studies_vary_only_the_geometry():
+    dp = next(s for s in EXPERIMENTS if s.name == "robot-dp-geometry")
+    combos = {(v.params["door_width"], v.params["dp_heading"], v.params["lessons"]) for v in dp.variants}
+    assert combos == {(w, h, n) for w in (36.0, 48.0) for h in (180.0, 45.0) for n in (0, 3, 10)}
+    assert {v.thesis["trials_to_2.5"] for v in dp.variants if v.params["lessons"] == 10} == {10}
+    # in the reconstructed geometry the studies' variants are exactly the thesis experiments' variants
+    for n, label in ((0, "no teaching"), (3, "3 lessons"), (10, "10 lessons")):
+        assert _variant_params("robot-dp-geometry", f"36-in doors, any heading, {n} lessons") == \
+            _variant_params("robot-teaching-dp", label)
+    assert _variant_params("robot-dk-geometry", "30 deg, multi-layer, 10 lessons") == \
+        _variant_params("robot-teaching-dk", "10 lessons")
+    assert _variant_params("robot-dk-geometry", "30 deg, single-layer, 10 lessons") == \
+        _variant_params("robot-single-layer", "DK single-layer")
+    tight = _variant_params("robot-dk-geometry", "10 deg, single-layer, 10 lessons")
+    assert tight == {**_variant_params("robot-single-layer", "DK single-layer"), "dock_tolerance": 10.0}
+
+
+def test_first_reaching():
+    assert first_reaching([0, 10, 20, 30], [0.0, 2.4, 2.6, 1.0], 2.5) == 20
+    assert first_reaching([0, 10], [0.0, 1.0], 2.5) is None
+
+
+def test_run_protocol_and_determinism():
+    a = run_robot(replace(TINY, lessons=3), np.random.default_rng(5))
+    b = run_robot(replace(TINY, lessons=3), np.random.default_rng(5))
+    assert a.curve_x == [0, 2, 4]  # a test before learning and after every test_every trials
+    assert a.curve_y == b.curve_y and a.metrics == b.metrics
+    assert all(-10.0 <= y <= 100.0 for y in a.curve_y)  # reinforcement per step is within the reward range
+    assert set(a.metrics) == {"trials_to_2.5", "trials_to_5", "final_performance", "mean_performance"}
+
+
+def test_wfl_single_layer_run():
+    r = run_robot(replace(TINY, task="WFL", lessons=2, hidden_fraction=0.0, momentum=0.0, binary_low=0.0, lr=0.03,
+                          paths=2), np.random.default_rng(0))
+    assert len(r.extra["paths"]) == 2 and len(r.extra["paths"][0]["poses"]) == RobotParams().max_steps + 1
+
+
+def test_bad_task_is_rejected():
+    with pytest.raises(ValueError, match="task must be one of"):
+        run_robot(replace(TINY, task="CHG"), np.random.default_rng(0))

@@ -1,0 +1,45 @@
+"""Ch. 4 experiments: the specs, and every one runs on the tiny profile, reproducibly."""
+
+import json
+
+import pytest
+
+from connrl.experiments.survival import EXPERIMENTS
+from tests.tiny_runs import run_tiny
+
+NAMES = [s.name for s in EXPERIMENTS]
+
+
+def test_five_experiments_cover_chapter_4():
+    assert NAMES == ["survival-study1", "survival-study2", "survival-planning", "survival-speedup", "survival-eval"]
+    s1, s2 = EXPERIMENTS[0], EXPERIMENTS[1]
+    assert len(s1.variants) == len(s2.variants) == 10  # 8 frameworks, -M with both models
+    assert s1.params.representation == "global" and s2.params.representation == "local"
+    assert s2.params.lr_scale == 2.0 and s1.params.lr_scale == 1.0
+    full = s1.resolve("full")[0]
+    assert (full.train_plays, full.test_envs, full.test_every, s1.resolve("full")[1]) == (300, 50, 20, 7)
+    assert EXPERIMENTS[4].resolve("full")[0].eval_envs == 8000
+
+
+@pytest.fixture
+def tiny_out(tiny_runs):
+    return tiny_runs(*NAMES)
+
+
+def test_tiny_runs_write_summaries(tiny_out):
+    for name in NAMES:
+        summary = json.loads((tiny_out / name / "summary.json").read_text())
+        assert summary["profile"] == "tiny"
+        assert (tiny_out / name / "curve.png").exists()
+    s = json.loads((tiny_out / "survival-study1" / "summary.json").read_text())
+    q = s["variants"]["QCON-T"]["quantities"]["final_food"]
+    assert len(q["per_run"]) == 1 and 0 <= q["mean"] <= 15
+    ev = json.loads((tiny_out / "survival-eval" / "summary.json").read_text())["variants"]["QCON-T"]["quantities"]
+    assert ev["eval_food"]["thesis"] == 12.1
+
+
+def test_tiny_runs_are_reproducible(tiny_out, tmp_path):
+    run_tiny("survival-speedup", tmp_path)
+    a = json.loads((tiny_out / "survival-speedup" / "summary.json").read_text())["variants"]
+    b = json.loads((tmp_path / "survival-speedup" / "summary.json").read_text())["variants"]
+    assert a == b

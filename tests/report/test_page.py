@@ -1,0 +1,47 @@
+"""docs/RESULTS.md: number formatting, the per-experiment table, figures beside the page, the whole page."""
+
+import json
+
+from connrl.report.page import figure as figure_link
+from connrl.report.page import fmt, note, summary_table, write_results
+from tests.tiny_runs import run_tiny
+
+
+def test_fmt():
+    assert (fmt(None), fmt(0.123456), fmt(12345.6), fmt(3)) == ("-", "0.1235", "1.235e+04", "3")
+
+
+def test_summary_table_has_one_row_per_variant_and_quantity(tiny_runs):
+    out = tiny_runs("pole-full")
+    summary = json.loads((out / "pole-full" / "summary.json").read_text())
+    table = summary_table(summary)
+    assert table.startswith("`connrl run pole-full --profile tiny --runs 1 --seed 0`")
+    rows = [line for line in table.splitlines() if line.startswith("| QCON-R |")]
+    assert len(rows) == 1 and rows[0].split("|")[2].strip() == "trials_to_satisfactory"
+    assert rows[0].split("|")[5].strip() == "119"  # the thesis's number beside ours
+
+
+def test_figure_is_copied_next_to_the_page(tiny_runs, tmp_path):
+    out = tiny_runs("pole-full")
+    doc = tmp_path / "docs" / "RESULTS.md"
+    assert figure_link(out / "pole-full" / "curve.png", doc, "pole-full") == "![pole-full](figures/pole-full.png)"
+    assert (tmp_path / "docs" / "figures" / "pole-full.png").exists()
+    assert figure_link(out / "nothing.png", doc, "x") == ""
+
+
+def test_notes_are_read_from_docs_notes():
+    assert note("pole-intro") and "not found" not in note("pole-intro")
+    assert "not found" in note("no-such-note")
+
+
+def test_write_results_has_every_chapter_and_names_its_source(tmp_path):
+    out = tmp_path / "runs"
+    for name in ("pole-full", "cup-task1"):
+        run_tiny(name, out)
+    doc = write_results(out, tmp_path / "RESULTS.md")
+    text = doc.read_text()
+    assert text.startswith("# Results: connrl beside the thesis") and f"`connrl results --out {out}`" in text
+    for heading in ("## Pole balancing, full state", "## Chapter 7: hidden state", "## Chapter 5: robot skills"):
+        assert heading in text
+    assert "connrl run pole-full --profile tiny" in text and "Command: `connrl run cup-task1" in text
+    assert "## Not yet run" in text and "`survival-study1`" in text

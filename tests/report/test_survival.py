@@ -1,0 +1,50 @@
+"""Ch. 4 results section: the page, the play PNG, comparison symbols."""
+
+import numpy as np
+import pytest
+
+from connrl.experiments.survival import EXPERIMENTS
+from connrl.report.survival import agreement, crossing, relation, render_play, results_section
+
+NAMES = [s.name for s in EXPERIMENTS]
+
+
+@pytest.fixture
+def tiny_out(tiny_runs):
+    return tiny_runs(*NAMES)
+
+
+def test_results_section_and_play_png(tiny_out, tmp_path):
+    text = results_section(tiny_out, doc=tmp_path / "RESULTS.md")
+    for needle in ("Fig. 4.3", "Fig. 4.4", "4.4.2", "Table of 4.5", "Fig. 4.5", "4.3.4", "39.9%"):
+        assert needle in text
+    png = tmp_path / "figures" / "survival-play.png"
+    assert png.exists() and png.stat().st_size > 10_000
+
+
+def test_render_play_draws_a_readable_png(tmp_path):
+    from connrl.envs.survival import SurvivalEnv
+    from connrl.tasks.survival import _frame
+
+    env = SurvivalEnv("global")
+    env.reset(seed=0)
+    frames = [_frame(env)]
+    for a in [0, 0, 3, 3, 2]:
+        env.step(a)
+        frames.append(_frame(env))
+    path = render_play(frames, tmp_path / "play.png", n_panels=3)
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(path)
+    assert img.shape[0] > 300 and img.shape[1] > 900  # three panels side by side
+
+
+def test_relation_symbols_and_agreement():
+    assert relation([5, 5.1, 4.9], [1, 1.1, 0.9]) == ">"
+    assert relation([1, 2, 3], [1, 2, 3]) == "~"
+    assert relation([1, 1.1, 0.9], [5, 5.1, 4.9]) == "<"
+    assert agreement(">", ">") == "agrees" and agreement(">=", ">") == "roughly"
+    assert agreement("<", ">") == "**disagrees**" and agreement("~", ">") == "**disagrees**"
+    assert crossing([0, 20, 40], [2.0, 6.0, 10.0], 8.0) == 30.0
+    assert crossing([0, 20], [1.0, 2.0], 8.0) is None
+    assert np.isclose(crossing([0, 20], [9.0, 10.0], 8.0), 0.0)

@@ -1,0 +1,78 @@
+"""The survival action models of 4.2.5 (perfect and learned) and planning inside a QCON-M trial."""
+
+import numpy as np
+import pytest
+
+from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv, rotate_observation
+from connrl.tasks.survival_models import LearnedSurvivalModel, PerfectSurvivalModel
+
+PERMS = np.stack([ROTATION_PERMUTATIONS[ACTION_ROTATION[a]] for a in range(4)])
+
+
+def test_perfect_model_steps_a_copy_and_leaves_the_live_play_alone():
+    env = SurvivalEnv("global")
+    x, _ = env.reset(seed=3, options={"food": [(17, 12), (18, 13)]})
+    before = env.get_state(include_rng=True)
+    model = PerfectSurvivalModel(env, np.random.default_rng(0))
+    outs = model.simulate(x, [0, 1, 3])
+    after = env.get_state(include_rng=True)
+    assert after["agent"] == before["agent"] and after["rng"] == before["rng"]
+    # enemies start 12+ cells away, so every simulated observation is the real one for that move
+    for a, (y, r, terminal) in zip([0, 1, 3], outs, strict=True):
+        twin = SurvivalEnv("global")
+        twin.reset(seed=3, options={"food": [(17, 12), (18, 13)]})
+        y_true, r_true, term_true, _, _ = twin.step(a)
+        np.testing.assert_array_equal(y, y_true)
+        assert (r, terminal) == (r_true, term_true)
+    assert [o[1] for o in outs] == [0.4, 0.4, 0.0]
+
+
+@pytest.mark.parametrize("rep", ["global", "local"])
+def test_learned_model_learns_reward_and_enemy_units(rep):
+    env = SurvivalEnv(rep)
+    x, _ = env.reset(seed=1)
+    model = LearnedSurvivalModel(env, np.random.default_rng(0))
+    y = x.copy()
+    y[52:84] = -0.5
+    y[52 + 5] = 0.5  # an enemy sensor turns on after the move
+    for _ in range(150):
+        model.learn(x, 2, -1.0, y, True)
+    r, enemy = model.predict(x, 2)
+    assert r < -0.6
+    np.testing.assert_array_equal(enemy, y[52:84])
+    (y_sim, r_sim, terminal), = model.simulate(x, [2])
+    assert terminal and r_sim == pytest.approx(r)  # predicted death ends the simulated play
+    np.testing.assert_array_equal(y_sim[52:84], y[52:84])
+    if rep == "global":  # the units the model does not learn come from the simulator (4.2.5)
+        np.testing.assert_array_equal(np.delete(y_sim, np.s_[52:84]), np.delete(env.step(2)[0], np.s_[52:84]))
+
+
+def test_learned_model_global_nets_are_shared_by_rotation():
+    env = SurvivalEnv("global")
+    x, _ = env.reset(seed=2)
+    model = LearnedSurvivalModel(env, np.random.default_rng(1))
+    rng = np.random.default_rng(5)
+    for _ in range(30):  # random training so the enemy net is not trivial
+        model.learn(rng.choice([-0.5, 0.5], 145), int(rng.integers(4)), 0.0, rng.choice([-0.5, 0.5], 145), False)
+    for a in range(4):
+        r_a, e_a = model.predict(x, a)
+        r_n, e_n = model.predict(rotate_observation(x, ACTION_ROTATION[a]), 0)  # the same move as "north"
+        assert r_a == pytest.approx(r_n)
+        full = np.zeros(145)
+        full[52:84] = e_n  # the rotated world's enemy map ...
+        back = np.empty(145)
+        back[PERMS[a]] = full  # ... turned back: y[perm[i]] = y_rotated[i]
+        np.testing.assert_array_equal(e_a, back[52:84])
+
+
+def test_qcon_plans_while_learning_but_not_at_test():
+    from connrl.core.rollout import run_trial
+    from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
+
+    env = SurvivalEnv("local")
+    env.reset(seed=0)
+    agent = make_survival_agent(SurvivalAgentParams("QCON-M", "local", "perfect"), env, np.random.default_rng(0))
+    run_trial(env, agent, trial=0, learning=True, seed=1)
+    assert agent.planner.hypothetical > 0 and agent.planner.steps > 0
+    run_trial(env, agent, trial=0, learning=False, seed=1)
+    assert agent.planner.hypothetical == 0  # reset at the test play's start and no planning at T = 0
