@@ -13,9 +13,9 @@ import time
 
 import numpy as np
 
+from connrl.core.rollout import run_trial
 from connrl.envs.cup import CupCollectionEnv
 from connrl.experiments.hidden_state import CupParams
-from connrl.experiments.protocol import run_trial
 from connrl.tasks.hidden_state import ARCHITECTURES, make_agent, test_score
 
 

@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
+from connrl.core.rollout import run_trial
 from connrl.envs.survival import SurvivalEnv
-from connrl.experiments.protocol import run_trial
 from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 
 CONFIGS = [("AHCON", "learned"), ("AHCON-R", "learned"), ("AHCON-M", "learned"), ("AHCON-M", "perfect"),

@@ -53,23 +53,34 @@ _positive_int, _seed = _int_at_least(1), _int_at_least(0)
 
 
 def cmd_run(args) -> int:
-    from connrl.experiments.runner import run_experiment
-
     spec = _get(args.name)
     try:
         spec.resolve(args.profile, args.runs)
     except ValueError as exc:
         raise SystemExit(f"connrl: {exc}") from None
+    return _run_and_report(spec, args, profile=args.profile, runs=args.runs, seed=args.seed)
+
+
+def _run_and_report(spec, args, *, profile: str, runs: int | None, seed: int, mean_curve: bool = False) -> int:
+    """Run (resuming finished runs), plot, and print the summary table; Ctrl-C keeps what finished."""
+    import numpy as np
+
+    from connrl.experiments.runner import run_experiment
+    from connrl.report.plots import plot_experiment
+
     try:
-        outcome = run_experiment(spec, profile=args.profile, runs=args.runs, seed=args.seed, out=Path(args.out),
+        outcome = run_experiment(spec, profile=profile, runs=runs, seed=seed, out=Path(args.out),
                                  workers=args.workers, show_progress=not args.quiet)
     except KeyboardInterrupt:
         print("\ninterrupted: finished runs are saved; run the same command again to resume.", file=sys.stderr)
         return 130
-    from connrl.report.plots import plot_experiment
-
     plots = plot_experiment(spec, outcome.records, Path(args.out) / spec.name)
     _print_summary(outcome.summary)
+    curves = [r["curve_y"] for r in sorted(outcome.records, key=lambda r: r["seed"])]
+    if mean_curve and curves and len({len(c) for c in curves}) == 1 and curves[0]:
+        xs, mean = outcome.records[0]["curve_x"], np.mean(curves, axis=0)
+        idx = np.unique(np.linspace(0, len(xs) - 1, min(11, len(xs))).round().astype(int))
+        print("mean curve: " + ", ".join(f"{xs[i]:g}: {mean[i]:.3g}" for i in idx))
     print(f"\n{outcome.ran} run(s) executed, {outcome.reused} reused from earlier; "
           f"{outcome.summary['timing']['wall_time_s']:.1f} s")
     print(f"summary: {outcome.summary_path}")
@@ -127,11 +138,7 @@ def cmd_teach(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    import numpy as np
-
-    from connrl.experiments.runner import run_experiment
     from connrl.experiments.sweep import parse_seeds, sweep_spec
-    from connrl.report.plots import plot_experiment
 
     spec = _get(args.name)
     try:
@@ -139,24 +146,8 @@ def cmd_sweep(args) -> int:
         sweep = sweep_spec(spec, args.set or [], args.variant)
     except ValueError as exc:
         raise SystemExit(f"connrl: {exc}") from None
-    try:
-        outcome = run_experiment(sweep, profile="full", runs=stop - first, seed=first, out=Path(args.out),
-                                 workers=args.workers, show_progress=not args.quiet)
-    except KeyboardInterrupt:
-        print("\ninterrupted: finished runs are saved; run the same command again to resume.", file=sys.stderr)
-        return 130
-    plots = plot_experiment(sweep, outcome.records, Path(args.out) / sweep.name)
     print(sweep.title)
-    _print_summary(outcome.summary)
-    curves = [r["curve_y"] for r in sorted(outcome.records, key=lambda r: r["seed"])]
-    if curves and len({len(c) for c in curves}) == 1 and curves[0]:
-        xs, mean = outcome.records[0]["curve_x"], np.mean(curves, axis=0)
-        idx = np.unique(np.linspace(0, len(xs) - 1, min(11, len(xs))).round().astype(int))
-        print("mean curve: " + ", ".join(f"{xs[i]:g}: {mean[i]:.3g}" for i in idx))
-    print(f"\n{outcome.ran} run(s) executed, {outcome.reused} reused; summary: {outcome.summary_path}")
-    for p in plots:
-        print(f"plot:    {p}")
-    return 0
+    return _run_and_report(sweep, args, profile="full", runs=stop - first, seed=first, mean_curve=True)
 
 
 def cmd_make_lessons(args) -> int:
@@ -187,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _add_experiment_commands(sub) -> None:
-    """list, run, plot, show."""
+    """list, run, plot, show, teach."""
     s = sub.add_parser("list", help="list the experiments", description="List every experiment with its "
                        "thesis section and run counts.")
     s.set_defaults(func=cmd_list)
@@ -227,12 +218,12 @@ def _add_experiment_commands(sub) -> None:
 
 
 def _add_tool_commands(sub) -> None:
-    """sweep, make-lessons, teach, results."""
+    """sweep, make-lessons, results."""
     s = sub.add_parser("sweep", help="run an experiment's setting with overrides over many seeds",
                        description="Run the experiment's full-profile parameters (or one variant's) with --set "
                        "overrides, one run per seed A..B-1, seeded as `connrl run` seeds its runs. Unknown keys "
-                       "are refused before any compute. Runs are stored and resumable under "
-                       "OUT/sweep-NAME-HASH/.")
+                       "and bad values are refused before any compute. Runs are stored and resumable under "
+                       "OUT/sweep-NAME-HASH/; give the same command again to print the table again.")
     s.add_argument("name", help="experiment name (see `connrl list`)")
     s.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a parameter; VALUE is JSON (1, 0.5, true, null, [10, 30], {\"hq\": 12}) "

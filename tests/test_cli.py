@@ -1,6 +1,7 @@
 """CLI: help texts, clear errors before any work, and a tiny-profile smoke run of every experiment."""
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -48,11 +49,18 @@ def test_plot_before_run_is_a_clear_error(tmp_path):
         cli.main(["plot", "pole-full", "--out", str(tmp_path)])
 
 
+GOLDEN = json.loads((Path(__file__).parent / "data" / "tiny_e172482.json").read_text())
+
+
 @pytest.mark.parametrize("name", sorted(all_experiments()))
 def test_every_experiment_runs_on_the_tiny_profile(name, tmp_path, capsys):
+    """A smoke run through the CLI; its numbers and run folder equal those commit e172482 produced."""
     assert cli.main(["run", name, "--profile", "tiny", "--out", str(tmp_path), "--workers", "1", "--quiet"]) == 0
     summary = json.loads((tmp_path / name / "summary.json").read_text())
     assert summary["profile"] == "tiny" and summary["variants"]
+    per_run = {v: {q: x["per_run"] for q, x in d["quantities"].items()} for v, d in summary["variants"].items()}
+    assert per_run == GOLDEN[name]["per_run"]
+    assert [p.name for p in (tmp_path / name / "runs").iterdir()] == [GOLDEN[name]["run_folder"]]
     assert (tmp_path / name / "curve.png").exists()
     assert cli.main(["plot", name, "--out", str(tmp_path)]) == 0
     assert cli.main(["show", name, "--out", str(tmp_path)]) == 0

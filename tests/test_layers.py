@@ -110,6 +110,18 @@ def test_layers_do_not_import_upward():
     assert not offenders, "imports across the layers:\n" + "\n".join(offenders)
 
 
+def test_only_tasks_wire_a_world_to_a_learner():
+    """Outside ``connrl.tasks`` no module imports both a world (``connrl.envs``) and an agent (``connrl.agents``)."""
+    offenders = []
+    for m in MODULES:
+        if in_layer(m, "connrl.tasks"):
+            continue
+        targets = [e.target for e in EDGES if e.source == m]
+        if any(in_layer(t, "connrl.envs") for t in targets) and any(in_layer(t, "connrl.agents") for t in targets):
+            offenders.append(m)
+    assert not offenders, f"modules that import both connrl.envs and connrl.agents outside connrl.tasks: {offenders}"
+
+
 def _top_level_names(tree: ast.Module) -> set[str]:
     names = set()
     for node in ast.walk(tree):  # includes names bound under if/try at module level

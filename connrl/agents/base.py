@@ -1,6 +1,6 @@
 """The agent protocol and the pieces QCON and AHCON share (replay settings, schedules, lesson bookkeeping).
 
-A run drives an agent like this (see ``connrl.experiments.runner.run_trial``)::
+A run drives an agent like this (``connrl.core.rollout.run_trial``)::
 
     agent.begin_trial(obs, info, trial=k, learning=True)
     while not done:

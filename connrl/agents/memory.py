@@ -23,6 +23,8 @@ had chosen it: the interruption of the robustness probe of 7.5.1.
 On-line learning: the thesis says the recurrent nets are trained in batch mode "to avoid possible
 instability" (7.5); recurrent-Q therefore learns only by replay after each trial. Window-Q and the
 recurrent-model's feed-forward Q-net also learn on-line from each step (Fig. 3.4) when ``online`` is set.
+
+Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Learners and protocols", gives each with its reason.
 """
 
 from __future__ import annotations

@@ -18,6 +18,8 @@ Ch. 5 needs:
 
 "Fewer lessons were replayed in the beginning when there were not many lessons available" (5.3.5 fn. 1):
 ``learn`` replays ``min(lessons_per_trial, lessons in memory)`` experienced lessons.
+
+Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Learners and protocols", gives each with its reason.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from connrl.core.lessons import Lesson
 from connrl.core.replay import REPAIRS, ReplayParams, replay_q
 
 # ------------------------------------------------------------------------------------------- the agent
+
 
 @dataclass(frozen=True)
 class TeachingConfig:

@@ -4,6 +4,8 @@ The thesis selects actions stochastically with ``P(a_i) = exp(m_i/T) / sum_k exp
 the temperature annealed over a run. It writes schedules two ways, ``1/T: a -> b`` (Table 4.1, Table B.1) and
 ``T: a -> b`` (5.3.4); both are linear in the written quantity over the trials of a run. Tests use T = 0,
 i.e. greedy selection.
+
+Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Learners and protocols", gives each with its reason.
 """
 
 from __future__ import annotations

@@ -53,9 +53,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from connrl.core.rollout import run_trial
 from connrl.experiments.pole import train_until_satisfactory
-from connrl.experiments.protocol import run_trial, train_and_test
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
+from connrl.experiments.protocol import train_and_test
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
 from connrl.tasks.hidden_state import (
     ARCHITECTURES,
     OPTIMAL_SCORE,
@@ -101,6 +102,9 @@ class CupParams(HiddenStateParams):
     probe: bool = True  # run the robustness probe of 7.5.1 after training
     probe_steps: tuple = (1, 2, 3)  # forced steps in the robustness probe (R: "a few steps")
 
+    def __post_init__(self):
+        check_types(self, arch=ARCHITECTURES, task=(1, 2, 3))
+
 
 @dataclass(frozen=True)
 class PoleHiddenParams(HiddenStateParams):
@@ -117,6 +121,9 @@ class PoleHiddenParams(HiddenStateParams):
     start_x: float = 1.2  # training start ranges (R, as pole-full)
     start_theta: float = 0.06
     test_steps: int = 5001  # "balanced for over 5000 steps" (7.5.4)
+
+    def __post_init__(self):
+        check_types(self, arch=ARCHITECTURES, task=(4,))
 
 
 def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:

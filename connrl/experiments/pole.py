@@ -12,8 +12,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from connrl.experiments.protocol import run_trial, train_and_test
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
+from connrl.core.rollout import run_trial
+from connrl.experiments.protocol import train_and_test
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
 from connrl.tasks.pole import make_agent, make_envs, satisfactory
 
 
@@ -44,6 +45,9 @@ class PoleParams:
     start_theta: float = 0.06
     test_steps: int = 5001  # "balanced for over 5000 steps" (7.5.4)
     max_trials: int = 1000  # 7.5.4: "not always found within 1000 trials"
+
+    def __post_init__(self):
+        check_types(self, agent=("qcon", "ahcon"), observe=("full", "x_theta"))
 
 
 def train_until_satisfactory(train_env, test_env, agent, max_trials: int, test_steps: int, progress) -> RunResult:

@@ -1,17 +1,13 @@
-"""The protocol every experiment shares: one trial of an agent in an environment, and the train-and-test loop.
+"""The protocol every experiment shares: the train-and-test loop.
 
 The thesis measures learning the same way in every chapter: training trials (stochastic actions, learning
-on) interleaved with tests of the greedy policy (T = 0, learning off). ``train_and_test`` is that loop; a
-chapter supplies what one training trial and one test are.
+on; ``connrl.core.run_trial``) interleaved with tests of the greedy policy (T = 0, learning off).
+``train_and_test`` is that loop; a chapter supplies what one training trial and one test are.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-
-from connrl.core.rollout import TrialStats, run_trial
-
-__all__ = ["TrialStats", "run_trial", "train_and_test"]
 
 
 def train_and_test(trials: int, train: Callable[[int], object], test: Callable[[int], object], *,

@@ -8,11 +8,11 @@ also has a fixed simulator seed, so the sensing and control noise of a test is t
 (less noise in the curve; the thesis does not say how it handled this).
 
 Agent (5.3): ``connrl.agents.teaching.TeachingQCON`` (built by ``connrl.tasks.robot.make_agent``): six OAON
-Q-nets (hidden = round(0.3 x inputs):
-16 for DP/DK, 11 for WF), lr 0.05, momentum 0.9, init +-0.5, Q in +-100, gamma 0.9, lambda 0.7 (set to 0
-at the end of a lesson and after non-policy actions), T 0.05 -> 0.02 over 300 trials on Q/100, stuck
-detection, on-line Q-learning during the trial and, after it, 60 lessons chosen by App. A.2 from the
-latest 100 (fewer while fewer exist) plus every taught lesson, non-policy actions (P < 2 %) not replayed.
+Q-nets (hidden = round(0.3 x inputs): 16 for DP/DK, 11 for WF), lr 0.05, momentum 0.9, init +-0.5, Q in +-100,
+gamma 0.9, lambda 0.7 (set to 0 at the end of a lesson and after non-policy actions), T 0.05 -> 0.02 over 300
+trials on Q/100, stuck detection, on-line Q-learning during the trial and, after it, 60 lessons chosen by App.
+A.2 from the latest 100 (fewer while fewer exist) plus every taught lesson, non-policy actions (P < 2 %) not
+replayed.
 
 Taught lessons (3.7, 5.4) come from the scripted teachers of ``connrl.envs.robot`` (not a person):
 ``connrl make-lessons robot`` rewrites ``connrl/data/lessons/robot-{dp,dk,wfl}.json``
@@ -29,8 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connrl.experiments.protocol import TrialStats, run_trial, train_and_test
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
+from connrl.core.replay import REPAIRS
+from connrl.core.rollout import TrialStats, run_trial
+from connrl.experiments.protocol import train_and_test
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
 from connrl.tasks.robot import evaluate, make_agent, make_env
 
 THRESHOLDS = (2.5, 5.0)  # the two performance levels of the tables in 5.6
@@ -70,6 +72,9 @@ class RobotParams:
     door_width: float = 36.0  # doorway width, in (R); others: sensitivity study (robot-dp-geometry)
     dp_heading: float = 180.0  # DP starts face within +-this many deg of the door (180 = any heading, 5.4)
     dock_tolerance: float = 30.0  # DK: a head-on charger contact within this many deg docks (R; robot-dk-geometry)
+
+    def __post_init__(self):
+        check_types(self, task=("DP", "DK", "WFL"), repair=REPAIRS)
 
 
 def quantity_name(level: float) -> str:
@@ -156,7 +161,7 @@ PROFILES = {
 
 def _spec(name, title, section, base, variants, quantities, paths=0, description=""):
     return ExperimentSpec(name=name, title=title, section=section, run="connrl.experiments.robot:run_robot",
-                          params=RobotParams(**base, paths=paths),
+                          params=override(RobotParams(), {**base, "paths": paths}, f"experiment {name}"),
                           profiles={k: ({**v, "paths": min(v.get("paths", paths), paths)} if paths else dict(v))
                                     for k, v in PROFILES.items()},
                           variants=tuple(variants), quantities=tuple(quantities), x_label="trials",

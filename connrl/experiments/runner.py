@@ -47,7 +47,7 @@ class Job:
     params: dict  # plain data (stored in the record); the run function gets an instance of params_type
     seed: int
     path: str  # where its records go (without suffix)
-    params_type: str = ""  # "module:Class" of the spec's parameter dataclass
+    params_type: str  # "module:Class" of the spec's parameter dataclass
 
 
 def variant_slug(label: str) -> str:

@@ -54,13 +54,36 @@ class RunResult:
 
 
 def override(params, changes: Mapping[str, Any], where: str = "parameters"):
-    """``dataclasses.replace(params, **changes)``, refusing a key the parameter class does not have."""
+    """``dataclasses.replace(params, **changes)``, refusing a key the parameter class does not have and a value
+    its annotation does not allow (checked by ``check_types``), before anything runs."""
     allowed = [f.name for f in dataclasses.fields(params)]
     unknown = sorted(set(changes) - set(allowed))
     if unknown:
         raise ValueError(f"{where}: unknown parameter(s) {', '.join(map(repr, unknown))}; allowed: "
                          f"{', '.join(allowed)}")
-    return dataclasses.replace(params, **changes)
+    try:
+        return dataclasses.replace(params, **changes)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
+
+
+_KINDS = {"bool": (bool,), "int": (int,), "float": (int, float), "str": (str,), "tuple": (tuple,), "dict": (dict,)}
+
+
+def check_types(params, **choices: tuple) -> None:
+    """Refuse a field whose value does not match its annotation (``float``, ``int | None``, ...; a bool is not
+    a number) or, for the fields named in ``choices``, is not one of the allowed values. Parameter classes call
+    it from ``__post_init__``, so a bad value fails when the spec (or a sweep) is built."""
+    for f in dataclasses.fields(params):
+        v = getattr(params, f.name)
+        kinds = [k.strip() for k in str(f.type).split("|")]
+        ok = (v is None and "None" in kinds) or any(
+            isinstance(v, _KINDS.get(k, object)) and not (isinstance(v, bool) and k in ("int", "float"))
+            for k in kinds if k != "None")
+        if not ok:
+            raise ValueError(f"parameter {f.name} must be {f.type}, got {v!r}")
+        if f.name in choices and v not in choices[f.name]:
+            raise ValueError(f"parameter {f.name} must be one of {', '.join(map(repr, choices[f.name]))}, got {v!r}")
 
 
 def as_dict(params) -> dict[str, Any]:

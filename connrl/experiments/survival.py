@@ -27,9 +27,18 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from connrl.experiments.protocol import run_trial, train_and_test
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
-from connrl.tasks.survival import SurvivalAgentParams, SurvivalEnv, environment_sets, evaluate, make_survival_agent
+from connrl.core.rollout import run_trial
+from connrl.experiments.protocol import train_and_test
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
+from connrl.tasks.survival import (
+    FRAMEWORKS,
+    MODELS,
+    SurvivalAgentParams,
+    SurvivalEnv,
+    environment_sets,
+    evaluate,
+    make_survival_agent,
+)
 from connrl.tasks.survival import test_plays as _test_plays
 
 
@@ -47,6 +56,10 @@ class SurvivalParams:
     eval_envs: int = 0  # 4.3.4: 8000 after training (survival-eval only)
     curve: str = "food"  # "food" (Figs. 4.3/4.4) or "planning" (Fig. 4.5: hypothetical actions per step)
     planning_block: int = 10  # plays averaged per point of the planning curve
+
+    def __post_init__(self):
+        check_types(self, framework=FRAMEWORKS, model=MODELS, representation=("global", "local"),
+                    curve=("food", "planning"))
 
 
 def _agent_params(p: SurvivalParams) -> SurvivalAgentParams:

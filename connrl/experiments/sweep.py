@@ -15,7 +15,7 @@ import hashlib
 import json
 from typing import Any
 
-from connrl.experiments.spec import ExperimentSpec, Variant, override
+from connrl.experiments.spec import ExperimentSpec, Variant, as_dict, override
 
 
 def parse_assignment(text: str) -> tuple[str, Any]:
@@ -42,11 +42,13 @@ def parse_seeds(text: str) -> tuple[int, int]:
     return first, stop
 
 
-def _typed(default, value):
-    """Keep a float field a float when given a whole number, and a tuple field a tuple."""
-    if isinstance(default, float) and isinstance(value, int) and not isinstance(value, bool):
+def _typed(field_type: str, value):
+    """JSON has no float-valued whole numbers and no tuples: ``1`` for a float field is 1.0, a list for a tuple
+    field a tuple (the annotation decides; anything else is checked by the parameter class)."""
+    kinds = [k.strip() for k in str(field_type).split("|")]
+    if "float" in kinds and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
-    if isinstance(default, tuple) and isinstance(value, list):
+    if "tuple" in kinds and isinstance(value, list):
         return tuple(value)
     return value
 
@@ -62,10 +64,12 @@ def sweep_spec(spec: ExperimentSpec, assignments: list[str], variant: str | None
                              + ", ".join(repr(v.label) for v in spec.variants))
         base = spec.variant_params(base, match[0])
         label = variant
+    types = {f.name: f.type for f in dataclasses.fields(base)}
     changes = dict(parse_assignment(a) for a in assignments)
-    changes = {k: _typed(getattr(base, k, None), v) for k, v in changes.items()}
-    params = override(base, changes, f"connrl sweep {spec.name}")
-    digest = hashlib.sha256(json.dumps([label, changes], sort_keys=True, default=str).encode()).hexdigest()[:8]
+    changes = {k: _typed(types.get(k, ""), v) for k, v in changes.items()}
+    params = override(base, changes, f"sweep of {spec.name}")
+    # named by the resulting parameters: the same setting, however spelt, reuses its runs
+    digest = hashlib.sha256(json.dumps(as_dict(params), sort_keys=True, default=str).encode()).hexdigest()[:8]
     title = label + "".join(f", {k}={v}" for k, v in changes.items())
     return dataclasses.replace(spec, name=f"sweep-{spec.name}-{digest}", title=f"sweep of {spec.name}: {title}",
                                params=params, profiles={p: {"runs": 1} for p in spec.profiles},

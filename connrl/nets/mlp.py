@@ -10,7 +10,7 @@ value_range: 7.4 gives the sigmoid to output units "in the nonlinear case" only,
 
 The thesis trains per sample (one experience at a time), so the work per call is tiny (a 145-30-1 net is
 about 9k multiply-adds) and interpreter/dispatch overhead dominates; the kernels are therefore Numba-compiled
-loops over preallocated arrays (see benchmarks/bench_nets.py and docs/PERFORMANCE.md).
+loops over preallocated arrays (see benchmarks/bench_core.py and docs/PERFORMANCE.md).
 
 Weights of all action nets are stacked: ``w1[a]`` is net a's hidden layer (H, I+1) and ``w2[a]`` its output
 layer (H+1,); the last column/entry is the bias. For a perceptron ``w2[a]`` has shape (I+1,) and ``w1`` is

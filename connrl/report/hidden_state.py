@@ -3,17 +3,13 @@ best-5-of-6 measure (``best_k_mean``) and its spread over every 6-run subset."""
 
 from __future__ import annotations
 
-import json
 from itertools import combinations
 from pathlib import Path
 
 import numpy as np
 
-from connrl.experiments.hidden_state import CUP_FIGURES
-from connrl.experiments.hidden_state import EXPERIMENTS as _SPECS
-from connrl.report.page import note
-
-EXPERIMENTS = "connrl.experiments.hidden_state"
+from connrl.experiments.hidden_state import CUP_FIGURES, EXPERIMENTS
+from connrl.report.page import fixed, load_summary, note
 
 
 def best_k_mean(values, k: int = 5, fail_value: float | None = None) -> tuple[float | None, int]:
@@ -36,18 +32,6 @@ def best5_of_6_distribution(values, fail_value: float) -> tuple[float, float, fl
     return float(means.mean()), float(np.percentile(means, 5)), float(np.percentile(means, 95))
 
 
-
-def _fmt(v, digits=1):
-    if v is None:
-        return "—"
-    return f"{v:.{digits}f}" if isinstance(v, float) and not float(v).is_integer() else f"{v:g}"
-
-
-def _load(out_dir: Path, name: str) -> dict | None:
-    p = Path(out_dir) / name / "summary.json"
-    return json.loads(p.read_text()) if p.exists() else None
-
-
 def _cmd(s: dict) -> str:
     return (f"`connrl run {s['experiment']} --profile {s['profile']} --runs {s['runs_per_variant']} "
             f"--seed {s['base_seed']}`")
@@ -58,15 +42,16 @@ _TASK_NOTES = {1: ["cups-task1"], 3: ["cups-task3"]}  # docs/notes/NAME.md
 
 def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     """Markdown for docs/RESULTS.md: Ch. 7 numbers beside the thesis's, from OUT/NAME/summary.json."""
+    out_dir = Path(out_dir)
     parts = []
     for task, (name, fig, section, title) in CUP_FIGURES.items():
-        s = _load(out_dir, name)
+        s = load_summary(out_dir, name)
         if s is not None:
             parts += _cup_table(s, task, fig, section, title)
-    s = _load(out_dir, "cup-robustness") or _load(out_dir, "cup-task1")  # Task 1 runs probe too (lambda=0.8)
+    s = load_summary(out_dir, "cup-robustness") or load_summary(out_dir, "cup-task1")  # Task 1 probes too (lambda=0.8)
     if s is not None:
         parts += _robustness_table(s)
-    s = _load(out_dir, "pole-hidden")
+    s = load_summary(out_dir, "pole-hidden")
     if s is not None:
         parts += _pole_table(s)
     if not parts:
@@ -90,11 +75,11 @@ def _cup_table(s: dict, task: int, fig: str, section: str, title: str) -> list[s
                   "recurrent-model oscillates"}[task]
         if task == 1 and "lambda=0" in label and "0.8" not in label:
             thesis = "much worse than λ=0.8"
-        finals = ", ".join(_fmt(x) for x in q["final_steps"]["per_run"])
+        finals = ", ".join(fixed(x, 1) for x in q["final_steps"]["per_run"])
         wasted = q.get("wasted_pickups_last100", {}).get("mean")
-        lines.append(f"| {label} | {tto['runs_reaching']}/{len(tto['per_run'])} | {_fmt(tto['mean'])} | "
-                     f"{finals} | {_fmt(q['optimal_last100']['mean'], 2)} | "
-                     f"{_fmt(q['mean_steps_last100']['mean'], 2)} | {_fmt(wasted, 2)} | {thesis} |")
+        lines.append(f"| {label} | {tto['runs_reaching']}/{len(tto['per_run'])} | {fixed(tto['mean'], 1)} | "
+                     f"{finals} | {fixed(q['optimal_last100']['mean'], 2)} | "
+                     f"{fixed(q['mean_steps_last100']['mean'], 2)} | {fixed(wasted, 2)} | {thesis} |")
     lines.append("")
     for name in _TASK_NOTES.get(task, []):
         lines += [note(name), ""]
@@ -111,13 +96,13 @@ def _robustness_table(s: dict) -> list[str]:
         arch = label.split(" ")[0]
         if label not in (arch, f"{arch} lambda=0.8"):
             continue
-        per = ", ".join(_fmt(x, 2) for x in v["quantities"]["robust_fraction"]["per_run"])
+        per = ", ".join(fixed(x, 2) for x in v["quantities"]["robust_fraction"]["per_run"])
         lines.append(f"| {arch} | {per} | {thesis.get(arch, '')} |")
     return lines + [""]
 
 
 def _pole_table(s: dict) -> list[str]:
-    spec = next(e for e in _SPECS if e.name == "pole-hidden")
+    spec = next(e for e in EXPERIMENTS if e.name == "pole-hidden")
     limit = spec.resolve(s["profile"])[0].trials
     n_runs = s["runs_per_variant"]
     lines = ["### Task 4: pole balancing from (x, θ) (Table 7.1)", "", f"Command: {_cmd(s)}.", "",
@@ -132,15 +117,15 @@ def _pole_table(s: dict) -> list[str]:
         q = v["quantities"]["trials_to_satisfactory"]
         runs = q["per_run"]
         mean, n_fail = best_k_mean(runs[:6], 5, fail_value=limit)
-        per = ", ".join(_fmt(x) if x is not None else f">{limit}" for x in runs)
-        shown = ("≥ " if n_fail else "") + _fmt(mean)
+        per = ", ".join(fixed(x, 1) if x is not None else f">{limit}" for x in runs)
+        shown = ("≥ " if n_fail else "") + fixed(mean, 1)
         spread, inside = "—", "—"
         if len(runs) > 6:
             m, lo, hi = best5_of_6_distribution(runs, limit)
-            spread = f"{_fmt(m)} ({_fmt(lo)}-{_fmt(hi)})"
+            spread = f"{fixed(m, 1)} ({fixed(lo, 1)}-{fixed(hi, 1)})"
             if q["thesis"] is not None:
                 inside = "yes" if lo <= q["thesis"] <= hi else "no"
         ok = sum(x is not None for x in runs)
-        lines.append(f"| {label} | {per} | {ok}/{len(runs)} | {shown} | {spread} | {_fmt(q['thesis'])} "
+        lines.append(f"| {label} | {per} | {ok}/{len(runs)} | {shown} | {spread} | {fixed(q['thesis'], 1)} "
                      f"| {inside} |")
     return lines + ["", note("pole-hidden-subsets"), ""]

@@ -2,7 +2,7 @@
 
 Every number on the page comes from a summary written by ``connrl run``; the page says which command,
 profile, runs and seeds produced it. Each chapter's section is a module of ``connrl.report`` (``SECTIONS``)
-with ``EXPERIMENTS`` (the experiment module it reports) and ``results_section(out_dir, doc)``; figures go
+with ``EXPERIMENTS`` (the specs it reports) and ``results_section(out_dir, doc)``; figures go
 in ``doc``'s folder. Hand-written paragraphs live in ``docs/notes/*.md`` and are included with ``note``.
 """
 
@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import math
 import shutil
 import time
 from pathlib import Path
@@ -25,6 +26,13 @@ def fmt(v) -> str:
     if isinstance(v, float):
         return f"{v:.4g}"
     return str(v)
+
+
+def fixed(v, digits: int = 2) -> str:
+    """A number with ``digits`` decimals (whole numbers without), a dash for none or a non-finite value."""
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "—"
+    return f"{v:.{digits}f}" if isinstance(v, float) and not float(v).is_integer() else f"{v:g}"
 
 
 def summary_table(summary: dict) -> str:
@@ -86,7 +94,7 @@ def write_results(out: Path, doc: Path) -> Path:
     covered = set()
     for mod in SECTIONS:
         module = importlib.import_module(mod)
-        names = [s.name for s in importlib.import_module(module.EXPERIMENTS).EXPERIMENTS]
+        names = [s.name for s in module.EXPERIMENTS]
         text = module.results_section(out, doc)
         if text:
             parts += [text, ""]

@@ -4,17 +4,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from connrl.experiments.pole import EXPERIMENTS as _SPECS
+from connrl.experiments.pole import EXPERIMENTS
 from connrl.report.page import figure, load_summary, note, summary_table
-
-EXPERIMENTS = "connrl.experiments.pole"
 
 
 def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
     """The stored summaries of pole-full and pole-full-ahc, with how to read them."""
     out_dir, doc = Path(out_dir), Path(doc)
     parts = ["## Pole balancing, full state (thesis 7.5.4, footnote 4; App. C)", "", note("pole-intro"), ""]
-    for spec in _SPECS:
+    for spec in EXPERIMENTS:
         summary = load_summary(out_dir, spec.name)
         if summary is None:
             continue

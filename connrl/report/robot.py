@@ -3,33 +3,23 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 from connrl.envs.robot import Layout, render_figure_5_3, render_paths
-from connrl.experiments.robot import EXPERIMENTS as _SPECS
-from connrl.experiments.robot import THRESHOLDS, first_reaching, quantity_name
+from connrl.experiments.robot import EXPERIMENTS, THRESHOLDS, first_reaching, quantity_name
 from connrl.experiments.runner import stored_runs
 from connrl.experiments.spec import ExperimentSpec
-from connrl.report.page import figure, note
+from connrl.report.page import figure, fixed, note
 from connrl.report.plots import save_figure
-
-EXPERIMENTS = "connrl.experiments.robot"
 
 
 def mean_curve(records: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     xs = np.asarray(records[0]["curve_x"], dtype=float)
     ys = np.array([r["curve_y"] for r in records if len(r["curve_y"]) == xs.size], dtype=float)
     return xs, ys.mean(axis=0)
-
-
-def _fmt(v, nd=2) -> str:
-    if v is None or (isinstance(v, float) and not math.isfinite(v)):
-        return "—"
-    return f"{v:.{nd}f}" if isinstance(v, float) and not float(v).is_integer() else f"{v:g}"
 
 
 def draw_solution_paths(records: list[dict], file: Path, task: str, k: int) -> Path | None:
@@ -62,12 +52,12 @@ def _variant_table(spec: ExperimentSpec, summary: dict, recs: list[dict], curves
         xs, ys = mean_curve(vr)
         curves[(spec.name, v.label)] = (xs, ys, len(vr))
         qs = summary["variants"][v.label]["quantities"]
-        row = f"| {v.label} | {_fmt(qs['final_performance']['mean'])} | {_fmt(qs['mean_performance']['mean'])} |"
+        row = f"| {v.label} | {fixed(qs['final_performance']['mean'])} | {fixed(qs['mean_performance']['mean'])} |"
         if dp:
             for level in THRESHOLDS:
                 q = qs[quantity_name(level)]
-                row += (f" {_fmt(first_reaching(list(xs), list(ys), level))} | {_fmt(q['mean'], 0)} "
-                        f"({q['runs_reaching']}/{len(q['per_run'])}) | {_fmt(q['thesis'])} |")
+                row += (f" {fixed(first_reaching(list(xs), list(ys), level), 2)} | {fixed(q['mean'], 0)} "
+                        f"({q['runs_reaching']}/{len(q['per_run'])}) | {fixed(q['thesis'], 2)} |")
         lines.append(row)
     lines.append("")
     return lines
@@ -81,7 +71,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     curves: dict[tuple[str, str], tuple[np.ndarray, np.ndarray, int]] = {}
     any_found = False
     walls, run_walls, cpus, seeds = [], [], set(), {}
-    for spec in _SPECS:
+    for spec in EXPERIMENTS:
         summary, recs = stored_runs(spec, out_dir)
         if summary is None or not recs:
             continue
@@ -261,7 +251,7 @@ def _speedup_tables(curves) -> list[str]:
                 sp = None
             else:
                 sp = (base / n) if (base and n) else None
-            out.append(f"| {label} | {_fmt(n) if n is not None else 'not reached'} | {_fmt(sp, 1)} | "
-                       f"{t_trials} | {_fmt(t_speed, 1)} |")
+            out.append(f"| {label} | {fixed(n, 2) if n is not None else 'not reached'} | {fixed(sp, 1)} | "
+                       f"{t_trials} | {fixed(t_speed, 1)} |")
         out.append("")
     return out

@@ -13,12 +13,11 @@ import numpy as np
 
 from connrl.envs.survival import GRID_SIZE, render_rgb
 from connrl.experiments.runner import stored_runs
-from connrl.experiments.survival import EXPERIMENTS as _EXPERIMENTS
+from connrl.experiments.survival import EXPERIMENTS
 from connrl.report.page import figure, note
 from connrl.report.plots import save_figure
 
-EXPERIMENTS = "connrl.experiments.survival"
-_SPECS = {s.name: s for s in _EXPERIMENTS}
+_SPECS = {s.name: s for s in EXPERIMENTS}
 
 # 4.3.4 histogram: % of plays with 0..15 pieces of food
 THESIS_HISTOGRAM = [0.1, 0.3, 0.8, 1.8, 2.2, 2.9, 4.0, 4.1, 3.8, 3.7, 3.4, 4.1, 5.4, 8.2, 15.2, 39.9]

@@ -4,6 +4,8 @@ robustness probe of 7.5.1.
 
 Builders take the experiment's parameters (``connrl.experiments.hidden_state.CupParams`` /
 ``PoleHiddenParams``) by attribute.
+
+Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Cup collection", gives each with its reason.
 """
 
 from __future__ import annotations
@@ -55,7 +57,6 @@ CUP_TASKS = {1: {"random_bits": 0, "control_error": 0.0},  # 7.5.1
              3: {"random_bits": 0, "control_error": 0.15}}  # 7.5.3: 15% control errors, off in tests
 
 
-
 def table_entry(p) -> dict:
     task, arch = p.task, p.arch
     if task not in TABLE_B1:
@@ -102,7 +103,6 @@ def make_agent(p, n_sensation: int, n_actions: int, rng: np.random.Generator):
                                online=p.online, replay=replay,
                                model_lessons_per_trial=p.model_lessons_per_trial)
     return RecurrentModelQ(cfg, n_actions, rng)
-
 
 
 # ------------------------------------------------------------------------------------------ cup tasks

@@ -2,6 +2,8 @@
 QCON-T (5.3) with its taught lessons; ``evaluate`` is the greedy test of 5.4.
 
 Builders take the experiment's parameters (``connrl.experiments.robot.RobotParams``) by attribute.
+
+Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "HEROINE robot world", gives each with its reason.
 """
 
 from __future__ import annotations
@@ -127,7 +129,6 @@ def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: floa
     return out
 
 
-
 def make_agent(p, rng: np.random.Generator) -> TeachingQCON:
     """QCON-T of 5.3 from the run's parameters (``connrl.experiments.robot.RobotParams``); ``linear_output``:
     single-layer nets with a linear output unit."""
@@ -145,7 +146,6 @@ def make_agent(p, rng: np.random.Generator) -> TeachingQCON:
     agent.add_taught_lessons(taught_lessons(p.task, p.lessons, p.binary_low, p.door_width,
                                             p.dock_tolerance))
     return agent
-
 
 
 def evaluate(env: RobotTaskEnv, agent, tasks, seeds, max_steps: int, paths: list | None = None) -> float:

@@ -16,6 +16,8 @@ V-nets always have one output. Every net: 145-30-1, momentum 0.9, initial weight
 V and Q targets above 1 are truncated to 1 (4.2.4). Learning rates and temperatures: Table 4.1 (Study 2
 doubles the learning rates). Stuck detection raises T while the agent stays in a small area without eating
 (4.2.6; thresholds are ours, :class:`SurvivalExploration`).
+
+Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Learners and protocols", gives each with its reason.
 """
 
 from __future__ import annotations

@@ -6,6 +6,8 @@
   inputs and *enemy nets* on the enemy and obstacle maps that predict each enemy sensor after the move,
   trained on-line from a bounded queue of experiences. As in the thesis, food, obstacle, energy and history
   units are not learned ("quite easy to predict"): they come from the simulator.
+
+Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Learners and protocols", gives each with its reason.
 """
 
 from __future__ import annotations

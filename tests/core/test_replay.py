@@ -315,15 +315,6 @@ def test_replay_q_falls_back_to_the_reference_loop(monkeypatch, how):
     assert calls == [(q, lesson, params, "none")]
 
 
-def test_replay_q_without_fast_path_equals_the_reference_loop():
-    lesson = _lesson(np.random.default_rng(2), terminated=False)
-    params = ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=0.2)
-    slow, ref = _pair(5)
-    assert replay_q(slow, lesson, params, "lower", fast=False) == replay_q_reference(ref, lesson, params, "lower")
-    np.testing.assert_array_equal(slow.w1, ref.w1)
-    np.testing.assert_array_equal(slow.w2, ref.w2)
-
-
 class PlainQ:
     """Hides the OAON type so replay_q has no fast path for it and runs the reference loop."""
 
