@@ -1,10 +1,13 @@
 """Pole balancing wiring (App. C, 7.5.4): the worlds of a parameter set and Table B.1's memoryless agents."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from connrl.agents import AHCON, QCON
 from connrl.experiments.pole import PoleParams
+from connrl.experiments.spec import as_dict
 from connrl.tasks.pole import make_agent, make_envs
 
 
@@ -26,5 +29,8 @@ def test_agents_have_table_b1_task_4_parameters():
     assert c.replay.threshold_for_age(69) == pytest.approx(1e-7)
     a = make_agent(PoleParams(agent="ahcon", hidden=0), 4, np.random.default_rng(0))
     assert isinstance(a, AHCON) and a.config.v_net.momentum == 0.0  # perceptrons: no momentum
+    with pytest.raises(ValueError, match="parameter agent must be one of 'qcon', 'ahcon', got 'sarsa'"):
+        PoleParams(agent="sarsa")  # refused when the parameters are built, before any run
+    loose = SimpleNamespace(**{**as_dict(PoleParams()), "agent": "sarsa"})  # builders take any attribute object
     with pytest.raises(ValueError, match="agent must be 'qcon' or 'ahcon'"):
-        make_agent(PoleParams(agent="sarsa"), 4, np.random.default_rng(0))
+        make_agent(loose, 4, np.random.default_rng(0))
