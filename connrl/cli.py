@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import json
+import os
 import sys
 from pathlib import Path
 
@@ -52,12 +52,27 @@ def _int_at_least(low: int):
 _positive_int, _seed = _int_at_least(1), _int_at_least(0)
 
 
+def _writable(folder) -> None:
+    """Refuse an output folder we cannot write in before any run starts (one line)."""
+    from connrl.storage import check_writable_dir
+
+    try:
+        check_writable_dir(folder)
+    except OSError as exc:
+        raise SystemExit(f"connrl: cannot write to {folder}: {exc.strerror or exc}") from None
+
+
+def _damaged(path, reason: str) -> None:
+    print(f"connrl: {path} is damaged ({reason}); redoing that run", file=sys.stderr)
+
+
 def cmd_run(args) -> int:
     spec = _get(args.name)
     try:
         spec.resolve(args.profile, args.runs)
     except ValueError as exc:
         raise SystemExit(f"connrl: {exc}") from None
+    _writable(args.out)
     return _run_and_report(spec, args, profile=args.profile, runs=args.runs, seed=args.seed)
 
 
@@ -70,7 +85,7 @@ def _run_and_report(spec, args, *, profile: str, runs: int | None, seed: int, me
 
     try:
         outcome = run_experiment(spec, profile=profile, runs=runs, seed=seed, out=Path(args.out),
-                                 workers=args.workers, show_progress=not args.quiet)
+                                 workers=args.workers, show_progress=not args.quiet, on_damaged=_damaged)
     except KeyboardInterrupt:
         print("\ninterrupted: finished runs are saved; run the same command again to resume.", file=sys.stderr)
         return 130
@@ -90,30 +105,30 @@ def _run_and_report(spec, args, *, profile: str, runs: int | None, seed: int, me
 
 
 def _print_summary(summary: dict) -> None:
-    from rich.console import Console
-    from rich.table import Table
+    """Our numbers beside the thesis's, one line per quantity: nothing is cut at any terminal width."""
+    from connrl.report.page import fmt, meets, per_run
 
-    from connrl.report.page import fmt as _fmt
-
-    table = Table(title=f"{summary['experiment']} ({summary['profile']} profile, {summary['runs_per_variant']} "
-                  f"run(s) per variant, seeds from {summary['base_seed']})")
-    for col in ("variant", "quantity", "ours: mean", "per run", "thesis", "meets thesis"):
-        table.add_column(col)
+    caveat = summary["profile"] != "full"
+    print(f"{summary['experiment']}: {summary['profile']} profile"
+          + (" (not the thesis's protocol: that is --profile full)" if caveat else " (the thesis's protocol)")
+          + f", {summary['runs_per_variant']} run(s) per variant, seeds from {summary['base_seed']}")
     for label, v in summary["variants"].items():
+        print(f"  {label}")
         for name, q in v["quantities"].items():
-            per_run = ", ".join(_fmt(x) for x in q["per_run"])
-            meets = {True: "yes", False: "no", None: "-"}[q.get("meets_thesis")]
-            table.add_row(label, name, _fmt(q["mean"]), per_run, _fmt(q["thesis"]), meets)
-    Console().print(table)
+            better = {"lower": "lower is better", "higher": "higher is better"}.get(q.get("better"), "")
+            print(f"    {name} ({better}): ours {fmt(q['mean'])} (per run: {per_run(q, v.get('diverged'))}); "
+                  f"thesis {fmt(q['thesis'])}; meets thesis: {meets(q, summary['profile'], markdown=False)}")
 
 
 def cmd_plot(args) -> int:
     from connrl.report.plots import plot_from_disk
 
     spec = _get(args.name)
+    from connrl.experiments.store import DamagedFile
+
     try:
         paths = plot_from_disk(spec, Path(args.out))
-    except FileNotFoundError as exc:
+    except (FileNotFoundError, DamagedFile) as exc:
         raise SystemExit(f"connrl: {exc}") from None
     for p in paths:
         print(p)
@@ -122,10 +137,15 @@ def cmd_plot(args) -> int:
 
 def cmd_show(args) -> int:
     spec = _get(args.name)
+    from connrl.experiments.store import DamagedFile, load_summary
+
     p = Path(args.out) / spec.name / "summary.json"
     if not p.exists():
         raise SystemExit(f"connrl: {p} not found: run `connrl run {spec.name}` first")
-    _print_summary(json.loads(p.read_text()))
+    try:
+        _print_summary(load_summary(p, spec.name))
+    except DamagedFile as exc:
+        raise SystemExit(f"connrl: {exc}") from None
     return 0
 
 
@@ -146,6 +166,7 @@ def cmd_sweep(args) -> int:
         sweep = sweep_spec(spec, args.set or [], args.variant)
     except ValueError as exc:
         raise SystemExit(f"connrl: {exc}") from None
+    _writable(args.out)
     print(sweep.title)
     return _run_and_report(sweep, args, profile="full", runs=stop - first, seed=first, mean_curve=True)
 
@@ -163,7 +184,9 @@ def cmd_make_lessons(args) -> int:
 def cmd_results(args) -> int:
     from connrl.report.page import write_results
 
-    path = write_results(Path(args.out), Path(args.doc))
+    doc = Path(args.doc) if args.doc else Path(args.out) / "RESULTS.md"
+    _writable(doc.parent)
+    path = write_results(Path(args.out), doc)
     print(path)
     return 0
 
@@ -243,16 +266,27 @@ def _add_tool_commands(sub) -> None:
     s.add_argument("--seed", type=_seed, default=0, help="teacher seed (default 0, the shipped files)")
     s.set_defaults(func=cmd_make_lessons)
 
-    s = sub.add_parser("results", help="write docs/RESULTS.md from stored summaries",
-                       description="Collect every OUT/*/summary.json into a Markdown results page.")
+    s = sub.add_parser("results", help="write a results page (OUT/RESULTS.md) from stored summaries",
+                       description="Collect every OUT/*/summary.json into a Markdown results page, by default "
+                       "OUT/RESULTS.md beside the runs (figures in OUT/figures/). The shipped page is rewritten "
+                       "only when asked: --doc docs/RESULTS.md.")
     s.add_argument("--out", default="runs", help="directory holding the experiments' outputs (default ./runs)")
-    s.add_argument("--doc", default="docs/RESULTS.md", help="Markdown file to write (default docs/RESULTS.md)")
+    s.add_argument("--doc", default=None, help="Markdown file to write (default OUT/RESULTS.md; the shipped page "
+                   "is docs/RESULTS.md)")
     s.set_defaults(func=cmd_results)
 
 
 def main(argv: list[str] | None = None) -> int:
+    from connrl.core.lesson_files import LessonFileError
+
     args = build_parser().parse_args(argv)
-    return args.func(args)
+    try:
+        return args.func(args)
+    except LessonFileError as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+    except BrokenPipeError:  # e.g. `connrl show NAME | head`: the reader left, nothing is wrong
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 if __name__ == "__main__":

@@ -33,3 +33,17 @@ def atomic_save_npz(path, **arrays: np.ndarray) -> None:
     buf = io.BytesIO()
     np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
     atomic_write_bytes(path, buf.getvalue())
+
+
+def check_writable_dir(path) -> None:
+    """Make sure ``path`` is (or can become) a folder we can write in, before any work is done; ``OSError``
+    with a plain reason otherwise."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise NotADirectoryError(f"{path} is a file, not a folder")
+    path.mkdir(parents=True, exist_ok=True)
+    probe = path / f".connrl-write-test-{os.getpid()}"
+    try:
+        probe.write_bytes(b"")
+    finally:
+        probe.unlink(missing_ok=True)

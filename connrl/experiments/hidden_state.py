@@ -145,7 +145,7 @@ def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total:
         wasted.append(test_env.wasted)
         rows.append({"trial": n, **last, "test_steps": score, "test_wasted_pickups": test_env.wasted})
 
-    train_and_test(p.trials, train, test, progress=progress)
+    train_and_test(p.trials, train, test, progress=progress, agent=agent)
     metrics = _cup_metrics(np.array(scores), wasted)
     extra = {}
     if p.probe and scores[-1] == OPTIMAL_SCORE:

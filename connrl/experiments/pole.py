@@ -67,7 +67,7 @@ def train_until_satisfactory(train_env, test_env, agent, max_trials: int, test_s
         rows.append({"trial": n, **last, "satisfactory": ok})
         return ok
 
-    trained = train_and_test(max_trials, train, test, stop=bool, progress=progress)
+    trained = train_and_test(max_trials, train, test, stop=bool, progress=progress, agent=agent)
     solved_at = trained if rows and rows[-1]["satisfactory"] else None
     progress(max_trials, max_trials)
     xs = list(range(1, max_trials + 1))

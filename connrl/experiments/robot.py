@@ -129,7 +129,8 @@ def run_robot(p: RobotParams, rng: np.random.Generator, progress=lambda done, to
         ys.append(perf)
         rows.append({"trials": n, "performance": perf} | ({"train_successes": successes} if n else {}))
 
-    train_and_test(p.trials, train, test, test_every=p.test_every, test_first=True, progress=progress)
+    train_and_test(p.trials, train, test, test_every=p.test_every, test_first=True, progress=progress,
+                   agent=run.agent)
     extra = {}
     if p.paths:
         recorded: list = [None] * min(p.paths, len(run.tests))

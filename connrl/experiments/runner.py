@@ -14,16 +14,13 @@ same jobs elsewhere.
 
 from __future__ import annotations
 
-import csv
 import hashlib
-import io
 import json
 import multiprocessing as mp
 import os
-import platform
 import queue
 import re
-import subprocess
+import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -32,8 +29,18 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
+from numba.core import event as numba_event
 
+from connrl.core.divergence import Diverged
 from connrl.experiments.spec import ExperimentSpec, RunResult, as_dict, load_callable, qualified_name
+from connrl.experiments.store import (
+    DamagedFile,
+    environment_info,
+    json_default,
+    load_record,
+    load_summary,
+    write_run_records,
+)
 from connrl.storage import atomic_write_text
 
 
@@ -85,9 +92,20 @@ _progress_queue = None
 _progress_tick: Callable[[], None] | None = None
 
 
-def _init_worker(q, tick=None):
+def _init_worker(q, tick=None, parent: int | None = None):
     global _progress_queue, _progress_tick
     _progress_queue, _progress_tick = q, tick
+    if parent is not None:
+        threading.Thread(target=_exit_with_parent, args=(parent,), daemon=True).start()
+
+
+def _exit_with_parent(parent: int) -> None:
+    """A worker whose parent died (e.g. SIGKILL, which runs no cleanup) exits instead of running on: the
+    parent is gone when this process has been handed to another (init or a subreaper)."""
+    while True:
+        time.sleep(0.5)
+        if os.getppid() != parent:
+            os._exit(1)
 
 
 def execute_job(job: Job) -> dict:
@@ -106,8 +124,14 @@ def execute_job(job: Job) -> dict:
                 _progress_tick()
 
     t0 = time.perf_counter()
-    result: RunResult = fn(params, rng, progress)
-    wall = time.perf_counter() - t0
+    diverged = None
+    with numba_event.install_recorder("numba:compile") as compiles:
+        try:
+            result: RunResult = fn(params, rng, progress)
+        except Diverged as exc:  # a failed run, recorded as such: its quantities are None, not "not reached"
+            result, diverged = RunResult([], [], {}), {"trial": exc.trial, "reason": exc.reason}
+    compile_s = compile_seconds(compiles.buffer)
+    wall = time.perf_counter() - t0 - compile_s
     record = {
         "experiment": job.experiment,
         "variant": job.variant,
@@ -118,10 +142,27 @@ def execute_job(job: Job) -> dict:
         "curve_y": [float(v) for v in result.curve_y],
         "extra": result.extra,
         "environment": environment_info(),
-        "wall_time_s": wall,
+        "wall_time_s": wall,  # without the Numba compiling the run triggered (the first run of a process pays it)
+        "compile_time_s": compile_s,
+        "diverged": diverged,
     }
     write_run_records(Path(job.path), record, result.rows)
     return record
+
+
+def compile_seconds(events) -> float:
+    """Seconds spent compiling, from a ``numba:compile`` event recording (nested compiles counted once)."""
+    total, depth, start = 0.0, 0, 0.0
+    for t, ev in events:
+        if ev.is_start:
+            if depth == 0:
+                start = t
+            depth += 1
+        elif depth:
+            depth -= 1
+            if depth == 0:
+                total += t - start
+    return total
 
 
 class SerialExecutor:
@@ -148,7 +189,8 @@ class ProcessExecutor:
 
     def map_unordered(self, fn, jobs, tick):
         ctx = mp.get_context("spawn")  # fresh interpreters: no inherited state, same on every OS
-        pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_init_worker, initargs=(self.q,))
+        pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_init_worker,
+                                   initargs=(self.q, None, os.getpid()))
         pending: dict[Future, Job] = {}
         it = iter(jobs)
         try:
@@ -169,66 +211,6 @@ class ProcessExecutor:
             for fut in pending:
                 fut.cancel()
             pool.shutdown(wait=True, cancel_futures=True)
-
-
-# ------------------------------------------------------------------------------------------------ store
-
-def write_run_records(path: Path, record: dict, rows: list[dict]) -> None:
-    buf = io.StringIO()
-    if rows:
-        keys = list(dict.fromkeys(k for r in rows for k in r))
-        w = csv.DictWriter(buf, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
-    else:
-        w = csv.writer(buf)
-        w.writerow(["x", "y"])
-        w.writerows(zip(record["curve_x"], record["curve_y"], strict=True))
-    atomic_write_text(path.with_suffix(".csv"), buf.getvalue())
-    # the .json is written last: its presence marks the run as finished
-    atomic_write_text(path.with_suffix(".json"), json.dumps(record, indent=1, default=_json_default))
-
-
-def _json_default(o):
-    if isinstance(o, np.integer):
-        return int(o)
-    if isinstance(o, np.floating):
-        return float(o)
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(f"cannot store {type(o).__name__} in JSON")
-
-
-def load_record(job: Job) -> dict | None:
-    p = Path(job.path).with_suffix(".json")
-    if not p.exists():
-        return None
-    try:
-        return json.loads(p.read_text())
-    except json.JSONDecodeError:
-        return None  # a damaged record is redone
-
-
-_ENV_INFO: dict | None = None
-
-
-def environment_info() -> dict:
-    global _ENV_INFO
-    if _ENV_INFO is None:
-        import gymnasium
-        import numba
-
-        import connrl
-
-        try:
-            commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5,
-                                    cwd=Path(__file__).parent).stdout.strip() or None
-        except (OSError, subprocess.SubprocessError):
-            commit = None
-        _ENV_INFO = {"python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
-                     "gymnasium": gymnasium.__version__, "connrl": connrl.__version__, "git_commit": commit,
-                     "machine": platform.machine(), "cpus": os.cpu_count()}
-    return _ENV_INFO
 
 
 # ---------------------------------------------------------------------------------------------- summary
@@ -262,7 +244,9 @@ def summarize(spec: ExperimentSpec, profile: str, seed: int, records: list[dict]
             elif t is not None:
                 qs[q.name]["meets_thesis"] = False if len(finite) < len(vals) else None
         variants[v.label] = {"seeds": [r["seed"] for r in recs], "params": v.params and dict(v.params),
-                             "quantities": qs}
+                             "quantities": qs,
+                             # per run: the training trial after which its networks diverged, or None
+                             "diverged": [(r.get("diverged") or {}).get("trial") for r in recs]}
     return {
         "experiment": spec.name,
         "title": spec.title,
@@ -273,6 +257,8 @@ def summarize(spec: ExperimentSpec, profile: str, seed: int, records: list[dict]
         "variants": variants,
         "environment": dict(environment_info()),
         "timing": {"wall_time_s": wall,
+                   "run_compile_time_s": [r.get("compile_time_s", 0.0) for r in sorted(records, key=lambda r: (
+                       r["variant"], r["seed"]))],
                    "run_wall_time_s": [r["wall_time_s"] for r in sorted(records, key=lambda r: (r["variant"],
                                                                                                 r["seed"]))]},
     }
@@ -290,13 +276,17 @@ class RunOutcome:
 
 
 def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | None = None, seed: int = 0,
-                   out: Path | str = "runs", workers: int | None = None,
-                   show_progress: bool = True) -> RunOutcome:
+                   out: Path | str = "runs", workers: int | None = None, show_progress: bool = True,
+                   on_damaged: Callable[[Path, str], None] = lambda path, reason: None) -> RunOutcome:
+    """Run what is not stored yet and write summary.json; ``on_damaged(path, reason)`` hears of each damaged
+    run record, which is redone."""
     out = Path(out)
     jobs = make_jobs(spec, profile, runs, seed, out)
     records, todo = [], []
     for job in jobs:
-        rec = load_record(job)
+        rec, damage = load_record(job.path)
+        if damage:
+            on_damaged(Path(job.path).with_suffix(".json"), damage)
         (records.append(rec) if rec is not None else todo.append(job))
     reused = len(records)
     workers = workers or os.cpu_count() or 1
@@ -306,13 +296,13 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     wall = time.perf_counter() - t0
     summary = summarize(spec, profile, seed, records, wall)
     summary_path = out / spec.name / "summary.json"
-    atomic_write_text(summary_path, json.dumps(summary, indent=1, default=_json_default))
+    atomic_write_text(summary_path, json.dumps(summary, indent=1, default=json_default))
     return RunOutcome(summary, summary_path, records, len(todo), reused)
 
 
 def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str) -> list[dict]:
-    manager = mp.get_context("spawn").Manager() if (show_progress and workers > 1) else None
-    q = manager.Queue() if manager is not None else (queue.SimpleQueue() if show_progress else None)
+    # a plain queue handed to the workers when they start (no manager process that could outlive us)
+    q = (mp.get_context("spawn").Queue() if workers > 1 else queue.SimpleQueue()) if show_progress else None
     executor: Executor = ProcessExecutor(workers, q) if workers > 1 else SerialExecutor(q)
     results = []
     display = _Progress(jobs, title) if show_progress else None
@@ -332,8 +322,6 @@ def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str) -> 
     finally:
         if display:
             display.stop()
-        if manager is not None:
-            manager.shutdown()
     return results
 
 
@@ -377,10 +365,20 @@ class _Progress:
 
 
 def stored_runs(spec: ExperimentSpec, out: Path) -> tuple[dict | None, list[dict]]:
-    """The summary of the latest ``connrl run`` of ``spec`` under ``out`` and the run records it names."""
+    """The summary of the latest ``connrl run`` of ``spec`` under ``out`` and the readable run records it
+    names (damaged or missing ones are left out: compare with ``expected_runs``). A damaged summary raises
+    ``DamagedFile``."""
     p = Path(out) / spec.name / "summary.json"
     if not p.exists():
         return None, []
-    summary = json.loads(p.read_text())
-    jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], Path(out))
-    return summary, [r for r in (load_record(j) for j in jobs) if r is not None]
+    summary = load_summary(p, spec.name)
+    try:
+        jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], Path(out))
+    except ValueError as exc:
+        raise DamagedFile(p, f"it does not fit experiment {spec.name}: {exc}") from None
+    return summary, [r for r in (load_record(j.path)[0] for j in jobs) if r is not None]
+
+
+def expected_runs(summary: dict) -> int:
+    return sum(len(v.get("per_run", [])) for v in
+               (next(iter(var["quantities"].values()), {}) for var in summary["variants"].values()))

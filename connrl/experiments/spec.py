@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -82,6 +83,8 @@ def check_types(params, **choices: tuple) -> None:
             for k in kinds if k != "None")
         if not ok:
             raise ValueError(f"parameter {f.name} must be {f.type}, got {v!r}")
+        if isinstance(v, float) and not math.isfinite(v):
+            raise ValueError(f"parameter {f.name} must be a finite number, got {v!r}")
         if f.name in choices and v not in choices[f.name]:
             raise ValueError(f"parameter {f.name} must be one of {', '.join(map(repr, choices[f.name]))}, got {v!r}")
 

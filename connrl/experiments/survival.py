@@ -106,7 +106,7 @@ def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda do
         progress(done, total)
 
     train_and_test(len(train), do_train, do_test, test_every=p.test_every, test_first=bool(n_tests),
-                   test_last=False)
+                   test_last=False, agent=agent)
     metrics, extra = _metrics(xs, ys, hyp)
     if p.eval_envs:
         ev = evaluate(agent, p.representation, int(rng.integers(2**31 - 1)), p.eval_envs,

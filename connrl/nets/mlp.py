@@ -49,10 +49,10 @@ class NetConfig:
         if self.n_hidden < 0:
             raise ValueError(f"n_hidden must be >= 0 (0 = perceptron), got {self.n_hidden}")
         for name in ("value_range", "init_range"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
-        if not self.lr > 0:
-            raise ValueError(f"learning rate lr must be > 0, got {self.lr}")
+            if not 0 < getattr(self, name) < math.inf:
+                raise ValueError(f"{name} must be a finite number > 0, got {getattr(self, name)}")
+        if not 0 < self.lr < math.inf:
+            raise ValueError(f"learning rate lr must be a finite number > 0, got {self.lr}")
         if not 0 <= self.momentum < 1:
             raise ValueError(f"momentum must be in [0, 1), got {self.momentum}")
         if self.linear_output and self.n_hidden > 0:

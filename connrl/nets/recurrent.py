@@ -74,10 +74,10 @@ class RecurrentNetConfig:
         if self.n_outputs < 1:
             raise ValueError(f"n_outputs must be >= 1, got {self.n_outputs}")
         for name in ("value_range", "init_range"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
-        if not self.lr > 0:
-            raise ValueError(f"learning rate lr must be > 0, got {self.lr}")
+            if not 0 < getattr(self, name) < math.inf:
+                raise ValueError(f"{name} must be a finite number > 0, got {getattr(self, name)}")
+        if not 0 < self.lr < math.inf:
+            raise ValueError(f"learning rate lr must be a finite number > 0, got {self.lr}")
         if not 0 <= self.momentum < 1:
             raise ValueError(f"momentum must be in [0, 1), got {self.momentum}")
         if not 0 <= self.decay <= 1:

@@ -1,4 +1,5 @@
-"""``connrl results``: docs/RESULTS.md from the stored ``OUT/NAME/summary.json`` files.
+"""``connrl results``: a results page (OUT/RESULTS.md, or docs/RESULTS.md with ``--doc``) from the stored
+``OUT/NAME/summary.json`` files.
 
 Every number on the page comes from a summary written by ``connrl run``; the page says which command,
 profile, runs and seeds produced it. Each chapter's section is a module of ``connrl.report`` (``SECTIONS``)
@@ -9,13 +10,16 @@ in ``doc``'s folder. Hand-written paragraphs live in ``docs/notes/*.md`` and are
 from __future__ import annotations
 
 import importlib
-import json
 import math
 import shutil
+import sys
 import time
 from pathlib import Path
 
+from connrl.experiments import store
 from connrl.experiments.registry import all_experiments
+from connrl.experiments.runner import expected_runs, stored_runs
+from connrl.experiments.store import DamagedFile
 from connrl.storage import atomic_write_text
 
 
@@ -35,6 +39,21 @@ def fixed(v, digits: int = 2) -> str:
     return f"{v:.{digits}f}" if isinstance(v, float) and not float(v).is_integer() else f"{v:g}"
 
 
+def per_run(q: dict, diverged: list | None) -> str:
+    """A quantity's per-run values; a run whose networks diverged shows as such, not as "not reached"."""
+    div = diverged or [None] * len(q["per_run"])
+    return ", ".join(f"diverged (trial {d})" if d is not None else fmt(x) for x, d in zip(q["per_run"], div,
+                                                                                          strict=False))
+
+
+def meets(q: dict, profile: str, markdown: bool = True) -> str:
+    """Whether the mean beats the thesis; on a profile other than ``full`` it says the protocol differs."""
+    word = {True: "yes", False: "**no**" if markdown else "no", None: "—"}[q.get("meets_thesis")]
+    if profile != "full" and q.get("meets_thesis") is not None:
+        word += f" ({profile} profile: not the thesis's protocol)"
+    return word
+
+
 def summary_table(summary: dict) -> str:
     """Our numbers beside the thesis's for one experiment's summary."""
     lines = [
@@ -44,14 +63,13 @@ def summary_table(summary: dict) -> str:
         f"wall time {summary['timing']['wall_time_s']:.0f} s, commit "
         f"`{(summary['environment'].get('git_commit') or 'unknown')[:10]}`.",
         "",
-        "| variant | quantity | ours (mean) | per run | thesis | meets thesis |",
-        "|---|---|---|---|---|---|",
+        "| variant | quantity | better | ours (mean) | per run | thesis | meets thesis |",
+        "|---|---|---|---|---|---|---|",
     ]
     for label, v in summary["variants"].items():
         for name, q in v["quantities"].items():
-            meets = {True: "yes", False: "**no**", None: "—"}[q.get("meets_thesis")]
-            per_run = ", ".join(fmt(x) for x in q["per_run"])
-            lines.append(f"| {label} | {name} | {fmt(q['mean'])} | {per_run} | {fmt(q['thesis'])} | {meets} |")
+            lines.append(f"| {label} | {name} | {q.get('better', '')} | {fmt(q['mean'])} | "
+                         f"{per_run(q, v.get('diverged'))} | {fmt(q['thesis'])} | {meets(q, summary['profile'])} |")
     return "\n".join(lines)
 
 
@@ -77,9 +95,51 @@ def note(name: str) -> str:
     return path.read_text().strip()
 
 
+def warn(message: str) -> None:
+    print(f"connrl: warning: {message}", file=sys.stderr)
+
+
 def load_summary(out: Path, name: str) -> dict | None:
-    p = out / name / "summary.json"
-    return json.loads(p.read_text()) if p.exists() else None
+    """OUT/NAME/summary.json, or None when it is absent or damaged (said on stderr: one bad summary leaves out
+    its own section, not the page)."""
+    p = Path(out) / name / "summary.json"
+    if not p.exists():
+        return None
+    try:
+        return store.load_summary(p, name)
+    except DamagedFile as exc:
+        warn(f"{exc}; left out of the page")
+        return None
+
+
+def stored(spec, out: Path) -> tuple[dict | None, list[dict]]:
+    """``connrl.experiments.runner.stored_runs`` for a results section: a damaged summary is left out (and said),
+    and a section drawn from fewer runs than its summary lists says so."""
+    try:
+        summary, records = stored_runs(spec, Path(out))
+    except DamagedFile as exc:
+        warn(f"{exc}; left out of the page")
+        return None, []
+    if summary is not None and len(records) < expected_runs(summary):
+        warn(f"{spec.name}: {expected_runs(summary) - len(records)} of the {expected_runs(summary)} runs in its "
+             "summary are missing or damaged; its curves show the others")
+    return summary, records
+
+
+def diverged_lines(out: Path, names) -> list[str]:
+    """A line per run whose networks diverged (a failed run, not a slow one), for the chapter's section."""
+    lines = []
+    for name in names:
+        try:
+            summary = store.load_summary(Path(out) / name / "summary.json", name)
+        except (OSError, DamagedFile):
+            continue  # absent, or already reported by the section
+        for label, v in summary["variants"].items():
+            for seed, trial in zip(v.get("seeds", []), v.get("diverged") or [], strict=False):
+                if trial is not None:
+                    lines.append(f"- **Diverged:** `{name}`, {label}, seed {seed}: the networks diverged after "
+                                 f"training trial {trial}; the run counts as failed.")
+    return lines + [""] if lines else []
 
 
 def write_results(out: Path, doc: Path) -> Path:
@@ -87,8 +147,8 @@ def write_results(out: Path, doc: Path) -> Path:
     parts = [
         "# Results: connrl beside the thesis",
         "",
-        f"Generated by `connrl results --out {out}` on {time.strftime('%Y-%m-%d')} from the `summary.json` files "
-        "that `connrl run` wrote. Do not edit by hand: re-run the experiments and this command.",
+        f"Generated by `connrl results --out {out} --doc {doc}` on {time.strftime('%Y-%m-%d')} from the "
+        "`summary.json` files that `connrl run` wrote. Do not edit by hand: re-run the experiments and this command.",
         "",
     ]
     covered = set()
@@ -97,7 +157,7 @@ def write_results(out: Path, doc: Path) -> Path:
         names = [s.name for s in module.EXPERIMENTS]
         text = module.results_section(out, doc)
         if text:
-            parts += [text, ""]
+            parts += [text, ""] + diverged_lines(out, names)
             covered.update(names)
             continue
         for name in names:

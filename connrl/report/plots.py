@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import matplotlib
@@ -10,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from connrl.experiments.runner import stored_runs  # noqa: E402
+from connrl.experiments.runner import expected_runs, stored_runs  # noqa: E402
 from connrl.experiments.spec import ExperimentSpec  # noqa: E402
 
 
@@ -75,7 +76,12 @@ def plot_experiment(spec: ExperimentSpec, records: list[dict], out_dir: Path) ->
 
 def plot_from_disk(spec: ExperimentSpec, out: Path) -> list[Path]:
     """Redraw the plot of the latest ``connrl run`` from the run records named in summary.json."""
-    summary, records = stored_runs(spec, out)
+    summary, records = stored_runs(spec, out)  # a damaged summary raises DamagedFile
     if summary is None:
         raise FileNotFoundError(f"{out / spec.name / 'summary.json'} not found: run `connrl run {spec.name}` first")
+    missing = expected_runs(summary) - len(records)
+    if missing > 0:
+        print(f"connrl: warning: {missing} of the {expected_runs(summary)} runs in {spec.name}'s summary are "
+              "missing or damaged; the plot shows the others (`connrl run` with the summary's profile redoes them)",
+              file=sys.stderr)
     return plot_experiment(spec, records, out / spec.name)

@@ -10,9 +10,8 @@ import numpy as np
 
 from connrl.envs.robot import Layout, render_figure_5_3, render_paths
 from connrl.experiments.robot import EXPERIMENTS, THRESHOLDS, first_reaching, quantity_name
-from connrl.experiments.runner import stored_runs
 from connrl.experiments.spec import ExperimentSpec
-from connrl.report.page import figure, fixed, note
+from connrl.report.page import figure, fixed, note, stored
 from connrl.report.plots import save_figure
 
 
@@ -72,7 +71,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     any_found = False
     walls, run_walls, cpus, seeds = [], [], set(), {}
     for spec in EXPERIMENTS:
-        summary, recs = stored_runs(spec, out_dir)
+        summary, recs = stored(spec, out_dir)
         if summary is None or not recs:
             continue
         any_found = True

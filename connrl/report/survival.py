@@ -12,9 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from connrl.envs.survival import GRID_SIZE, render_rgb
-from connrl.experiments.runner import stored_runs
 from connrl.experiments.survival import EXPERIMENTS
-from connrl.report.page import figure, note
+from connrl.report.page import figure, note, stored
 from connrl.report.plots import save_figure
 
 _SPECS = {s.name: s for s in EXPERIMENTS}
@@ -75,7 +74,7 @@ def agreement(ours: str, thesis: str) -> str:
 
 
 def _load_records(out: Path, name: str) -> tuple[dict | None, list[dict]]:
-    return stored_runs(_SPECS[name], out)
+    return stored(_SPECS[name], out)
 
 
 def crossing(xs, ys, level: float) -> float | None:

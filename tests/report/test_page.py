@@ -18,7 +18,8 @@ def test_summary_table_has_one_row_per_variant_and_quantity(tiny_runs):
     assert table.startswith("`connrl run pole-full --profile tiny --runs 1 --seed 0`")
     rows = [line for line in table.splitlines() if line.startswith("| QCON-R |")]
     assert len(rows) == 1 and rows[0].split("|")[2].strip() == "trials_to_satisfactory"
-    assert rows[0].split("|")[5].strip() == "119"  # the thesis's number beside ours
+    assert rows[0].split("|")[3].strip() == "lower"  # which way is better
+    assert rows[0].split("|")[6].strip() == "119"  # the thesis's number beside ours
 
 
 def test_figure_is_copied_next_to_the_page(tiny_runs, tmp_path):
@@ -40,7 +41,8 @@ def test_write_results_has_every_chapter_and_names_its_source(tmp_path):
         run_tiny(name, out)
     doc = write_results(out, tmp_path / "RESULTS.md")
     text = doc.read_text()
-    assert text.startswith("# Results: connrl beside the thesis") and f"`connrl results --out {out}`" in text
+    assert text.startswith("# Results: connrl beside the thesis")
+    assert f"`connrl results --out {out} --doc {tmp_path / 'RESULTS.md'}`" in text
     for heading in ("## Pole balancing, full state", "## Chapter 7: hidden state", "## Chapter 5: robot skills"):
         assert heading in text
     assert "connrl run pole-full --profile tiny" in text and "Command: `connrl run cup-task1" in text

@@ -1,0 +1,149 @@
+"""What ``connrl run`` stores, read back with checks: run records, summaries, and the machine they came from.
+
+Files are plain JSON and CSV written atomically (``connrl.storage``). Reading never trusts them: a record or
+summary that is empty, truncated, binary, of the wrong shape or missing a key is *damaged*. A damaged run
+record (or one whose CSV is gone) counts as not run, so ``connrl run`` redoes it; a damaged summary is
+reported by name with how to rebuild it (``DamagedFile``).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import platform
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+from connrl.storage import atomic_write_text
+
+# run record key -> allowed JSON types
+RECORD_KEYS = {"experiment": (str,), "variant": (str,), "seed": (int,), "params": (dict,), "metrics": (dict,),
+               "curve_x": (list,), "curve_y": (list,), "wall_time_s": (int, float)}
+SUMMARY_KEYS = {"experiment": (str,), "profile": (str,), "base_seed": (int,), "runs_per_variant": (int,),
+                "variants": (dict,), "timing": (dict,), "environment": (dict,)}
+
+
+class DamagedFile(ValueError):
+    """A stored file that cannot be used; the message names it and says what is wrong."""
+
+    def __init__(self, path, reason: str, fix: str = ""):
+        self.path, self.reason = Path(path), reason
+        super().__init__(f"{path} is damaged ({reason})" + (f"; {fix}" if fix else ""))
+
+
+def read_json(path) -> object:
+    """The JSON in ``path``; ``DamagedFile`` when it is empty, binary or not JSON."""
+    raw = Path(path).read_bytes()
+    if not raw.strip():
+        raise DamagedFile(path, "empty")
+    try:
+        return json.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise DamagedFile(path, "not text") from None
+    except json.JSONDecodeError as exc:
+        raise DamagedFile(path, f"not JSON: {exc.msg} at line {exc.lineno}") from None
+
+
+def _shape_problem(doc: object, keys: dict[str, tuple]) -> str | None:
+    if not isinstance(doc, dict):
+        return f"expected a JSON object, found {type(doc).__name__}"
+    for key, types in keys.items():
+        if key not in doc:
+            return f"missing key {key!r}"
+        v = doc[key]
+        if not isinstance(v, types) or (isinstance(v, bool) and bool not in types):
+            return f"{key!r} has the wrong type ({type(v).__name__})"
+    return None
+
+
+def check_record(rec: object) -> str | None:
+    """What is wrong with a run record, or None."""
+    problem = _shape_problem(rec, RECORD_KEYS)
+    if problem is None and len(rec["curve_x"]) != len(rec["curve_y"]):
+        problem = "curve_x and curve_y differ in length"
+    return problem
+
+
+def load_record(path) -> tuple[dict | None, str | None]:
+    """A finished run's record: ``(record, None)``; ``(None, None)`` if not run; ``(None, reason)`` if damaged
+    (including a record whose CSV is gone), which the runner redoes."""
+    p = Path(path).with_suffix(".json")
+    if not p.exists():
+        return None, None
+    try:
+        rec = read_json(p)
+    except DamagedFile as exc:
+        return None, exc.reason
+    problem = check_record(rec)
+    if problem is None and not p.with_suffix(".csv").exists():
+        problem = f"its CSV {p.with_suffix('.csv').name} is gone"
+    return (None, problem) if problem else (rec, None)
+
+
+def load_summary(path, name: str = "") -> dict:
+    """A summary.json, checked; ``FileNotFoundError`` if absent, ``DamagedFile`` (saying how to rebuild it)."""
+    fix = (f"run the `connrl run {name}` command that made it again: finished runs are reused and the summary "
+           "is rewritten") if name else "run the command that made it again"
+    try:
+        doc = read_json(path)
+    except DamagedFile as exc:
+        raise DamagedFile(path, exc.reason, fix) from None
+    problem = _shape_problem(doc, SUMMARY_KEYS)
+    if problem is None:
+        problem = next((f"variant {k!r} is not an object with quantities" for k, v in doc["variants"].items()
+                        if not isinstance(v, dict) or not isinstance(v.get("quantities"), dict)), None)
+    if problem:
+        raise DamagedFile(path, problem, fix)
+    return doc
+
+
+def write_run_records(path: Path, record: dict, rows: list[dict]) -> None:
+    buf = io.StringIO()
+    if rows:
+        keys = list(dict.fromkeys(k for r in rows for k in r))
+        w = csv.DictWriter(buf, fieldnames=keys)
+        w.writeheader()
+        w.writerows(rows)
+    else:
+        w = csv.writer(buf)
+        w.writerow(["x", "y"])
+        w.writerows(zip(record["curve_x"], record["curve_y"], strict=True))
+    atomic_write_text(path.with_suffix(".csv"), buf.getvalue())
+    # the .json is written last: its presence marks the run as finished
+    atomic_write_text(path.with_suffix(".json"), json.dumps(record, indent=1, default=json_default))
+
+
+def json_default(o):
+    if isinstance(o, np.integer):
+        return int(o)
+    if isinstance(o, np.floating):
+        return float(o)
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"cannot store {type(o).__name__} in JSON")
+
+
+_ENV_INFO: dict | None = None
+
+
+def environment_info() -> dict:
+    global _ENV_INFO
+    if _ENV_INFO is None:
+        import gymnasium
+        import numba
+
+        import connrl
+
+        try:
+            commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5,
+                                    cwd=Path(__file__).parent).stdout.strip() or None
+        except (OSError, subprocess.SubprocessError):
+            commit = None
+        _ENV_INFO = {"python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
+                     "gymnasium": gymnasium.__version__, "connrl": connrl.__version__, "git_commit": commit,
+                     "machine": platform.machine(), "cpus": os.cpu_count()}
+    return _ENV_INFO

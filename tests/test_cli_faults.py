@@ -1,0 +1,271 @@
+"""Bad input and faults through the CLI: one clear line, refused before any compute, nothing lost.
+
+Each test asserts the message and that nothing was written or lost; every one of them fails on e172482.
+"""
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from connrl import cli
+from tests.tiny_runs import run_tiny
+
+
+def _one_line(exc: SystemExit) -> str:
+    text = str(exc.code)
+    assert text.startswith("connrl: ") and "\n" not in text and "Traceback" not in text
+    return text
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+# ------------------------------------------------------------------------------------------- output folder
+
+@pytest.mark.parametrize("command", [["run", "pole-full", "--profile", "tiny"],
+                                     ["sweep", "pole-full", "--set", "max_trials=2", "--seeds", "0:1"]])
+def test_an_output_folder_that_is_a_file_is_refused_before_any_run(command, tmp_path, monkeypatch):
+    import connrl.experiments.runner as runner
+
+    monkeypatch.setattr(runner, "execute_job", lambda job: pytest.fail("a run started"))
+    target = tmp_path / "out.txt"
+    target.write_text("keep me")
+    for out, reason in ((target, "is a file, not a folder"), (target / "sub", "Not a directory")):
+        with pytest.raises(SystemExit) as e:
+            cli.main([*command, "--out", str(out), "--quiet", "--workers", "1"])
+        assert f"cannot write to {out}: " in _one_line(e.value) and reason in str(e.value.code)
+    assert target.read_text() == "keep me" and sorted(p.name for p in tmp_path.iterdir()) == ["out.txt"]
+
+
+def test_results_refuses_a_page_it_cannot_write(tmp_path):
+    (tmp_path / "docs").write_text("a file")
+    with pytest.raises(SystemExit) as e:
+        cli.main(["results", "--out", str(tmp_path / "runs"), "--doc", str(tmp_path / "docs" / "RESULTS.md")])
+    assert f"cannot write to {tmp_path / 'docs'}" in _one_line(e.value)
+    assert (tmp_path / "docs").read_text() == "a file"
+
+
+def test_results_writes_beside_the_runs_unless_asked(tmp_path, capsys):
+    out = tmp_path / "runs"
+    run_tiny("pole-full", out)
+    assert cli.main(["results", "--out", str(out)]) == 0
+    assert (out / "RESULTS.md").exists() and capsys.readouterr().out.strip() == str(out / "RESULTS.md")
+    assert not Path("docs/RESULTS.md").is_relative_to(out)
+    with pytest.raises(SystemExit):
+        cli.main(["results", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert "by default OUT/RESULTS.md beside the runs" in help_text and "--doc docs/RESULTS.md" in help_text
+
+
+# ----------------------------------------------------------------------------------------- damaged results
+
+DAMAGE = {"truncated": lambda b: b[: len(b) // 2], "empty": lambda b: b"", "list": lambda b: b"[]",
+          "object": lambda b: b"{}", "binary": lambda b: bytes(range(256)),
+          "missing key": lambda b: json.dumps({k: v for k, v in json.loads(b).items() if k != "metrics"}).encode()}
+
+
+@pytest.mark.parametrize("kind", sorted(DAMAGE))
+def test_run_redoes_a_damaged_record_and_says_so(kind, tmp_path, capsys):
+    out = tmp_path / "runs"
+    assert cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(out), "--quiet", "--workers", "1"]) == 0
+    record = next(out.rglob("seed-0.json"))
+    good = json.loads(record.read_text())
+    record.write_bytes(DAMAGE[kind](record.read_bytes()))
+    capsys.readouterr()
+    assert cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(out), "--quiet", "--workers", "1"]) == 0
+    err = capsys.readouterr().err
+    assert f"connrl: {record} is damaged (" in err and "redoing that run" in err
+    redone = json.loads(record.read_text())
+    assert redone["curve_y"] == good["curve_y"] and redone["metrics"] == good["metrics"]
+
+
+def test_run_redoes_a_record_whose_csv_is_gone(tmp_path, capsys):
+    out = tmp_path / "runs"
+    cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(out), "--quiet", "--workers", "1"])
+    next(out.rglob("seed-0.csv")).unlink()
+    capsys.readouterr()
+    cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(out), "--quiet", "--workers", "1"])
+    assert "its CSV seed-0.csv is gone); redoing that run" in capsys.readouterr().err
+    assert next(out.rglob("seed-0.csv")).exists()
+
+
+@pytest.mark.parametrize("kind", sorted(DAMAGE))
+@pytest.mark.parametrize("command", ["show", "plot"])
+def test_show_and_plot_name_a_damaged_summary_and_how_to_rebuild_it(kind, command, tmp_path):
+    out = tmp_path / "runs"
+    run_tiny("pole-full", out)
+    summary = out / "pole-full" / "summary.json"
+    summary.write_bytes(DAMAGE[kind](summary.read_bytes()) if kind != "missing key" else
+                        json.dumps({k: v for k, v in json.loads(summary.read_text()).items() if k != "variants"})
+                        .encode())
+    before = _files(out)
+    with pytest.raises(SystemExit) as e:
+        cli.main([command, "pole-full", "--out", str(out)])
+    msg = _one_line(e.value)
+    assert f"{summary} is damaged (" in msg and "run the `connrl run pole-full` command that made it again" in msg
+    assert _files(out) == before
+
+
+def test_plot_warns_when_it_draws_fewer_runs_than_the_summary_lists(tmp_path, capsys):
+    out = tmp_path / "runs"
+    assert cli.main(["run", "pole-full", "--profile", "tiny", "--runs", "2", "--out", str(out), "--quiet",
+                     "--workers", "1"]) == 0
+    next(out.rglob("seed-1.json")).unlink()
+    capsys.readouterr()
+    assert cli.main(["plot", "pole-full", "--out", str(out)]) == 0
+    assert "1 of the 2 runs in pole-full's summary are missing or damaged" in capsys.readouterr().err
+
+
+def test_one_damaged_summary_leaves_out_its_section_not_the_page(tmp_path, capsys):
+    out = tmp_path / "runs"
+    run_tiny("pole-full", out)
+    run_tiny("cup-task1", out)
+    (out / "cup-task1" / "summary.json").write_text("{")
+    assert cli.main(["results", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"{out / 'cup-task1' / 'summary.json'} is damaged (not JSON" in err and "left out of the page" in err
+    page = (out / "RESULTS.md").read_text()
+    assert "### pole-full:" in page and "Task 1: 2-cup collection" not in page
+
+
+# -------------------------------------------------------------------------------------------- divergence
+
+@pytest.mark.parametrize("value", ["1e400", "-1e400", "NaN"])
+def test_a_non_finite_learning_rate_is_refused_before_any_run(value, tmp_path):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["sweep", "pole-full", "--set", f"lr={value}", "--seeds", "0:1", "--out", str(tmp_path)])
+    assert "parameter lr must be a finite number" in _one_line(e.value)
+    assert not any(tmp_path.iterdir())
+
+
+def test_an_exploding_run_is_recorded_as_diverged_not_as_slow(tmp_path, capsys):
+    out = tmp_path / "runs"
+    assert cli.main(["sweep", "pole-full", "--set", "lr=1e6", "--set", "max_trials=5", "--set", "test_steps=200",
+                     "--seeds", "0:1", "--out", str(out), "--quiet", "--workers", "1"]) == 0
+    assert "per run: diverged (trial 1)" in capsys.readouterr().out
+    record = json.loads(next(out.rglob("seed-0.json")).read_text())
+    assert record["diverged"]["trial"] == 1 and "exploding weights" in record["diverged"]["reason"]
+    summary = json.loads(next(out.glob("sweep-pole-full-*/summary.json")).read_text())
+    assert summary["variants"]["sweep"]["diverged"] == [1]
+
+
+# ------------------------------------------------------------------------------------------- output text
+
+def test_show_says_which_way_is_better_and_cuts_nothing(tmp_path, capsys):
+    out = tmp_path / "runs"
+    run_tiny("survival-planning", out)
+    capsys.readouterr()
+    assert cli.main(["show", "survival-planning", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "hypothetical_per_step_first20 (higher is better)" in text
+    assert "hypothetical_per_step_last20 (lower is better)" in text
+    assert "tiny profile (not the thesis's protocol: that is --profile full)" in text
+
+
+def test_meets_thesis_on_a_quick_profile_says_it_is_not_the_protocol(tmp_path, capsys):
+    from connrl.report.page import meets, summary_table
+
+    q = {"meets_thesis": True}
+    assert meets(q, "full") == "yes" and meets(q, "quick") == "yes (quick profile: not the thesis's protocol)"
+    out = tmp_path / "runs"
+    run_tiny("pole-full", out)
+    table = summary_table(json.loads((out / "pole-full" / "summary.json").read_text()))
+    assert "| lower |" in table
+
+
+def test_numba_compile_time_is_kept_apart_from_a_runs_wall_time():
+    from types import SimpleNamespace
+
+    from connrl.experiments.runner import compile_seconds
+
+    def ev(start):
+        return SimpleNamespace(is_start=start)
+
+    # an outer compile 0..3 s with a nested one 1..2 s, then another 10..10.5 s: 3.5 s in all
+    events = [(0.0, ev(True)), (1.0, ev(True)), (2.0, ev(False)), (3.0, ev(False)), (10.0, ev(True)),
+              (10.5, ev(False))]
+    assert compile_seconds(events) == pytest.approx(3.5)
+
+
+def test_gitignore_and_readme_use_a_venv():
+    root = Path(__file__).resolve().parents[1]
+    assert ".venv/" in (root / ".gitignore").read_text().split()
+    readme = (root / "README.md").read_text()
+    run_cmd = next(line for line in readme.splitlines() if "connrl run pole-full" in line and "pip" in line)
+    test_cmd = next(line for line in readme.splitlines() if "pytest" in line and "pip" in line)
+    for cmd in (run_cmd, test_cmd):
+        assert cmd.startswith("python3 -m venv .venv && . .venv/bin/activate && ")
+    assert test_cmd in (root / ".ci" / "run").read_text()
+
+
+# ---------------------------------------------------------------------------------------------- orphans
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"  # a zombie has exited; only its parent's bookkeeping is left
+
+
+@pytest.mark.skipif(not Path("/proc").exists(), reason="needs /proc")
+def test_workers_exit_when_the_parent_is_killed(tmp_path):
+    out = tmp_path / "runs"
+    parent = subprocess.Popen([sys.executable, "-m", "connrl.cli", "run", "pole-full-ahc", "--profile", "full",
+                               "--out", str(out), "--workers", "2", "--quiet"], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.time() + 120
+        workers: list[int] = []
+        while time.time() < deadline and len(workers) < 2:
+            time.sleep(0.2)
+            workers = [c for c in _children(parent.pid) if "python" in Path(f"/proc/{c}/cmdline").read_bytes()
+                       .decode(errors="replace") and _alive(c)]
+        assert len(workers) >= 2, "the workers did not start"
+        time.sleep(1.0)
+        os.kill(parent.pid, signal.SIGKILL)
+        parent.wait()
+        deadline = time.time() + 5
+        while time.time() < deadline and any(_alive(w) for w in workers):
+            time.sleep(0.1)
+        assert not any(_alive(w) for w in workers), "workers outlived their parent"
+        written = _files(out) if out.exists() else {}
+        time.sleep(1.5)
+        assert (_files(out) if out.exists() else {}) == written, "files were written after the workers should be gone"
+    finally:
+        if parent.poll() is None:
+            os.killpg(parent.pid, signal.SIGKILL)
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def test_the_results_page_shows_a_diverged_run(tmp_path):
+    from connrl.report.page import write_results
+
+    out = tmp_path / "runs"
+    run_tiny("pole-full", out)
+    path = out / "pole-full" / "summary.json"
+    summary = json.loads(path.read_text())
+    summary["variants"]["QCON-R"]["diverged"] = [2]
+    path.write_text(json.dumps(summary))
+    page = write_results(out, tmp_path / "RESULTS.md").read_text()
+    assert "**Diverged:** `pole-full`, QCON-R, seed 0: the networks diverged after training trial 2" in page
