@@ -52,10 +52,21 @@ def _int_at_least(low: int):
 _positive_int, _seed = _int_at_least(1), _int_at_least(0)
 
 
+def _run_count(text: str) -> int:
+    from connrl.experiments.store import MAX_RUNS
+
+    n = _positive_int(text)
+    if n > MAX_RUNS:
+        raise argparse.ArgumentTypeError(f"must be at most {MAX_RUNS} runs per variant, got {n}")
+    return n
+
+
 def _writable(folder) -> None:
     """Refuse an output folder we cannot write in before any run starts (one line)."""
     from connrl.storage import check_writable_dir
 
+    if not str(folder).strip():
+        raise SystemExit("connrl: --out must name a folder, got an empty string")
     try:
         check_writable_dir(folder)
     except OSError as exc:
@@ -89,7 +100,12 @@ def _run_and_report(spec, args, *, profile: str, runs: int | None, seed: int, me
     except KeyboardInterrupt:
         print("\ninterrupted: finished runs are saved; run the same command again to resume.", file=sys.stderr)
         return 130
-    plots = plot_experiment(spec, outcome.records, Path(args.out) / spec.name)
+    except OSError as exc:  # raised before any run by prepare_outputs
+        raise SystemExit(f"connrl: {exc.strerror or exc}") from None
+    try:
+        plots = plot_experiment(spec, outcome.records, Path(args.out) / spec.name)
+    except OSError as exc:
+        raise SystemExit(f"connrl: the runs are saved, but the plot could not be written: {exc}") from None
     _print_summary(outcome.summary)
     curves = [r["curve_y"] for r in sorted(outcome.records, key=lambda r: r["seed"])]
     if mean_curve and curves and len({len(c) for c in curves}) == 1 and curves[0]:
@@ -117,7 +133,8 @@ def _print_summary(summary: dict) -> None:
         for name, q in v["quantities"].items():
             better = {"lower": "lower is better", "higher": "higher is better"}.get(q.get("better"), "")
             print(f"    {name} ({better}): ours {fmt(q['mean'])} (per run: {per_run(q, v.get('diverged'))}); "
-                  f"thesis {fmt(q['thesis'])}; meets thesis: {meets(q, summary['profile'], markdown=False)}")
+                  f"thesis {fmt(q['thesis'])}; meets thesis: "
+                  f"{meets(q, summary['profile'], False, summary['runs_per_variant'], summary.get('protocol_runs'))}")
 
 
 def cmd_plot(args) -> int:
@@ -130,6 +147,8 @@ def cmd_plot(args) -> int:
         paths = plot_from_disk(spec, Path(args.out))
     except (FileNotFoundError, DamagedFile) as exc:
         raise SystemExit(f"connrl: {exc}") from None
+    except OSError as exc:
+        raise SystemExit(f"connrl: the plot could not be written: {exc}") from None
     for p in paths:
         print(p)
     return 0
@@ -184,9 +203,20 @@ def cmd_make_lessons(args) -> int:
 def cmd_results(args) -> int:
     from connrl.report.page import write_results
 
-    doc = Path(args.doc) if args.doc else Path(args.out) / "RESULTS.md"
+    out = Path(args.out)
+    stored = sorted(p.parent.name for p in out.glob("*/summary.json")) if out.is_dir() else []
+    if not stored:
+        raise SystemExit(f"connrl: no stored results in {out} (no OUT/NAME/summary.json): run `connrl run NAME` "
+                         "first, or give --out the folder your runs are in")
+    doc = Path(args.doc) if args.doc else out / "RESULTS.md"
+    if doc.is_dir():
+        raise SystemExit(f"connrl: cannot write to {doc}: it is a folder; --doc takes a Markdown file")
     _writable(doc.parent)
-    path = write_results(Path(args.out), doc)
+    total = len(_experiments())
+    if len(stored) < total:
+        print(f"connrl: warning: {len(stored)} of {total} experiments have stored results in {out}; the page "
+              "lists the others as not yet run", file=sys.stderr)
+    path = write_results(out, doc)
     print(path)
     return 0
 
@@ -212,7 +242,7 @@ def _add_experiment_commands(sub) -> None:
     s.add_argument("name", help="experiment name (see `connrl list`)")
     s.add_argument("--profile", choices=PROFILES, default="quick",
                    help="quick: minutes, a first look (default); full: the thesis's protocol; tiny: a smoke test")
-    s.add_argument("--runs", type=_positive_int, default=None, help="runs per variant (overrides the profile)")
+    s.add_argument("--runs", type=_run_count, default=None, help="runs per variant (overrides the profile)")
     s.add_argument("--seed", type=_seed, default=0, help="base seed; run i uses seed+i (default 0)")
     s.add_argument("--out", default="runs", help="output directory (default ./runs)")
     s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")

@@ -46,11 +46,25 @@ def test_an_output_folder_that_is_a_file_is_refused_before_any_run(command, tmp_
 
 
 def test_results_refuses_a_page_it_cannot_write(tmp_path):
+    run_tiny("pole-full", tmp_path / "runs")
     (tmp_path / "docs").write_text("a file")
     with pytest.raises(SystemExit) as e:
         cli.main(["results", "--out", str(tmp_path / "runs"), "--doc", str(tmp_path / "docs" / "RESULTS.md")])
     assert f"cannot write to {tmp_path / 'docs'}" in _one_line(e.value)
     assert (tmp_path / "docs").read_text() == "a file"
+    (tmp_path / "folder").mkdir()
+    with pytest.raises(SystemExit) as e:
+        cli.main(["results", "--out", str(tmp_path / "runs"), "--doc", str(tmp_path / "folder")])
+    assert "it is a folder; --doc takes a Markdown file" in _one_line(e.value)
+
+
+@pytest.mark.parametrize("make", [lambda p: None, lambda p: p.mkdir()])
+def test_results_without_stored_runs_is_refused(make, tmp_path):
+    make(tmp_path / "runs")
+    with pytest.raises(SystemExit) as e:
+        cli.main(["results", "--out", str(tmp_path / "runs"), "--doc", str(tmp_path / "RESULTS.md")])
+    assert f"no stored results in {tmp_path / 'runs'}" in _one_line(e.value)
+    assert not (tmp_path / "RESULTS.md").exists()
 
 
 def test_results_writes_beside_the_runs_unless_asked(tmp_path, capsys):
@@ -269,3 +283,106 @@ def test_the_results_page_shows_a_diverged_run(tmp_path):
     path.write_text(json.dumps(summary))
     page = write_results(out, tmp_path / "RESULTS.md").read_text()
     assert "**Diverged:** `pole-full`, QCON-R, seed 0: the networks diverged after training trial 2" in page
+
+
+# --------------------------------------------------------------------- found by the independent audit
+
+def test_a_path_in_the_way_below_out_is_refused_before_any_run(tmp_path, monkeypatch):
+    import connrl.experiments.runner as runner
+
+    monkeypatch.setattr(runner, "execute_job", lambda job: pytest.fail("a run started"))
+    (tmp_path / "pole-full").write_text("x")
+    with pytest.raises(SystemExit) as e:
+        cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(tmp_path), "--quiet", "--workers", "1"])
+    assert f"cannot write to {tmp_path / 'pole-full'}" in _one_line(e.value)
+    (tmp_path / "pole-full").unlink()
+    (tmp_path / "pole-full" / "summary.json").mkdir(parents=True)
+    with pytest.raises(SystemExit) as e:
+        cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(tmp_path), "--quiet", "--workers", "1"])
+    assert "summary.json: a folder is in the way" in _one_line(e.value)
+
+
+INSIDE = {"quantity not an object": lambda s: s["variants"]["QCON-R"]["quantities"].update(trials_to_satisfactory="x"),
+          "per_run a number": lambda s: s["variants"]["QCON-R"]["quantities"]["trials_to_satisfactory"].update(
+              per_run=5),
+          "per_run text": lambda s: s["variants"]["QCON-R"]["quantities"]["trials_to_satisfactory"].update(
+              per_run=["abc"]),
+          "mean missing": lambda s: s["variants"]["QCON-R"]["quantities"]["trials_to_satisfactory"].pop("mean"),
+          "meets_thesis text": lambda s: s["variants"]["QCON-R"]["quantities"]["trials_to_satisfactory"].update(
+              meets_thesis="maybe"),
+          "diverged a number": lambda s: s["variants"]["QCON-R"].update(diverged=5),
+          "timing empty": lambda s: s.update(timing={}),
+          "git_commit a number": lambda s: s["environment"].update(git_commit=5),
+          "another experiment": lambda s: s.update(experiment="pole-hidden"),
+          "huge run count": lambda s: s.update(runs_per_variant=10**8)}
+
+
+@pytest.mark.parametrize("kind", sorted(INSIDE))
+def test_wrong_types_inside_a_summary_are_named_not_a_traceback(kind, tmp_path, capsys):
+    out = tmp_path / "runs"
+    run_tiny("pole-full", out)
+    path = out / "pole-full" / "summary.json"
+    summary = json.loads(path.read_text())
+    INSIDE[kind](summary)
+    path.write_text(json.dumps(summary))
+    for command in ("show", "plot"):
+        with pytest.raises(SystemExit) as e:
+            cli.main([command, "pole-full", "--out", str(out)])
+        assert f"{path} is damaged (" in _one_line(e.value)
+    assert cli.main(["results", "--out", str(out)]) == 0
+    assert "left out of the page" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kind", ["other experiment", "other seed", "text curve", "text metric", "csv bytes",
+                                  "deep nesting"])
+def test_a_record_that_is_not_this_runs_is_redone(kind, tmp_path, capsys):
+    out = tmp_path / "runs"
+    args = ["run", "pole-full", "--profile", "tiny", "--runs", "2", "--out", str(out), "--quiet", "--workers", "1"]
+    cli.main(args)
+    record = next(out.rglob("seed-1.json"))
+    good = record.read_bytes()
+    rec = json.loads(good)
+    if kind == "csv bytes":
+        record.with_suffix(".csv").write_bytes(bytes(range(256)))
+    elif kind == "deep nesting":
+        record.write_text("[" * 100_000 + "]" * 100_000)
+    else:
+        change = {"other experiment": {"experiment": "pole-full-ahc"}, "other seed": {"seed": 2},
+                  "text curve": {"curve_y": ["a"] * len(rec["curve_y"])},
+                  "text metric": {"metrics": {"trials_to_satisfactory": "7"}}}[kind]
+        record.write_text(json.dumps({**rec, **change}))
+    capsys.readouterr()
+    assert cli.main(args) == 0
+    assert f"{record} is damaged (" in capsys.readouterr().err
+    assert json.loads(record.read_text())["curve_y"] == rec["curve_y"]
+
+
+def test_huge_run_counts_are_refused_before_any_run(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["run", "pole-full", "--runs", "100000000", "--out", str(tmp_path)])
+    assert "must be at most 10000 runs per variant" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:
+        cli.main(["sweep", "pole-full", "--seeds", "0:100000000", "--out", str(tmp_path)])
+    assert "at most 10000" in _one_line(e.value)
+    assert not any(tmp_path.iterdir())
+
+
+def test_meets_thesis_says_when_fewer_runs_than_the_protocol():
+    from connrl.report.page import meets
+
+    q = {"meets_thesis": True}
+    assert meets(q, "full", True, 1, 10) == "yes (1 run(s); the protocol has 10)"
+    assert meets(q, "full", True, 10, 10) == "yes"
+
+
+def test_a_diverged_survival_run_does_not_block_the_page(tmp_path, capsys):
+    out = tmp_path / "runs"
+    run_tiny("survival-study1", out)
+    record = next(out.rglob("seed-0.json"))
+    rec = json.loads(record.read_text())
+    rec.update(metrics={}, curve_x=[], curve_y=[], diverged={"trial": 3, "reason": "exploding weights"})
+    record.write_text(json.dumps(rec))
+    cli.main(["run", "survival-study1", "--profile", "tiny", "--out", str(out), "--quiet", "--workers", "1"])
+    assert cli.main(["results", "--out", str(out)]) == 0
+    page = (out / "RESULTS.md").read_text()
+    assert f"**Diverged:** `survival-study1`, {rec['variant']}, seed 0" in page and "## Chapter 4" in page

@@ -207,6 +207,11 @@ class ProcessExecutor:
                     nxt = next(it, None)
                     if nxt is not None:
                         pending[pool.submit(fn, nxt)] = nxt
+        except BaseException:
+            # Ctrl-C (or any error): stop the runs in flight instead of finishing them; what finished is saved
+            for proc in list(getattr(pool, "_processes", {}).values()):  # no public handle on the workers
+                proc.terminate()
+            raise
         finally:
             for fut in pending:
                 fut.cancel()
@@ -254,6 +259,7 @@ def summarize(spec: ExperimentSpec, profile: str, seed: int, records: list[dict]
         "profile": profile,
         "base_seed": seed,
         "runs_per_variant": len(records) // max(len(spec.variants), 1),
+        "protocol_runs": spec.profiles["full"]["runs"],  # runs per variant of the thesis's protocol
         "variants": variants,
         "environment": dict(environment_info()),
         "timing": {"wall_time_s": wall,
@@ -282,9 +288,10 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     run record, which is redone."""
     out = Path(out)
     jobs = make_jobs(spec, profile, runs, seed, out)
+    prepare_outputs(out / spec.name, jobs)
     records, todo = [], []
     for job in jobs:
-        rec, damage = load_record(job.path)
+        rec, damage = load_record(job.path, job)
         if damage:
             on_damaged(Path(job.path).with_suffix(".json"), damage)
         (records.append(rec) if rec is not None else todo.append(job))
@@ -364,6 +371,19 @@ class _Progress:
             self.progress.remove_task(self.tasks.pop(job.path))
 
 
+def prepare_outputs(folder: Path, jobs: list[Job]) -> None:
+    """Make every folder the runs will write in, before any run: a path in the way fails now (``OSError``
+    naming it), not after the compute."""
+    for where in sorted({Path(j.path).parent for j in jobs}):
+        try:
+            where.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OSError(exc.errno, f"cannot write to {where}: {exc.strerror or exc}") from None
+    for name in ("summary.json", "curve.png", "curve.svg"):
+        if (folder / name).is_dir():
+            raise IsADirectoryError(f"cannot write to {folder / name}: a folder is in the way")
+
+
 def stored_runs(spec: ExperimentSpec, out: Path) -> tuple[dict | None, list[dict]]:
     """The summary of the latest ``connrl run`` of ``spec`` under ``out`` and the readable run records it
     names (damaged or missing ones are left out: compare with ``expected_runs``). A damaged summary raises
@@ -376,7 +396,7 @@ def stored_runs(spec: ExperimentSpec, out: Path) -> tuple[dict | None, list[dict
         jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], Path(out))
     except ValueError as exc:
         raise DamagedFile(p, f"it does not fit experiment {spec.name}: {exc}") from None
-    return summary, [r for r in (load_record(j.path)[0] for j in jobs) if r is not None]
+    return summary, [r for r in (load_record(j.path, j)[0] for j in jobs) if r is not None]
 
 
 def expected_runs(summary: dict) -> int:

@@ -46,6 +46,8 @@ def read_json(path) -> object:
         raise DamagedFile(path, "not text") from None
     except json.JSONDecodeError as exc:
         raise DamagedFile(path, f"not JSON: {exc.msg} at line {exc.lineno}") from None
+    except RecursionError:
+        raise DamagedFile(path, "nested too deeply to be ours") from None
 
 
 def _shape_problem(doc: object, keys: dict[str, tuple]) -> str | None:
@@ -60,17 +62,49 @@ def _shape_problem(doc: object, keys: dict[str, tuple]) -> str | None:
     return None
 
 
-def check_record(rec: object) -> str | None:
-    """What is wrong with a run record, or None."""
+MAX_RUNS = 10_000  # per variant: far beyond any protocol; a larger count is a typo or a damaged file
+
+
+def _number(v) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
+def check_record(rec: object, job=None) -> str | None:
+    """What is wrong with a run record (or, given its ``job``, why it is not that job's record), or None."""
     problem = _shape_problem(rec, RECORD_KEYS)
-    if problem is None and len(rec["curve_x"]) != len(rec["curve_y"]):
-        problem = "curve_x and curve_y differ in length"
-    return problem
+    if problem:
+        return problem
+    if len(rec["curve_x"]) != len(rec["curve_y"]):
+        return "curve_x and curve_y differ in length"
+    if not all(_number(v) for v in rec["curve_x"] + rec["curve_y"]):
+        return "its curve holds something other than numbers"
+    if not all(v is None or _number(v) for v in rec["metrics"].values()):
+        return "a metric is neither a number nor null"
+    if rec.get("diverged") is not None and not isinstance(rec["diverged"], dict):
+        return "'diverged' is neither null nor an object"
+    if job is not None:
+        params = json.loads(json.dumps(job.params, default=json_default))  # as stored: tuples become lists
+        for key, want in (("experiment", job.experiment), ("variant", job.variant), ("seed", job.seed),
+                          ("params", params)):
+            if rec[key] != want:
+                return f"its {key} is not this run's" if key == "params" else \
+                    f"its {key} is {rec[key]!r}, this run's is {want!r}"
+    return None
 
 
-def load_record(path) -> tuple[dict | None, str | None]:
+def _csv_problem(path: Path) -> str | None:
+    if not path.exists():
+        return f"its CSV {path.name} is gone"
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        return f"its CSV {path.name} is not text"
+    return None if text.strip() else f"its CSV {path.name} is empty"
+
+
+def load_record(path, job=None) -> tuple[dict | None, str | None]:
     """A finished run's record: ``(record, None)``; ``(None, None)`` if not run; ``(None, reason)`` if damaged
-    (including a record whose CSV is gone), which the runner redoes."""
+    (including a record of another run, and a CSV that is gone or not text), which the runner redoes."""
     p = Path(path).with_suffix(".json")
     if not p.exists():
         return None, None
@@ -78,27 +112,59 @@ def load_record(path) -> tuple[dict | None, str | None]:
         rec = read_json(p)
     except DamagedFile as exc:
         return None, exc.reason
-    problem = check_record(rec)
-    if problem is None and not p.with_suffix(".csv").exists():
-        problem = f"its CSV {p.with_suffix('.csv').name} is gone"
+    except OSError as exc:
+        return None, f"unreadable: {exc.strerror or exc}"
+    problem = check_record(rec, job) or _csv_problem(p.with_suffix(".csv"))
     return (None, problem) if problem else (rec, None)
 
 
 def load_summary(path, name: str = "") -> dict:
     """A summary.json, checked; ``FileNotFoundError`` if absent, ``DamagedFile`` (saying how to rebuild it)."""
-    fix = (f"run the `connrl run {name}` command that made it again: finished runs are reused and the summary "
-           "is rewritten") if name else "run the command that made it again"
+    fix = (f"run the `connrl run {name}` command that made it again (same --profile and --runs): finished runs "
+           "are reused and the summary is rewritten") if name else "run the command that made it again"
     try:
         doc = read_json(path)
     except DamagedFile as exc:
         raise DamagedFile(path, exc.reason, fix) from None
-    problem = _shape_problem(doc, SUMMARY_KEYS)
-    if problem is None:
-        problem = next((f"variant {k!r} is not an object with quantities" for k, v in doc["variants"].items()
-                        if not isinstance(v, dict) or not isinstance(v.get("quantities"), dict)), None)
+    except FileNotFoundError:
+        raise
+    except OSError as exc:
+        raise DamagedFile(path, f"unreadable: {exc.strerror or exc}", fix) from None
+    problem = _shape_problem(doc, SUMMARY_KEYS) or _summary_problem(doc, name)
     if problem:
         raise DamagedFile(path, problem, fix)
     return doc
+
+
+QUANTITY_KEYS = {"per_run": (list,), "mean": (int, float, type(None)), "thesis": (int, float, type(None)),
+                 "better": (str,)}
+
+
+def _summary_problem(doc: dict, name: str) -> str | None:
+    """Deeper checks of a summary whose top level is right: everything the show/plot/results code reads."""
+    if name and doc["experiment"] != name:
+        return f"it is the summary of {doc['experiment']!r}, not of {name!r}"
+    if not 1 <= doc["runs_per_variant"] <= MAX_RUNS or doc["base_seed"] < 0:
+        return "its run count or base seed is out of range"
+    timing = doc["timing"]
+    if not _number(timing.get("wall_time_s")) or not isinstance(timing.get("run_wall_time_s"), list):
+        return "its timing is incomplete"
+    if not isinstance(doc["environment"].get("git_commit"), str | type(None)):
+        return "its environment's git_commit is not text"
+    for label, v in doc["variants"].items():
+        if not isinstance(v, dict) or not isinstance(v.get("quantities"), dict):
+            return f"variant {label!r} is not an object with quantities"
+        if not isinstance(v.get("diverged", []), list) or not isinstance(v.get("seeds", []), list):
+            return f"variant {label!r}: 'diverged' or 'seeds' is not a list"
+        for qname, q in v["quantities"].items():
+            problem = _shape_problem(q, QUANTITY_KEYS)
+            if problem is None and not all(x is None or _number(x) for x in q["per_run"]):
+                problem = "a per-run value is neither a number nor null"
+            if problem is None and q.get("meets_thesis") not in (True, False, None):
+                problem = "'meets_thesis' is neither true, false nor null"
+            if problem:
+                return f"variant {label!r}, quantity {qname!r}: {problem}"
+    return None
 
 
 def write_run_records(path: Path, record: dict, rows: list[dict]) -> None:

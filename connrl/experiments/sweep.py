@@ -16,6 +16,7 @@ import json
 from typing import Any
 
 from connrl.experiments.spec import ExperimentSpec, Variant, as_dict, override
+from connrl.experiments.store import MAX_RUNS
 
 
 def parse_assignment(text: str) -> tuple[str, Any]:
@@ -39,6 +40,8 @@ def parse_seeds(text: str) -> tuple[int, int]:
         raise ValueError(f"--seeds expects A:B with whole numbers (seeds A..B-1), got {text!r}") from None
     if not sep or first < 0 or stop <= first:
         raise ValueError(f"--seeds expects A:B with 0 <= A < B (seeds A..B-1), got {text!r}")
+    if stop - first > MAX_RUNS:
+        raise ValueError(f"--seeds asks for {stop - first} runs; at most {MAX_RUNS}")
     return first, stop
 
 

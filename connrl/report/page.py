@@ -46,11 +46,16 @@ def per_run(q: dict, diverged: list | None) -> str:
                                                                                           strict=False))
 
 
-def meets(q: dict, profile: str, markdown: bool = True) -> str:
-    """Whether the mean beats the thesis; on a profile other than ``full`` it says the protocol differs."""
+def meets(q: dict, profile: str, markdown: bool = True, runs: int | None = None,
+          protocol_runs: int | None = None) -> str:
+    """Whether the mean beats the thesis; it says so when the profile, or fewer runs, is not the protocol."""
     word = {True: "yes", False: "**no**" if markdown else "no", None: "—"}[q.get("meets_thesis")]
-    if profile != "full" and q.get("meets_thesis") is not None:
+    if q.get("meets_thesis") is None:
+        return word
+    if profile != "full":
         word += f" ({profile} profile: not the thesis's protocol)"
+    elif runs is not None and protocol_runs is not None and runs < protocol_runs:
+        word += f" ({runs} run(s); the protocol has {protocol_runs})"
     return word
 
 
@@ -66,10 +71,12 @@ def summary_table(summary: dict) -> str:
         "| variant | quantity | better | ours (mean) | per run | thesis | meets thesis |",
         "|---|---|---|---|---|---|---|",
     ]
+    runs = (summary["runs_per_variant"], summary.get("protocol_runs"))
     for label, v in summary["variants"].items():
         for name, q in v["quantities"].items():
+            word = meets(q, summary["profile"], True, *runs)
             lines.append(f"| {label} | {name} | {q.get('better', '')} | {fmt(q['mean'])} | "
-                         f"{per_run(q, v.get('diverged'))} | {fmt(q['thesis'])} | {meets(q, summary['profile'])} |")
+                         f"{per_run(q, v.get('diverged'))} | {fmt(q['thesis'])} | {word} |")
     return "\n".join(lines)
 
 
@@ -123,7 +130,8 @@ def stored(spec, out: Path) -> tuple[dict | None, list[dict]]:
     if summary is not None and len(records) < expected_runs(summary):
         warn(f"{spec.name}: {expected_runs(summary) - len(records)} of the {expected_runs(summary)} runs in its "
              "summary are missing or damaged; its curves show the others")
-    return summary, records
+    # a diverged run has no curve and no quantities: the section reads the others (diverged_lines lists it)
+    return summary, [r for r in records if not r.get("diverged")]
 
 
 def diverged_lines(out: Path, names) -> list[str]:
