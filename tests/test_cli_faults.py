@@ -386,3 +386,56 @@ def test_a_diverged_survival_run_does_not_block_the_page(tmp_path, capsys):
     assert cli.main(["results", "--out", str(out)]) == 0
     page = (out / "RESULTS.md").read_text()
     assert f"**Diverged:** `survival-study1`, {rec['variant']}, seed 0" in page and "## Chapter 4" in page
+
+
+@pytest.mark.skipif(not Path("/proc").exists(), reason="needs /proc")
+def test_ctrl_c_stops_the_runs_in_flight_and_keeps_what_finished(tmp_path):
+    out = tmp_path / "runs"
+    parent = subprocess.Popen([sys.executable, "-m", "connrl.cli", "run", "pole-full-ahc", "--profile", "full",
+                               "--out", str(out), "--workers", "2", "--quiet"], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.PIPE, start_new_session=True)
+    try:
+        deadline = time.time() + 120
+        workers: list[int] = []
+        while time.time() < deadline and len(workers) < 2:
+            time.sleep(0.2)
+            workers = [c for c in _children(parent.pid) if _alive(c)]
+        assert len(workers) >= 2, "the workers did not start"
+        time.sleep(1.0)
+        start = time.time()
+        parent.send_signal(signal.SIGINT)
+        _, err = parent.communicate(timeout=60)
+        assert parent.returncode == 130 and time.time() - start < 10
+        assert b"finished runs are saved; run the same command again to resume" in err
+        deadline = time.time() + 5
+        while time.time() < deadline and any(_alive(w) for w in workers):
+            time.sleep(0.1)
+        assert not any(_alive(w) for w in workers)
+    finally:
+        if parent.poll() is None:
+            os.killpg(parent.pid, signal.SIGKILL)
+
+
+@pytest.mark.parametrize("name, setting, message", [
+    ("pole-full", "gamma=5", "parameter gamma must be in [0, 1], got 5.0"),
+    ("pole-full", "lam=-1", "parameter lam must be in [0, 1], got -1.0"),
+    ("pole-full", "hidden=-3", "parameter hidden must be >= 0, got -3"),
+    ("pole-full", "lr=-0.5", "parameter lr must be > 0, got -0.5"),
+    ("pole-full", "capacity=0", "parameter capacity must be >= 1, got 0"),
+    ("pole-full", "max_trials=0", "parameter max_trials must be >= 1, got 0"),
+    ("cup-task1", "decay=2", "parameter decay must be in [0, 1], got 2.0"),
+    ("survival-study1", "test_envs=0", "parameter test_envs must be >= 1, got 0"),
+    ("robot-teaching-dp", "lessons=-1", "parameter lessons must be >= 0, got -1"),
+    ("robot-teaching-dp", "lessons=20", "parameter lessons must be at most 10 for task DP"),
+    ("robot-teaching-dp", "door_width=-5", "parameter door_width must exceed the robot's diameter (24 in)"),
+    ("robot-teaching-dp", "stuck_window=0", "parameter stuck_window must be >= 1, got 0"),
+    ("robot-teaching-dp", "dp_heading=270", "parameter dp_heading must be in [0, 180], got 270.0"),
+])
+def test_out_of_range_settings_are_refused_before_any_run(name, setting, message, tmp_path, monkeypatch):
+    import connrl.experiments.runner as runner
+
+    monkeypatch.setattr(runner, "execute_job", lambda job: pytest.fail("a run started"))
+    with pytest.raises(SystemExit) as e:
+        cli.main(["sweep", name, "--set", setting, "--seeds", "0:1", "--out", str(tmp_path), "--workers", "1"])
+    assert message in _one_line(e.value)
+    assert not any(tmp_path.iterdir())

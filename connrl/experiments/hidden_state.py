@@ -67,6 +67,10 @@ from connrl.tasks.hidden_state import (
 )
 from connrl.tasks.pole import make_envs as make_pole_envs
 
+HIDDEN_RANGES = {"lam": "0..1", "gamma": "0..1", "init_range": ">0", "momentum": "0..<1", "feedback": ">=0",
+                 "decay": "0..1", "capacity": ">=1", "anneal_trials": ">=1", "trials": ">=1",
+                 "lessons_per_trial": ">=0", "p_threshold": "0..<1", "p_threshold_oldest": ">0"}
+
 
 @dataclass(frozen=True)
 class HiddenStateParams:
@@ -103,7 +107,8 @@ class CupParams(HiddenStateParams):
     probe_steps: tuple = (1, 2, 3)  # forced steps in the robustness probe (R: "a few steps")
 
     def __post_init__(self):
-        check_types(self, arch=ARCHITECTURES, task=(1, 2, 3))
+        check_types(self, {**HIDDEN_RANGES, "model_range": ">0", "model_lessons_per_trial": ">=0"},
+                    arch=ARCHITECTURES, task=(1, 2, 3))
 
 
 @dataclass(frozen=True)
@@ -123,7 +128,9 @@ class PoleHiddenParams(HiddenStateParams):
     test_steps: int = 5001  # "balanced for over 5000 steps" (7.5.4)
 
     def __post_init__(self):
-        check_types(self, arch=ARCHITECTURES, task=(4,))
+        check_types(self, {**HIDDEN_RANGES, "model_range": ">0", "model_lessons_per_trial": ">=0",
+                           "train_max_steps": ">=1", "start_x": ">=0", "start_theta": ">=0", "test_steps": ">=1"},
+                    arch=ARCHITECTURES, task=(4,))
 
 
 def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:

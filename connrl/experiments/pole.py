@@ -17,6 +17,11 @@ from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
 from connrl.tasks.pole import make_agent, make_envs, satisfactory
 
+POLE_RANGES = {"hidden": ">=0", "lr": ">0", "init_range": ">0", "momentum": "0..<1", "gamma": "0..1", "lam": "0..1",
+               "inv_t_start": ">0", "inv_t_end": ">0", "anneal_trials": ">=1", "capacity": ">=1",
+               "lessons_per_trial": ">=0", "p_threshold": "0..<1", "p_threshold_oldest": ">0", "train_max_steps": ">=1",
+               "start_x": ">=0", "start_theta": ">=0", "test_steps": ">=1", "max_trials": ">=1"}
+
 
 @dataclass(frozen=True)
 class PoleParams:
@@ -47,7 +52,7 @@ class PoleParams:
     max_trials: int = 1000  # 7.5.4: "not always found within 1000 trials"
 
     def __post_init__(self):
-        check_types(self, agent=("qcon", "ahcon"), observe=("full", "x_theta"))
+        check_types(self, POLE_RANGES, agent=("qcon", "ahcon"), observe=("full", "x_theta"))
 
 
 def train_until_satisfactory(train_env, test_env, agent, max_trials: int, test_steps: int, progress) -> RunResult:

@@ -31,11 +31,19 @@ import numpy as np
 
 from connrl.core.replay import REPAIRS
 from connrl.core.rollout import TrialStats, run_trial
+from connrl.envs.robot import ROBOT_RADIUS
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
-from connrl.tasks.robot import evaluate, make_agent, make_env
+from connrl.tasks.robot import TAUGHT_COUNTS, evaluate, make_agent, make_env
 
 THRESHOLDS = (2.5, 5.0)  # the two performance levels of the tables in 5.6
+
+
+ROBOT_RANGES = {"lessons": ">=0", "hidden_fraction": ">=0", "lr": ">0", "momentum": "0..<1", "init_range": ">0",
+                "value_range": ">0", "gamma": "0..1", "lam": "0..1", "t_start": ">0", "t_end": ">0", "capacity": ">=1",
+                "lessons_per_trial": ">=0", "p_threshold": "0..<1", "stuck_window": ">=1", "stuck_radius": ">=0",
+                "stuck_boost": ">0", "trials": ">=1", "max_steps": ">=1", "test_every": ">=1", "test_tasks": ">=1",
+                "paths": ">=0", "dp_heading": "0..180", "dock_tolerance": "0..180"}
 
 
 @dataclass(frozen=True)
@@ -74,7 +82,15 @@ class RobotParams:
     dock_tolerance: float = 30.0  # DK: a head-on charger contact within this many deg docks (R; robot-dk-geometry)
 
     def __post_init__(self):
-        check_types(self, task=("DP", "DK", "WFL"), repair=REPAIRS)
+        check_types(self, ROBOT_RANGES, task=("DP", "DK", "WFL"), repair=REPAIRS)
+        if not self.door_width > 2 * ROBOT_RADIUS:
+            raise ValueError(f"parameter door_width must exceed the robot's diameter ({2 * ROBOT_RADIUS:g} in), "
+                             f"got {self.door_width}")
+
+    def check_combination(self):
+        if self.lessons > TAUGHT_COUNTS[self.task]:
+            raise ValueError(f"parameter lessons must be at most {TAUGHT_COUNTS[self.task]} for task {self.task} "
+                             f"(the taught lessons there are), got {self.lessons}")
 
 
 def quantity_name(level: float) -> str:

@@ -71,10 +71,17 @@ def override(params, changes: Mapping[str, Any], where: str = "parameters"):
 _KINDS = {"bool": (bool,), "int": (int,), "float": (int, float), "str": (str,), "tuple": (tuple,), "dict": (dict,)}
 
 
-def check_types(params, **choices: tuple) -> None:
+_RANGES = {">0": (lambda v: v > 0, "> 0"), ">=0": (lambda v: v >= 0, ">= 0"), ">=1": (lambda v: v >= 1, ">= 1"),
+           "0..1": (lambda v: 0 <= v <= 1, "in [0, 1]"), "0..<1": (lambda v: 0 <= v < 1, "in [0, 1)"),
+           "0..180": (lambda v: 0 <= v <= 180, "in [0, 180]")}
+
+
+def check_types(params, ranges: Mapping[str, str] | None = None, **choices: tuple) -> None:
     """Refuse a field whose value does not match its annotation (``float``, ``int | None``, ...; a bool is not
-    a number) or, for the fields named in ``choices``, is not one of the allowed values. Parameter classes call
-    it from ``__post_init__``, so a bad value fails when the spec (or a sweep) is built."""
+    a number), lies outside its range in ``ranges`` (``">0"``, ``">=0"``, ``">=1"``, ``"0..1"``, ``"0..<1"``,
+    ``"0..180"``; None passes where the annotation allows it) or, for the fields named in ``choices``, is not
+    one of the allowed values. Parameter classes call it from ``__post_init__``, so a bad value fails when the
+    spec (or a sweep) is built, before any run."""
     for f in dataclasses.fields(params):
         v = getattr(params, f.name)
         kinds = [k.strip() for k in str(f.type).split("|")]
@@ -85,8 +92,22 @@ def check_types(params, **choices: tuple) -> None:
             raise ValueError(f"parameter {f.name} must be {f.type}, got {v!r}")
         if isinstance(v, float) and not math.isfinite(v):
             raise ValueError(f"parameter {f.name} must be a finite number, got {v!r}")
+        if ranges and f.name in ranges and v is not None and not _RANGES[ranges[f.name]][0](v):
+            raise ValueError(f"parameter {f.name} must be {_RANGES[ranges[f.name]][1]}, got {v!r}")
         if f.name in choices and v not in choices[f.name]:
             raise ValueError(f"parameter {f.name} must be one of {', '.join(map(repr, choices[f.name]))}, got {v!r}")
+
+
+def check_combination(params, where: str = "parameters"):
+    """A complete parameter set's checks across fields (``params.check_combination()``, where a class has one:
+    e.g. no more taught lessons than a task has), which a partial set such as a spec's base cannot pass."""
+    check = getattr(params, "check_combination", None)
+    if check is not None:
+        try:
+            check()
+        except ValueError as exc:
+            raise ValueError(f"{where}: {exc}") from None
+    return params
 
 
 def as_dict(params) -> dict[str, Any]:
@@ -122,7 +143,8 @@ class ExperimentSpec:
             base = override(self.params, {k: v for k, v in over.items() if k != "runs"},
                             f"experiment {self.name}, profile {p!r}")
             for v in self.variants:
-                override(base, v.params, f"experiment {self.name}, variant {v.label!r}")
+                check_combination(override(base, v.params, f"experiment {self.name}, variant {v.label!r}"),
+                                  f"experiment {self.name}, variant {v.label!r}")
 
     def resolve(self, profile: str, runs: int | None = None) -> tuple[Any, int]:
         """Parameters and run count for a profile (``runs`` overrides the profile's)."""

@@ -58,8 +58,9 @@ class SurvivalParams:
     planning_block: int = 10  # plays averaged per point of the planning curve
 
     def __post_init__(self):
-        check_types(self, framework=FRAMEWORKS, model=MODELS, representation=("global", "local"),
-                    curve=("food", "planning"))
+        check_types(self, {"lr_scale": ">0", "train_plays": ">=1", "test_envs": ">=1", "test_every": ">=0",
+                           "eval_envs": ">=0", "planning_block": ">=1"},
+                    framework=FRAMEWORKS, model=MODELS, representation=("global", "local"), curve=("food", "planning"))
 
 
 def _agent_params(p: SurvivalParams) -> SurvivalAgentParams:

@@ -15,7 +15,7 @@ import hashlib
 import json
 from typing import Any
 
-from connrl.experiments.spec import ExperimentSpec, Variant, as_dict, override
+from connrl.experiments.spec import ExperimentSpec, Variant, as_dict, check_combination, override
 from connrl.experiments.store import MAX_RUNS
 
 
@@ -70,7 +70,7 @@ def sweep_spec(spec: ExperimentSpec, assignments: list[str], variant: str | None
     types = {f.name: f.type for f in dataclasses.fields(base)}
     changes = dict(parse_assignment(a) for a in assignments)
     changes = {k: _typed(types.get(k, ""), v) for k, v in changes.items()}
-    params = override(base, changes, f"sweep of {spec.name}")
+    params = check_combination(override(base, changes, f"sweep of {spec.name}"), f"sweep of {spec.name}")
     # named by the resulting parameters: the same setting, however spelt, reuses its runs
     digest = hashlib.sha256(json.dumps(as_dict(params), sort_keys=True, default=str).encode()).hexdigest()[:8]
     title = label + "".join(f", {k}={v}" for k, v in changes.items())
