@@ -242,21 +242,29 @@ def _alive(pid: int) -> bool:
     return state != "Z"  # a zombie has exited; only its parent's bookkeeping is left
 
 
+def _run_with_two_workers(out: Path) -> tuple[subprocess.Popen, list[int]]:
+    """``connrl run`` of a long experiment (pole-full-ahc never solves: every run takes 1000 trials) in its own
+    process group, once both worker processes run."""
+    parent = subprocess.Popen([sys.executable, "-m", "connrl.cli", "run", "pole-full-ahc", "--profile", "full",
+                               "--out", str(out), "--workers", "2", "--quiet"], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.PIPE, start_new_session=True)
+    deadline = time.time() + 120
+    workers: list[int] = []
+    while time.time() < deadline and len(workers) < 2:
+        time.sleep(0.2)
+        workers = [c for c in _children(parent.pid) if _alive(c)]
+    if len(workers) < 2:
+        os.killpg(parent.pid, signal.SIGKILL)
+        pytest.fail("the workers did not start")
+    time.sleep(1.0)
+    return parent, workers
+
+
 @pytest.mark.skipif(not Path("/proc").exists(), reason="needs /proc")
 def test_workers_exit_when_the_parent_is_killed(tmp_path):
     out = tmp_path / "runs"
-    parent = subprocess.Popen([sys.executable, "-m", "connrl.cli", "run", "pole-full-ahc", "--profile", "full",
-                               "--out", str(out), "--workers", "2", "--quiet"], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL, start_new_session=True)
+    parent, workers = _run_with_two_workers(out)
     try:
-        deadline = time.time() + 120
-        workers: list[int] = []
-        while time.time() < deadline and len(workers) < 2:
-            time.sleep(0.2)
-            workers = [c for c in _children(parent.pid) if "python" in Path(f"/proc/{c}/cmdline").read_bytes()
-                       .decode(errors="replace") and _alive(c)]
-        assert len(workers) >= 2, "the workers did not start"
-        time.sleep(1.0)
         os.kill(parent.pid, signal.SIGKILL)
         parent.wait()
         deadline = time.time() + 5
@@ -390,18 +398,8 @@ def test_a_diverged_survival_run_does_not_block_the_page(tmp_path, capsys):
 
 @pytest.mark.skipif(not Path("/proc").exists(), reason="needs /proc")
 def test_ctrl_c_stops_the_runs_in_flight_and_keeps_what_finished(tmp_path):
-    out = tmp_path / "runs"
-    parent = subprocess.Popen([sys.executable, "-m", "connrl.cli", "run", "pole-full-ahc", "--profile", "full",
-                               "--out", str(out), "--workers", "2", "--quiet"], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.PIPE, start_new_session=True)
+    parent, workers = _run_with_two_workers(tmp_path / "runs")
     try:
-        deadline = time.time() + 120
-        workers: list[int] = []
-        while time.time() < deadline and len(workers) < 2:
-            time.sleep(0.2)
-            workers = [c for c in _children(parent.pid) if _alive(c)]
-        assert len(workers) >= 2, "the workers did not start"
-        time.sleep(1.0)
         start = time.time()
         parent.send_signal(signal.SIGINT)
         _, err = parent.communicate(timeout=60)
