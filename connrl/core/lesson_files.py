@@ -193,7 +193,7 @@ def _read_doc(path: Path) -> dict:
         raise LessonFileError(f"{path}: cannot read the lesson file ({exc.strerror or exc})") from None
     if not isinstance(doc, dict) or doc.get("format") != LESSON_FORMAT:
         raise LessonFileError(f"{path}: 'format' must be {LESSON_FORMAT!r}")
-    if doc.get("version") != LESSON_VERSION:
+    if doc.get("version") != LESSON_VERSION or isinstance(doc.get("version"), bool):  # true == 1 in Python
         raise LessonFileError(f"{path}: lesson format version {doc.get('version')!r} is not supported "
                               f"(this connrl reads version {LESSON_VERSION})")
     if not isinstance(doc.get("env_id", ""), str):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -28,7 +29,7 @@ def curves_on_grid(records: list[dict]) -> tuple[np.ndarray, np.ndarray]:
 def save_figure(fig, file: Path) -> Path:
     """Write ``fig`` to ``file`` (format from its suffix) atomically: a reader never sees half a plot."""
     file.parent.mkdir(parents=True, exist_ok=True)
-    tmp = file.with_name(f".{file.stem}.tmp{file.suffix}")
+    tmp = file.with_name(f".{file.stem}.{os.getpid()}.tmp{file.suffix}")  # two writers never share one
     fig.savefig(tmp, format=file.suffix[1:])
     tmp.replace(file)
     return file

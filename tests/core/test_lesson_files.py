@@ -246,3 +246,15 @@ def test_shipped_lesson_files_are_rewritten_byte_for_byte(tmp_path, name):
     p = tmp_path / "again.json"
     save_lessons(p, load_lessons(src), env_id=raw["env_id"], env_kwargs=raw["env_kwargs"], source=raw["source"])
     assert p.read_bytes() == src.read_bytes()
+
+
+def test_a_boolean_version_is_not_version_1(tmp_path):
+    import json
+
+    from connrl.core.lesson_files import LessonFileError, load_lessons
+
+    path = tmp_path / "l.json"
+    path.write_text(json.dumps({"format": "connrl-lesson", "version": True, "env_id": "x", "env_kwargs": {},
+                                "lessons": []}))
+    with pytest.raises(LessonFileError, match="lesson format version True is not supported"):
+        load_lessons(path)
