@@ -60,7 +60,6 @@ class TeachingQCON(QCON):
                  teaching: TeachingConfig | None = None, q=None):
         super().__init__(config, n_actions, rng, q=q)
         self.teaching = teaching or TeachingConfig()
-        self._fast = self.teaching.fast
 
     def act(self, obs, info=None, *, greedy: bool = False) -> int:
         if not self.learning or self._x is None:
@@ -79,4 +78,4 @@ class TeachingQCON(QCON):
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
         params = self.replay_params(p_threshold)
         repair = self.teaching.repair if lesson.taught else "none"
-        replay_q(self.q, lesson, params, repair, fast=self._fast)
+        replay_q(self.q, lesson, params, repair, fast=self.teaching.fast)

@@ -252,6 +252,7 @@ def summarize(spec: ExperimentSpec, profile: str, seed: int, records: list[dict]
                              "quantities": qs,
                              # per run: the training trial after which its networks diverged, or None
                              "diverged": [(r.get("diverged") or {}).get("trial") for r in recs]}
+    in_order = sorted(records, key=lambda r: (r["variant"], r["seed"]))
     return {
         "experiment": spec.name,
         "title": spec.title,
@@ -263,10 +264,8 @@ def summarize(spec: ExperimentSpec, profile: str, seed: int, records: list[dict]
         "variants": variants,
         "environment": dict(environment_info()),
         "timing": {"wall_time_s": wall,
-                   "run_compile_time_s": [r.get("compile_time_s", 0.0) for r in sorted(records, key=lambda r: (
-                       r["variant"], r["seed"]))],
-                   "run_wall_time_s": [r["wall_time_s"] for r in sorted(records, key=lambda r: (r["variant"],
-                                                                                                r["seed"]))]},
+                   "run_compile_time_s": [r.get("compile_time_s", 0.0) for r in in_order],
+                   "run_wall_time_s": [r["wall_time_s"] for r in in_order]},
     }
 
 
@@ -397,6 +396,14 @@ def stored_runs(spec: ExperimentSpec, out: Path) -> tuple[dict | None, list[dict
     except ValueError as exc:
         raise DamagedFile(p, f"it does not fit experiment {spec.name}: {exc}") from None
     return summary, [r for r in (load_record(j.path, j)[0] for j in jobs) if r is not None]
+
+
+def missing_runs(spec_name: str, summary: dict, records: list[dict]) -> str | None:
+    """"N of the M runs in NAME's summary are missing or damaged", or None when every run was read."""
+    expected = expected_runs(summary)
+    if len(records) >= expected:
+        return None
+    return f"{expected - len(records)} of the {expected} runs in {spec_name}'s summary are missing or damaged"
 
 
 def expected_runs(summary: dict) -> int:

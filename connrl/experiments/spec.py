@@ -68,6 +68,12 @@ def override(params, changes: Mapping[str, Any], where: str = "parameters"):
         raise ValueError(f"{where}: {exc}") from None
 
 
+def field_kinds(field: dataclasses.Field) -> list[str]:
+    """The type names of a parameter field's annotation (``"float | None"`` -> ``["float", "None"]``); the
+    parameter modules use postponed annotations, so these are strings."""
+    return [k.strip() for k in str(field.type).split("|")]
+
+
 _KINDS = {"bool": (bool,), "int": (int,), "float": (int, float), "str": (str,), "tuple": (tuple,), "dict": (dict,)}
 
 
@@ -84,7 +90,7 @@ def check_types(params, ranges: Mapping[str, str] | None = None, **choices: tupl
     spec (or a sweep) is built, before any run."""
     for f in dataclasses.fields(params):
         v = getattr(params, f.name)
-        kinds = [k.strip() for k in str(f.type).split("|")]
+        kinds = field_kinds(f)
         ok = (v is None and "None" in kinds) or any(
             isinstance(v, _KINDS.get(k, object)) and not (isinstance(v, bool) and k in ("int", "float"))
             for k in kinds if k != "None")

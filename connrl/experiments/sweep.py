@@ -15,7 +15,7 @@ import hashlib
 import json
 from typing import Any
 
-from connrl.experiments.spec import ExperimentSpec, Variant, as_dict, check_combination, override
+from connrl.experiments.spec import ExperimentSpec, Variant, as_dict, check_combination, field_kinds, override
 from connrl.experiments.store import MAX_RUNS
 
 
@@ -45,10 +45,9 @@ def parse_seeds(text: str) -> tuple[int, int]:
     return first, stop
 
 
-def _typed(field_type: str, value):
+def _typed(kinds: list[str], value):
     """JSON has no float-valued whole numbers and no tuples: ``1`` for a float field is 1.0, a list for a tuple
     field a tuple (the annotation decides; anything else is checked by the parameter class)."""
-    kinds = [k.strip() for k in str(field_type).split("|")]
     if "float" in kinds and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
     if "tuple" in kinds and isinstance(value, list):
@@ -67,9 +66,9 @@ def sweep_spec(spec: ExperimentSpec, assignments: list[str], variant: str | None
                              + ", ".join(repr(v.label) for v in spec.variants))
         base = spec.variant_params(base, match[0])
         label = variant
-    types = {f.name: f.type for f in dataclasses.fields(base)}
+    kinds = {f.name: field_kinds(f) for f in dataclasses.fields(base)}
     changes = dict(parse_assignment(a) for a in assignments)
-    changes = {k: _typed(types.get(k, ""), v) for k, v in changes.items()}
+    changes = {k: _typed(kinds.get(k, []), v) for k, v in changes.items()}
     params = check_combination(override(base, changes, f"sweep of {spec.name}"), f"sweep of {spec.name}")
     # named by the resulting parameters: the same setting, however spelt, reuses its runs
     digest = hashlib.sha256(json.dumps(as_dict(params), sort_keys=True, default=str).encode()).hexdigest()[:8]

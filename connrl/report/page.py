@@ -18,7 +18,7 @@ from pathlib import Path
 
 from connrl.experiments import store
 from connrl.experiments.registry import all_experiments
-from connrl.experiments.runner import expected_runs, stored_runs
+from connrl.experiments.runner import missing_runs, stored_runs
 from connrl.experiments.store import DamagedFile
 from connrl.storage import atomic_write_text
 
@@ -127,9 +127,9 @@ def stored(spec, out: Path) -> tuple[dict | None, list[dict]]:
     except DamagedFile as exc:
         warn(f"{exc}; left out of the page")
         return None, []
-    if summary is not None and len(records) < expected_runs(summary):
-        warn(f"{spec.name}: {expected_runs(summary) - len(records)} of the {expected_runs(summary)} runs in its "
-             "summary are missing or damaged; its curves show the others")
+    missing = missing_runs(spec.name, summary, records) if summary is not None else None
+    if missing:
+        warn(f"{missing}; its section shows the others")
     # a diverged run has no curve and no quantities: the section reads the others (diverged_lines lists it)
     return summary, [r for r in records if not r.get("diverged")]
 

@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from connrl.experiments.runner import expected_runs, stored_runs  # noqa: E402
+from connrl.experiments.runner import missing_runs, stored_runs  # noqa: E402
 from connrl.experiments.spec import ExperimentSpec  # noqa: E402
 
 
@@ -80,9 +80,8 @@ def plot_from_disk(spec: ExperimentSpec, out: Path) -> list[Path]:
     summary, records = stored_runs(spec, out)  # a damaged summary raises DamagedFile
     if summary is None:
         raise FileNotFoundError(f"{out / spec.name / 'summary.json'} not found: run `connrl run {spec.name}` first")
-    missing = expected_runs(summary) - len(records)
-    if missing > 0:
-        print(f"connrl: warning: {missing} of the {expected_runs(summary)} runs in {spec.name}'s summary are "
-              "missing or damaged; the plot shows the others (`connrl run` with the summary's profile redoes them)",
-              file=sys.stderr)
+    missing = missing_runs(spec.name, summary, records)
+    if missing:
+        print(f"connrl: warning: {missing}; the plot shows the others (`connrl run` with the summary's profile "
+              "redoes them)", file=sys.stderr)
     return plot_experiment(spec, records, out / spec.name)
