@@ -424,10 +424,15 @@ def test_ctrl_c_stops_the_runs_in_flight_and_keeps_what_finished(tmp_path):
     ("cup-task1", "decay=2", "parameter decay must be in [0, 1], got 2.0"),
     ("survival-study1", "test_envs=0", "parameter test_envs must be >= 1, got 0"),
     ("robot-teaching-dp", "lessons=-1", "parameter lessons must be >= 0, got -1"),
-    ("robot-teaching-dp", "lessons=20", "parameter lessons must be at most 10 for task DP"),
+    ("robot-teaching-dp", "lessons=201", "parameter lessons must be at most 200"),
     ("robot-teaching-dp", "door_width=-5", "parameter door_width must exceed the robot's diameter (24 in)"),
     ("robot-teaching-dp", "stuck_window=0", "parameter stuck_window must be >= 1, got 0"),
     ("robot-teaching-dp", "dp_heading=270", "parameter dp_heading must be in [0, 180], got 270.0"),
+    ("robot-teaching-dp", "edge_jump=0", "parameter edge_jump must be > 0, got 0.0"),
+    ("robot-teaching-dp", "dp_far=12", "parameter dp_far must be at least 24"),
+    ("robot-teaching-dp", "taught_order=first", "parameter taught_order must be one of 'after', 'shuffled'"),
+    ("robot-dp-copy", "policy=random", "parameter policy must be one of 'copy', 'teacher'"),
+    ("robot-dp-copy", "copy_epochs=-1", "parameter copy_epochs must be >= 0, got -1"),
 ])
 def test_out_of_range_settings_are_refused_before_any_run(name, setting, message, tmp_path, monkeypatch):
     import connrl.experiments.runner as runner

@@ -54,6 +54,9 @@ class LinearSchedule:
         return self.start + (self.end - self.start) * frac
 
 
+TAUGHT_ORDERS = ("after", "shuffled")
+
+
 @dataclass(frozen=True)
 class ReplayConfig:
     """Experience replay settings (3.5, 5.1, App. A.2)."""
@@ -65,10 +68,13 @@ class ReplayConfig:
     batch: bool = False  # batch-mode replay (5.1.2; recurrent nets, 7.5)
     taught_probability: LinearSchedule = LinearSchedule(1.0, 1.0)  # chance a taught lesson is replayed (4.2.7)
     taught_p_threshold: float = 0.0  # P_t for taught lessons (3.7: 0 for near-optimal teachers)
+    taught_order: str = "after"  # "after" the experienced lessons, or "shuffled" in among them (not in the thesis)
 
     def __post_init__(self):
         if self.capacity < 1:
             raise ValueError(f"replay capacity must be >= 1 lesson, got {self.capacity}")
+        if self.taught_order not in TAUGHT_ORDERS:
+            raise ValueError(f"taught_order must be one of {', '.join(TAUGHT_ORDERS)}, got {self.taught_order!r}")
         for name in ("p_threshold", "taught_p_threshold"):
             v = getattr(self, name)
             if not 0 <= v < 1:
@@ -171,7 +177,9 @@ class LessonAgent:
         raise NotImplementedError
 
     def learn(self) -> None:
-        """After a trial: replay n experienced lessons chosen by App. A.2, then the taught lessons (3.5, 3.7)."""
+        """After a trial: replay n experienced lessons chosen by App. A.2 and the taught lessons (3.5, 3.7), the
+        taught ones after the others or, with ``taught_order="shuffled"``, at random places among them (the
+        thesis does not say which; docs/RECONSTRUCTION.md, "Learners and protocols")."""
         r = self.config.replay
         if r is None or not self.learning:
             return
@@ -179,10 +187,17 @@ class LessonAgent:
         n = int(round(r.lessons_per_trial(self.trial))) if len(mem) else 0
         if self.replay_at_most_stored:
             n = min(n, len(mem))
-        for _ in range(n):
-            age, lesson = mem.sample(self.rng)
-            self.replay_lesson(lesson, r.threshold_for_age(age))
         p_taught = r.taught_probability(self.trial)
-        for lesson in self.book.taught:
-            if p_taught >= 1 or self.rng.random() < p_taught:
-                self.replay_lesson(lesson, r.taught_p_threshold)
+        if r.taught_order == "after":  # draws interleaved with replays, as the streams of stored runs expect
+            for _ in range(n):
+                age, lesson = mem.sample(self.rng)
+                self.replay_lesson(lesson, r.threshold_for_age(age))
+            for lesson in self.book.taught:
+                if p_taught >= 1 or self.rng.random() < p_taught:
+                    self.replay_lesson(lesson, r.taught_p_threshold)
+            return
+        queue = [(lesson, r.threshold_for_age(age)) for age, lesson in (mem.sample(self.rng) for _ in range(n))]
+        queue += [(lesson, r.taught_p_threshold) for lesson in self.book.taught
+                  if p_taught >= 1 or self.rng.random() < p_taught]
+        for i in self.rng.permutation(len(queue)):
+            self.replay_lesson(*queue[i])

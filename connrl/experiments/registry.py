@@ -11,6 +11,7 @@ SPEC_MODULES = (
     "connrl.experiments.survival",
     "connrl.experiments.hidden_state",
     "connrl.experiments.robot",
+    "connrl.experiments.robot_bounds",
 )
 
 

@@ -18,9 +18,11 @@ Taught lessons (3.7, 5.4) come from the scripted teachers of ``connrl.envs.robot
 ``connrl make-lessons robot`` rewrites ``connrl/data/lessons/robot-{dp,dk,wfl}.json``
 deterministically; 3 (DP, DK) or 2 (WFL) taught lessons are the first ones of the file.
 
-What we measured of the gap between our door passing and the thesis's, and of single-layer docking, is in
-docs/notes/robot-dp-gap.md (the seeds and commands are given there); the reconstructed geometry is in
-docs/RECONSTRUCTION.md, "HEROINE robot world".
+The DP world is calibrated (48-in doors, 44-in door-edge threshold; docs/RECONSTRUCTION.md, "Calibration of door
+passing"): ``robot-dp-calibration`` is the fit, ``robot-dp-geometry`` undoes each change alone,
+``robot-dp-replay-order``, ``robot-dp-lesson-use`` and ``robot-dp-fresh`` measure what it predicts, and
+``connrl.experiments.robot_bounds`` holds the copy bound. The earlier diagnosis of the SPEC geometry, and of
+single-layer docking, is docs/notes/robot-dp-gap.md.
 """
 
 from __future__ import annotations
@@ -34,8 +36,9 @@ from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.robot import ROBOT_RADIUS
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
-from connrl.tasks.robot import TAUGHT_COUNTS, evaluate, make_agent, make_env
+from connrl.tasks.robot import TAUGHT_COUNTS, TAUGHT_ORDERS, evaluate, make_agent, make_env
 
+MAX_TAUGHT = 200  # taught lessons an agent may ask for: the shipped ones, then fresh demonstrations
 THRESHOLDS = (2.5, 5.0)  # the two performance levels of the tables in 5.6
 
 
@@ -43,7 +46,7 @@ ROBOT_RANGES = {"lessons": ">=0", "hidden_fraction": ">=0", "lr": ">0", "momentu
                 "value_range": ">0", "gamma": "0..1", "lam": "0..1", "t_start": ">0", "t_end": ">0", "capacity": ">=1",
                 "lessons_per_trial": ">=0", "p_threshold": "0..<1", "stuck_window": ">=1", "stuck_radius": ">=0",
                 "stuck_boost": ">0", "trials": ">=1", "max_steps": ">=1", "test_every": ">=1", "test_tasks": ">=1",
-                "paths": ">=0", "dp_heading": "0..180", "dock_tolerance": "0..180"}
+                "paths": ">=0", "dp_heading": "0..180", "dock_tolerance": "0..180", "edge_jump": ">0"}
 
 
 @dataclass(frozen=True)
@@ -68,6 +71,7 @@ class RobotParams:
     lessons_per_trial: int = 60  # experienced lessons replayed after each trial (5.3.5)
     p_threshold: float = 0.02  # P_l: non-policy threshold (5.3.5)
     repair: str = "none"  # "none" | "lower" | "raise" (5.4.3)
+    taught_order: str = "after"  # taught lessons replayed "after" the experienced ones or "shuffled" among them (R)
     stuck_window: int = 8  # stuck detection (5.3.4, R): last 8 positions ...
     stuck_radius: float = 12.0  # ... within 12 in (one move) of their mean ...
     stuck_boost: float = 5.0  # ... multiply T by 5
@@ -77,20 +81,26 @@ class RobotParams:
     test_tasks: int = 50  # fixed test tasks per run (5.4)
     paths: int = 0  # greedy solution paths recorded at the end of the run (Figs. 5.5-5.7)
     linear_output: bool = False  # single-layer nets only: linear output unit (7.4's linear OAON; diagnostic)
-    door_width: float = 36.0  # doorway width, in (R); others: sensitivity study (robot-dp-geometry)
+    door_width: float = 48.0  # doorway width, in (R, calibrated: robot-dp-calibration; 36 = the SPEC reconstruction)
     dp_heading: float = 180.0  # DP starts face within +-this many deg of the door (180 = any heading, 5.4)
     dock_tolerance: float = 30.0  # DK: a head-on charger contact within this many deg docks (R; robot-dk-geometry)
+    dp_far: float = 72.0  # DP starts lie 24..dp_far in from the door's wall (R)
+    edge_jump: float = 44.0  # neighbouring sonar readings this many in apart mark a door edge (R, Fig. 5.3b; SPEC 24)
+    lesson_starts: str = "random"  # DP teacher's starts: "random" headings or "spread" (hand-picked, R)
 
     def __post_init__(self):
-        check_types(self, ROBOT_RANGES, task=("DP", "DK", "WFL"), repair=REPAIRS)
+        check_types(self, ROBOT_RANGES, task=("DP", "DK", "WFL"), repair=REPAIRS, taught_order=TAUGHT_ORDERS,
+                    lesson_starts=("random", "spread"))
         if not self.door_width > 2 * ROBOT_RADIUS:
             raise ValueError(f"parameter door_width must exceed the robot's diameter ({2 * ROBOT_RADIUS:g} in), "
                              f"got {self.door_width}")
 
-    def check_combination(self):
-        if self.lessons > TAUGHT_COUNTS[self.task]:
-            raise ValueError(f"parameter lessons must be at most {TAUGHT_COUNTS[self.task]} for task {self.task} "
-                             f"(the taught lessons there are), got {self.lessons}")
+        if not self.dp_far >= 24.0:
+            raise ValueError(f"parameter dp_far must be at least 24 (in; DP starts lie 24..dp_far from the wall), "
+                             f"got {self.dp_far}")
+        if self.lessons > MAX_TAUGHT:
+            raise ValueError(f"parameter lessons must be at most {MAX_TAUGHT} (beyond the shipped "
+                             f"{TAUGHT_COUNTS[self.task]} the teacher demonstrates afresh), got {self.lessons}")
 
 
 def quantity_name(level: float) -> str:
@@ -187,6 +197,9 @@ def _spec(name, title, section, base, variants, quantities, paths=0, description
 
 
 _DP_Q = (_q_reach(2.5), _q_reach(5.0), Q_FINAL, Q_MEAN)
+SPEC_DP = "SPEC: 36-in doors, 24-in edges"  # the reconstruction before the calibration of issue 12
+_GEOMETRIES = ((SPEC_DP, {"door_width": 36.0, "edge_jump": 24.0}, (0, 3, 10)),
+               ("36-in doors only", {"door_width": 36.0}, (0, 10)), ("24-in edges only", {"edge_jump": 24.0}, (0, 10)))
 _Q = (Q_FINAL, Q_MEAN)
 
 EXPERIMENTS = [
@@ -225,14 +238,36 @@ EXPERIMENTS = [
            Variant("DK single-layer", {"task": "DK", "lessons": 10, "lr": 0.04}),
            Variant("WFL single-layer", {"task": "WFL", "lessons": 5, "lr": 0.03})], _Q,
           description="compare with the multi-layer curves of robot-teaching-* (10/10/5 lessons)"),
-    _spec("robot-dp-geometry", "Sensitivity of DP to the reconstructed geometry: door width and start heading "
+    _spec("robot-dp-calibration", "Calibration of the DP reconstruction on Fig. 5.4a's no-teaching curve: door width "
+          "(not a thesis figure; run on the development seeds 100-106)", "5.4.1, 5.6; R", {"task": "DP", "lessons": 0},
+          [Variant(f"{w:g}-in doors, no teaching", {"door_width": w}, {"trials_to_2.5": 280})
+           for w in (36.0, 42.0, 48.0)],
+          _DP_Q, description="criterion: the mean no-teaching curve at trial 280 closest to the thesis's 2.5 "
+                             "(docs/RECONSTRUCTION.md, 'Calibration of door passing')"),
+    _spec("robot-dp-geometry", "The previous (SPEC) DP reconstruction and each calibrated change alone "
           "(not a thesis figure)", "5.4.1, 5.6; R", {"task": "DP"},
-          [Variant(f"{w:g}-in doors, {h}, {n} lessons", {"door_width": w, "dp_heading": hd, "lessons": n},
+          [Variant(f"{label}, {n} lessons", {**over, "lessons": n},
                    {"trials_to_2.5": {0: 280, 3: 20, 10: 10}[n], **({"trials_to_5": 65} if n == 10 else {})})
-           for w in (36.0, 48.0) for h, hd in (("any heading", 180.0), ("facing +-45", 45.0))
-           for n in (0, 3, 10)], _DP_Q,
-          description="the thesis does not give the door width (we reconstruct 36 in for a 24-in body) nor "
-                      "the start headings beyond 'near a door'; thesis numbers are its Fig. 5.4a / 5.6 values"),
+           for label, over, ns in _GEOMETRIES for n in ns], _DP_Q,
+          description="the calibrated default is 48-in doors with a 44-in door-edge jump (robot-teaching-dp); the SPEC "
+                      "reconstruction had 36 / 24; thesis numbers are its Fig. 5.4a / 5.6 values"),
+    _spec("robot-dp-replay-order", "Taught lessons replayed after the experienced ones, or shuffled in among them "
+          "(not a thesis figure)", "5.3.5; R", {"task": "DP"},
+          [Variant(f"{n} lessons, {order}", {"lessons": n, "taught_order": order},
+                   {"trials_to_2.5": {3: 20, 10: 10}[n]}) for n in (3, 10) for order in ("after", "shuffled")], _DP_Q,
+          description="5.3.5 replays '60 experienced lessons as well as all the taught lessons' without an order"),
+    _spec("robot-dp-lesson-use", "QCON-T replaying 10 or 100 taught lessons, to set beside copies of the same lessons "
+          "(robot-dp-copy; not a thesis figure)", "3.7, 5.4.1; R", {"task": "DP"},
+          [Variant("10 lessons", {"lessons": 10}, {"trials_to_2.5": 10}), Variant("100 lessons", {"lessons": 100})],
+          _DP_Q, description="the one change from robot-teaching-dp is the number of lessons; the first 10 of the 100 "
+                             "are the shipped ones"),
+    _spec("robot-dp-fresh", "The calibrated DP predictions again, for fresh seeds (not a thesis figure; run on seeds "
+          "1000-1006, never used in development)", "5.6", {"task": "DP"},
+          [Variant("no teaching", {"lessons": 0}, {"trials_to_2.5": 280}),
+           Variant("3 lessons", {"lessons": 3}, {"trials_to_2.5": 20}),
+           Variant("10 lessons", {"lessons": 10}, {"trials_to_2.5": 10, "trials_to_5": 65}),
+           Variant("10 lessons, lambda=0", {"lessons": 10, "lam": 0.0}, {"trials_to_5": 280}),
+           Variant("10 lessons, lambda=0.3", {"lessons": 10, "lam": 0.3}, {"trials_to_5": 140})], _DP_Q),
     _spec("robot-dk-geometry", "Sensitivity of DK to the reconstructed docking tolerance, multi- vs single-layer "
           "(not a thesis figure)", "5.4.1, 5.4.4; R", {"task": "DK"},
           [Variant(f"{tol:g} deg, {arch}, {n} lessons",

@@ -9,10 +9,15 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from connrl.envs.robot import Layout, render_figure_5_3, render_paths
-from connrl.experiments.robot import EXPERIMENTS, THRESHOLDS, first_reaching, quantity_name
+from connrl.experiments.robot import EXPERIMENTS as SKILLS
+from connrl.experiments.robot import SPEC_DP, THRESHOLDS, first_reaching, quantity_name
+from connrl.experiments.robot_bounds import EXPERIMENTS as BOUNDS
 from connrl.experiments.spec import ExperimentSpec
 from connrl.report.page import figure, fixed, note, stored
 from connrl.report.plots import save_figure
+from connrl.report.robot_dp import copy_table, dp_notes
+
+EXPERIMENTS = [*SKILLS[:1], *BOUNDS, *SKILLS[1:]]  # what this section covers; the copy bound beside the DP curves
 
 
 def mean_curve(records: list[dict]) -> tuple[np.ndarray, np.ndarray]:
@@ -70,6 +75,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     curves: dict[tuple[str, str], tuple[np.ndarray, np.ndarray, int]] = {}
     any_found = False
     walls, run_walls, cpus, seeds = [], [], set(), {}
+    copy_summary = None
     for spec in EXPERIMENTS:
         summary, recs = stored(spec, out_dir)
         if summary is None or not recs:
@@ -84,6 +90,10 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
                   f"`connrl run {spec.name} --profile {prof} --seed {summary['base_seed']}` — "
                   f"{summary['runs_per_variant']} runs per variant, seeds {seeds[spec.name]}, "
                   f"wall {summary['timing']['wall_time_s']:.0f} s.", ""]
+        if spec in BOUNDS:
+            copy_summary = summary
+            lines += copy_table(spec, summary)
+            continue
         lines += _variant_table(spec, summary, recs, curves)
         panels = _PANELS.get(spec.name)
         png = (_draw_panels(spec, curves, panels, out_dir / spec.name / "panels.png") if panels
@@ -113,14 +123,17 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
               "above).", ""]
     lines += _speedup_tables(curves)
     lines += ["### Where Ch. 5 falls short", "", note("robot-shortfall"), "",
-              *_geometry_notes(curves, seeds)]
+              *dp_notes(curves, copy_summary, seeds), *_docking_notes(curves, seeds)]
     return "\n".join(lines)
 
 
 _PANELS = {  # experiments drawn as small multiples: panel title -> [(line label, variant label)]
-    "robot-dp-geometry": {f"{w}-in doors, {h}": [(f"{n} lessons", f"{w}-in doors, {h}, {n} lessons")
-                                                 for n in (0, 3, 10)]
-                          for w in (36, 48) for h in ("any heading", "facing +-45")},
+    "robot-dp-geometry": {
+        **{label: [(f"{n} lessons", f"{label}, {n} lessons") for n in ns]
+           for label, ns in ((SPEC_DP, (0, 3, 10)), ("36-in doors only", (0, 10)), ("24-in edges only", (0, 10)))},
+        "calibrated: 48-in doors, 44-in edges (robot-teaching-dp)": [
+            (f"{n} lessons", ("robot-teaching-dp", v)) for n, v in ((0, "no teaching"), (3, "3 lessons"),
+                                                                      (10, "10 lessons"))]},
     "robot-dk-geometry": {f"dock within {t} deg": [(f"{a}, {n} lessons", f"{t} deg, {a}, {n} lessons")
                                                    for a in ("multi-layer", "single-layer") for n in (0, 10)]
                           for t in (30, 10)},
@@ -135,8 +148,9 @@ def _draw_panels(spec: ExperimentSpec, curves, panels: dict, file: Path) -> Path
                              sharex=True, sharey=True, squeeze=False)
     for ax, (title, lines) in zip(axes.flat, panels.items(), strict=False):
         for i, (label, variant) in enumerate(lines):
-            if (spec.name, variant) in curves:
-                xs, ys, k = curves[(spec.name, variant)]
+            key = variant if isinstance(variant, tuple) else (spec.name, variant)  # or another experiment's
+            if key in curves:
+                xs, ys, k = curves[key]
                 ax.plot(xs, ys, color=f"C{i}", lw=1.5, label=f"{label} ({k} runs)")
         for y in spec.y_reference.values():
             ax.axhline(y, color="k", ls="--", lw=0.7)
@@ -152,49 +166,6 @@ def _draw_panels(spec: ExperimentSpec, curves, panels: dict, file: Path) -> Path
     save_figure(fig, file)
     plt.close(fig)
     return file
-
-
-def _geometry_notes(curves, seeds: dict[str, str]) -> list[str]:
-    """Generated sentences on robot-dp-geometry / robot-dk-geometry (empty when they were not run)."""
-    out = []
-
-    def curve(exp, label):
-        xs, ys, _ = curves[(exp, label)]
-        return list(xs), np.asarray(ys)
-
-    def reach(label, level):
-        n = first_reaching(*curve("robot-dp-geometry", label), level)
-        return "not reached" if n is None else f"trial {n:g}"
-
-    def at(label, trial):
-        xs, ys = curve("robot-dp-geometry", label)
-        return float(ys[xs.index(trial)]) if trial in xs else float("nan")
-
-    combos = [f"{w}-in doors, {h}" for w in (36, 48) for h in ("any heading", "facing +-45")]
-    if all(("robot-dp-geometry", f"{g}, {n} lessons") in curves for g in combos for n in (0, 3, 10)):
-        def row(n, level):
-            return "; ".join(f"{g}: {reach(f'{g}, {n} lessons', level)}" for g in combos)
-
-        def mean_perf(g, n):
-            return float(np.mean(curve("robot-dp-geometry", f"{g}, {n} lessons")[1]))
-
-        best = max(combos, key=lambda g: mean_perf(g, 10))
-        best10, spec10 = at(f"{best}, 10 lessons", 10), at(f"{combos[0]}, 10 lessons", 10)
-        helped = mean_perf(best, 10) > mean_perf(combos[0], 10)
-        ordered = all(mean_perf(g, 10) > mean_perf(g, 3) > mean_perf(g, 0) for g in combos)
-        verdict = ("the geometry explains part of the gap, not all of it" if helped and not best10 >= 2.5
-                   else "the geometry closes the gap at trial 10" if helped else "the geometry does not help")
-        out += [f"**Door width and start heading** (`robot-dp-geometry`, seeds {seeds['robot-dp-geometry']}): "
-                "the thesis gives neither. Mean-curve trials to 2.5 with 10 lessons (thesis 10): " + row(10, 2.5) +
-                ". To 5 with 10 lessons (thesis 65): " + row(10, 5.0) + ". To 2.5 with 3 lessons (thesis 20): " +
-                row(3, 2.5) + ". Without teaching (thesis 280): " + row(0, 2.5) + ". The facing starts apply to "
-                "the 50 test tasks as well, so they make the test easier too, not only the learning. The best of "
-                f"these geometries ({best}, by mean performance with 10 lessons) scores {best10:.2f} at trial 10 "
-                f"with 10 lessons (reconstructed default geometry {spec10:.2f}; thesis 2.5), so {verdict}; the order "
-                "of the "
-                "teaching conditions (mean performance, 10 > 3 > 0 lessons) "
-                + ("holds in every geometry." if ordered else "does not hold in every geometry."), ""]
-    return out + _docking_notes(curves, seeds)
 
 
 def _docking_notes(curves, seeds: dict[str, str]) -> list[str]:
@@ -242,12 +213,11 @@ def _speedup_tables(curves) -> list[str]:
         out += [f"### {title} (thesis 5.6)", "", "| | trials (ours) | speedup (ours) | trials (thesis) | "
                 "speedup (thesis) |", "|---|---|---|---|---|"]
         base = None
-        for label, key, t_trials, t_speed in table:
+        for i, (label, key, t_trials, t_speed) in enumerate(table):
             xs, ys, _ = curves[key]
             n = first_reaching(list(xs), list(ys), level)
-            if base is None:
-                base = n
-                sp = None
+            if i == 0:  # the reference row; without it reaching the level there is no speedup
+                base, sp = n, None
             else:
                 sp = (base / n) if (base and n) else None
             out.append(f"| {label} | {fixed(n, 2) if n is not None else 'not reached'} | {fixed(sp, 1)} | "

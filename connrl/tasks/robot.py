@@ -9,23 +9,28 @@ Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "HEROINE robot wo
 from __future__ import annotations
 
 import functools
+import math
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
 from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents.base import TAUGHT_ORDERS  # noqa: F401  (experiments see the learner through tasks)
 from connrl.agents.teaching import TeachingConfig, TeachingQCON
 from connrl.core.exploration import StuckConfig, TemperatureSchedule
 from connrl.core.lesson_files import load_lessons, save_lessons
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import run_trial
-from connrl.envs.robot import OBS_SIZE, Layout, RobotTaskEnv, teach
+from connrl.envs.robot import DOOR_EDGE_JUMP, OBS_SIZE, Layout, RobotTaskEnv, teach
 from connrl.nets import NetConfig
 
 LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
 TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5}  # lessons shipped per task (5.4.1)
-DEFAULT_GEOMETRY = {"door_width": 36.0, "dock_tolerance": 30.0}  # what the shipped taught lessons were made in
+# The world the shipped taught lessons were made in: the default layout's doors, docking, door edges, starts.
+DEFAULT_GEOMETRY = {"door_width": 48.0, "dock_tolerance": 30.0, "edge_jump": float(DOOR_EDGE_JUMP), "spread": False}
+GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+DP_FAR = 72.0  # DP starts lie 24..DP_FAR in from the door's wall (R)
 
 
 def lesson_path(task: str) -> Path:
@@ -33,21 +38,33 @@ def lesson_path(task: str) -> Path:
 
 
 def make_env(p) -> RobotTaskEnv:
-    """The task environment of a parameter set (the layout's doors widened when ``door_width`` asks)."""
+    """The task environment of a parameter set (the layout's doors resized when ``door_width`` asks)."""
     layout = Layout.load("default")
     if p.door_width != DEFAULT_GEOMETRY["door_width"]:
         layout = layout.with_door_width(p.door_width)
     return RobotTaskEnv(p.task, layout=layout, binary_low=p.binary_low, max_steps=p.max_steps,
-                        dp_heading=p.dp_heading, dock_tolerance=p.dock_tolerance)
+                        dp_heading=p.dp_heading, dp_depth=(24.0, p.dp_far), dock_tolerance=p.dock_tolerance,
+                        edge_jump=p.edge_jump)
+
+
+def spread_heading(start: tuple, k: int, layout: Layout) -> tuple:
+    """The k-th hand-picked start (R): the drawn position, the heading turned from the bearing of the nearest door
+    by the golden-ratio sequence 0, 222, 85, 307, ... deg, so any first few lessons face the door from many angles,
+    turn-arounds included (5.4: "a manually-chosen start position")."""
+    x, y, _ = start
+    door = min(layout.doors.values(), key=lambda d: math.hypot(d.center[0] - x, d.center[1] - y))
+    bearing = math.degrees(math.atan2(door.center[1] - y, door.center[0] - x))
+    return (x, y, (bearing + 360.0 * ((k * GOLDEN) % 1.0)) % 360.0)
 
 
 def make_taught_lessons(task: str, n: int | None = None, seed: int = 0, max_tries: int = 200,
-                        env: RobotTaskEnv | None = None) -> list[Lesson]:
+                        env: RobotTaskEnv | None = None, spread: bool = False) -> list[Lesson]:
     """Demonstrations by the scripted teacher of ``task`` from start poses drawn with ``seed``.
 
     DP and DK keep only demonstrations that reach the goal (the thesis's "positive examples", 5.4.1);
     WFL keeps every 30-step demonstration. Deterministic given ``seed``. ``env`` (default: the task on
-    the default layout) sets the geometry the teacher demonstrates in.
+    the default layout) sets the geometry the teacher demonstrates in. ``spread`` (DP): the k-th lesson's
+    heading is set by ``spread_heading`` instead of drawn.
     """
     n = TAUGHT_COUNTS[task] if n is None else n
     env = RobotTaskEnv(task) if env is None else env
@@ -57,6 +74,8 @@ def make_taught_lessons(task: str, n: int | None = None, seed: int = 0, max_trie
         if len(out) == n:
             break
         start = env.sample_task(rng)
+        if spread:
+            start = spread_heading(start, len(out), env.layout)
         play_seed = int(rng.integers(2**31))
         steps = teach(env, start, seed=play_seed)
         success = bool(steps[-1][4])
@@ -92,34 +111,41 @@ def binary_columns(task: str) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=8)
-def _demonstrated(task: str, door_width: float, dock_tolerance: float) -> tuple[Lesson, ...]:
-    """The shipped lessons' recipe (seed 0, starts with any heading, 30 steps) in another geometry; cached
-    per process (callers copy the inputs before changing them)."""
+def _demonstrated(task: str, n: int, door_width: float, dock_tolerance: float, edge_jump: float,
+                  spread: bool) -> tuple[Lesson, ...]:
+    """The shipped lessons' recipe (seed 0, the default start region with any heading, 30 steps) in another world
+    or for more lessons than the file has; cached per process (callers copy the inputs before changing them)."""
     env = make_env(SimpleNamespace(task=task, door_width=door_width, dock_tolerance=dock_tolerance, binary_low=-0.5,
-                                   max_steps=30, dp_heading=180.0))
-    return tuple(make_taught_lessons(task, seed=0, env=env))
+                                   max_steps=30, dp_heading=180.0, dp_far=DP_FAR, edge_jump=edge_jump))
+    return tuple(make_taught_lessons(task, n, seed=0, env=env, max_tries=max(200, 20 * n), spread=spread))
 
 
-def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: float = 36.0,
-                   dock_tolerance: float = 30.0) -> list[Lesson]:
+def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: float = 48.0,
+                   dock_tolerance: float = 30.0, edge_jump: float = DOOR_EDGE_JUMP,
+                   spread: bool = False) -> list[Lesson]:
     """The first ``n`` taught lessons of ``task``, re-encoded for ``binary_low`` (files use -0.5/+0.5).
 
-    In the geometry of the shipped lessons (DEFAULT_GEOMETRY) they are read from the file; in another one
-    the same scripted teacher demonstrates afresh there (same seed and starts, deterministic).
+    In the world of the shipped lessons (DEFAULT_GEOMETRY), and for at most as many as the file has, they are read
+    from the file; otherwise the same scripted teacher demonstrates afresh (same seed and starts, deterministic),
+    so the first lessons of a longer list are the file's.
     """
     if n == 0:
         return []
+    world = {"door_width": float(door_width), "dock_tolerance": float(dock_tolerance), "edge_jump": float(edge_jump),
+             "spread": bool(spread) and task == "DP"}
     if task != "DK":
-        dock_tolerance = DEFAULT_GEOMETRY["dock_tolerance"]  # only docking depends on it
-    if (door_width, dock_tolerance) != (DEFAULT_GEOMETRY["door_width"], DEFAULT_GEOMETRY["dock_tolerance"]):
-        lessons = _demonstrated(task, float(door_width), float(dock_tolerance))
-        where = f"the teacher made {len(lessons)} with {door_width:g}-in doors, docking within {dock_tolerance:g} deg"
+        world["dock_tolerance"] = DEFAULT_GEOMETRY["dock_tolerance"]  # only docking depends on it
+    if task == "DK":
+        world["door_width"] = DEFAULT_GEOMETRY["door_width"]  # docking happens away from the doors
+    if task != "DP":
+        world["edge_jump"] = DEFAULT_GEOMETRY["edge_jump"]  # only DP sees the door-edge bits
+    if world != DEFAULT_GEOMETRY or n > TAUGHT_COUNTS[task]:
+        lessons = _demonstrated(task, n, **world)
     else:
         lessons = load_lessons(lesson_path(task), env_id=f"connrl/Robot-{task}-v0", input_dim=OBS_SIZE[task],
                                n_actions=6)
-        where = f"the file has {len(lessons)}"
-    if n > len(lessons):
-        raise ValueError(f"{task}: {n} taught lessons asked for, {where}")
+        if n > len(lessons):
+            raise ValueError(f"{task}: {n} taught lessons asked for, the file has {len(lessons)}")
     out = []
     for lesson in lessons[:n]:
         x = lesson.inputs.copy()
@@ -138,14 +164,25 @@ def make_agent(p, rng: np.random.Generator) -> TeachingQCON:
                     momentum=p.momentum, linear_output=bool(p.linear_output) and hidden == 0)
     replay = ReplayConfig(capacity=p.capacity,
                           lessons_per_trial=LinearSchedule(p.lessons_per_trial, p.lessons_per_trial),
-                          p_threshold=p.p_threshold)
+                          p_threshold=p.p_threshold, taught_order=p.taught_order)
     cfg = QCONConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials),
                      gamma=p.gamma, lam=p.lam, online=p.online, replay=replay,
                      stuck=StuckConfig(p.stuck_window, p.stuck_radius, p.stuck_boost))
     agent = TeachingQCON(cfg, 6, rng, TeachingConfig(repair=p.repair, merit_scale=p.value_range))
     agent.add_taught_lessons(taught_lessons(p.task, p.lessons, p.binary_low, p.door_width,
-                                            p.dock_tolerance))
+                                            p.dock_tolerance, p.edge_jump, p.lesson_starts == "spread"))
     return agent
+
+
+def teacher_score(env: RobotTaskEnv, tasks, seeds) -> tuple[float, int]:
+    """The scripted teacher (true pose) on fixed tasks: reinforcement per step as ``evaluate``, and its successes."""
+    total, steps, successes = 0.0, 0, 0
+    for start, seed in zip(tasks, seeds, strict=True):
+        lesson = teach(env, start, seed=int(seed))
+        total += sum(s[2] for s in lesson)
+        steps += len(lesson)
+        successes += bool(lesson[-1][4])
+    return total / steps, successes
 
 
 def evaluate(env: RobotTaskEnv, agent, tasks, seeds, max_steps: int, paths: list | None = None) -> float:

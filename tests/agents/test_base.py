@@ -75,3 +75,26 @@ def test_p_threshold_moves_with_lesson_age():
     assert r.threshold_for_age(0) == pytest.approx(1e-4)
     assert r.threshold_for_age(69) == pytest.approx(1e-7)
     assert 1e-7 < r.threshold_for_age(35) < 1e-4
+
+
+@pytest.mark.parametrize("order", ["after", "shuffled"])
+def test_taught_lessons_replayed_after_or_shuffled_among_the_experienced(order):
+    """Every chosen lesson is replayed once per trial either way; "after" puts the taught ones last (as before
+    taught_order existed), "shuffled" puts them at random places (5.3.5 gives no order)."""
+    replay = ReplayConfig(capacity=50, lessons_per_trial=LinearSchedule(12, 12), p_threshold=0.0, taught_order=order)
+    agent = qcon(replay=replay, seed=4)
+    taught = [Lesson(np.full((2, 4), k), [0], [1.0], terminated=True, taught=True) for k in range(4)]
+    agent.add_taught_lessons(taught)
+    for k in range(20):  # 20 experienced lessons in memory
+        agent.book.memory.add(Lesson(np.full((2, 4), 100 + k), [1], [0.0], terminated=True))
+    calls = []
+    agent.replay_lesson = lambda lesson, p: calls.append(lesson.taught)
+    agent.begin_trial(np.zeros(4), trial=0)
+    agent.learn()
+    assert len(calls) == 16 and sum(calls) == 4
+    if order == "after":
+        assert calls == [False] * 12 + [True] * 4
+    else:
+        assert calls != [False] * 12 + [True] * 4  # seed 4: some taught lesson comes before an experienced one
+    with pytest.raises(ValueError, match="taught_order must be one of after, shuffled"):
+        ReplayConfig(taught_order="first")

@@ -14,6 +14,7 @@ from connrl.envs.robot import (
     OBS_SIZE,
     TASKS,
     TURN_LEFT_60,
+    Layout,
     RobotTaskEnv,
     encode_sonar,
     side_alignment,
@@ -124,7 +125,7 @@ def test_dp_success_when_the_centre_gets_into_another_room():
 
 
 def test_dp_jamb_collision():
-    env = exact("DP")
+    env = exact("DP", layout=Layout.load("default").with_door_width(36.0))  # the SPEC reconstruction's doors
     # 8 in off door A's axis (6 in of slack per side): the body touches the west jamb (96, 300) when the
     # centre is at y = 300 + sqrt(12^2 - 10^2) = 306.6, so the second move south (318 -> 306) is cancelled,
     # the contact 56.4 deg right of the heading.
@@ -136,6 +137,14 @@ def test_dp_jamb_collision():
     # 5 in off the axis the body clears the jamb by 1 in and the robot gets through.
     env.reset(seed=0, options={"start": (109, 330, 270)})
     assert [env.step(MOVE_FORWARD)[1] for _ in range(3)] == [0, 0, 100]
+    # the calibrated 48-in door (12 in of slack per side): 8 in off the axis passes, 14 in off hits the jamb at x = 90
+    env = exact("DP")
+    env.reset(seed=0, options={"start": (106, 330, 270)})
+    assert [env.step(MOVE_FORWARD)[1] for _ in range(3)] == [0, 0, 100]
+    env.reset(seed=0, options={"start": (100, 330, 270)})  # 10 in from the jamb (90, 300), as above
+    assert env.step(MOVE_FORWARD)[1] == 0
+    _, r, _, _, info = env.step(MOVE_FORWARD)
+    assert (r, info["collision_side"]) == (-10.0, "right")
 
 
 def test_truncation_after_max_steps():

@@ -12,8 +12,9 @@ def test_default_layout_matches_spec():
     L = Layout.load("default")
     assert L.size == (360.0, 420.0)
     assert L.rooms == {"A": (0, 0, 180, 300), "B": (180, 0, 360, 300), "C": (0, 300, 360, 420)}
-    assert L.doors["A"].segment == (96, 300, 132, 300) and L.doors["B"].segment == (228, 300, 264, 300)
-    assert all(d.width == 36 for d in L.doors.values())
+    # 48-in doors about the SPEC's centres x = 114 and 246 (calibrated, docs/RECONSTRUCTION.md)
+    assert L.doors["A"].segment == (90, 300, 138, 300) and L.doors["B"].segment == (222, 300, 270, 300)
+    assert all(d.width == 48 for d in L.doors.values())
     assert set(L.obstacles) == {(72, 150, 120, 174), (132, 36, 168, 72), (252, 168, 300, 192)}
     assert L.charger == (0, 0, 18, 18) and L.light == (9, 9)
     for name, loc in L.locations.items():
@@ -49,7 +50,9 @@ def test_layout_round_trips_through_dict():
 
 
 def test_with_door_width_widens_each_door_about_its_centre():
-    d = Layout.load("default")
+    d = Layout.load("default").with_door_width(36.0)  # the SPEC reconstruction's doors
+    assert {k: v.segment for k, v in d.doors.items()} == {"A": (96.0, 300.0, 132.0, 300.0),
+                                                          "B": (228.0, 300.0, 264.0, 300.0)}
     w = d.with_door_width(48.0)
     assert {k: v.segment for k, v in w.doors.items()} == {"A": (90.0, 300.0, 138.0, 300.0),
                                                           "B": (222.0, 300.0, 270.0, 300.0)}

@@ -75,7 +75,7 @@ def test_start_generators():
         assert L.is_free(x, y) and math.hypot(x - 9, y - 9) <= 96 and L.light_visible(x, y) and 0 <= h < 360
         x, y, h = dp.sample_task(rng)
         door = min(abs(x - 114), abs(x - 246))
-        assert L.is_free(x, y) and door <= 18 and 24 <= abs(y - 300) <= 72 and 0 <= h < 360  # in front
+        assert L.is_free(x, y) and door <= 24 and 24 <= abs(y - 300) <= 72 and 0 <= h < 360  # in front
         x, y, h = wf.sample_task(rng)
         assert L.is_free(x, y) and L.room_at(x, y) in "ABC"
 
@@ -85,7 +85,7 @@ def test_dp_start_region_arguments():
     L = Layout.load("default")
     pts = [sample_dp_start(rng, L, offset=40.0, depth=(30.0, 36.0)) for _ in range(200)]
     lat = [min(abs(x - 114), abs(x - 246)) for x, _, _ in pts]
-    assert max(lat) <= 40 and max(lat) > 18 and all(30 <= abs(y - 300) <= 36 for _, y, _ in pts)
+    assert max(lat) <= 40 and max(lat) > 24 and all(30 <= abs(y - 300) <= 36 for _, y, _ in pts)
     rooms = {L.room_at(x, y) for x, y, _ in pts}
     assert rooms == {"A", "B", "C"}  # both doors, both sides
     with pytest.raises(ValueError, match="dp_offset"):
@@ -107,5 +107,6 @@ def test_dp_start_heading_faces_the_door():
         assert abs((h - through + 180.0) % 360.0 - 180.0) <= 45.0 + 1e-9
         assert 0.0 <= h < 360.0
     # any heading (the default) keeps the draws of the generator before dp_heading existed (commit c29cf40)
-    assert RobotTaskEnv("DP").sample_task(np.random.default_rng(3)) == pytest.approx(
+    spec = Layout.load("default").with_door_width(36.0)
+    assert RobotTaskEnv("DP", layout=spec).sample_task(np.random.default_rng(3)) == pytest.approx(
         (256.8458807474303, 351.94377773108965, 33.88631120654371), abs=1e-12)

@@ -17,7 +17,8 @@ def test_specs_cover_chapter_5():
     names = {s.name for s in EXPERIMENTS}
     assert names == {"robot-teaching-dp", "robot-teaching-dk", "robot-teaching-wfl", "robot-lambda-dp",
                      "robot-lambda-wfl", "robot-repairs-3", "robot-repairs-10", "robot-single-layer",
-                     "robot-dp-geometry", "robot-dk-geometry"}
+                     "robot-dp-geometry", "robot-dk-geometry", "robot-dp-calibration", "robot-dp-replay-order",
+                     "robot-dp-fresh", "robot-dp-lesson-use"}
     for s in EXPERIMENTS:
         params, runs = s.resolve("full")
         assert runs == 7 and params.trials == 300 and params.test_every == 10 and params.test_tasks == 50
@@ -40,13 +41,19 @@ def _variant_params(name: str, label: str) -> dict:
 
 def test_geometry_studies_vary_only_the_geometry():
     dp = next(s for s in EXPERIMENTS if s.name == "robot-dp-geometry")
-    combos = {(v.params["door_width"], v.params["dp_heading"], v.params["lessons"]) for v in dp.variants}
-    assert combos == {(w, h, n) for w in (36.0, 48.0) for h in (180.0, 45.0) for n in (0, 3, 10)}
+    combos = {(v.params.get("door_width", 48.0), v.params.get("edge_jump", 44.0), v.params["lessons"])
+              for v in dp.variants}
+    assert combos == {(36.0, 24.0, 0), (36.0, 24.0, 3), (36.0, 24.0, 10), (36.0, 44.0, 0), (36.0, 44.0, 10),
+                      (48.0, 24.0, 0), (48.0, 24.0, 10)}
     assert {v.thesis["trials_to_2.5"] for v in dp.variants if v.params["lessons"] == 10} == {10}
-    # in the reconstructed geometry the studies' variants are exactly the thesis experiments' variants
+    # each variant is the thesis experiment's variant with only the geometry changed
     for n, label in ((0, "no teaching"), (3, "3 lessons"), (10, "10 lessons")):
-        assert _variant_params("robot-dp-geometry", f"36-in doors, any heading, {n} lessons") == \
-            _variant_params("robot-teaching-dp", label)
+        assert _variant_params("robot-dp-geometry", f"SPEC: 36-in doors, 24-in edges, {n} lessons") == \
+            {**_variant_params("robot-teaching-dp", label), "door_width": 36.0, "edge_jump": 24.0}
+    assert _variant_params("robot-dp-fresh", "10 lessons, lambda=0.3") == \
+        _variant_params("robot-lambda-dp", "lambda=0.3")
+    assert _variant_params("robot-dp-calibration", "48-in doors, no teaching") == \
+        _variant_params("robot-teaching-dp", "no teaching")
     assert _variant_params("robot-dk-geometry", "30 deg, multi-layer, 10 lessons") == \
         _variant_params("robot-teaching-dk", "10 lessons")
     assert _variant_params("robot-dk-geometry", "30 deg, single-layer, 10 lessons") == \

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
 from connrl.report import robot
 from tests.tiny_runs import run_tiny
 
@@ -18,11 +20,16 @@ def test_tiny_run_and_results_section(tmp_path):
 
 
 def test_geometry_sections_draw_panels_and_notes(tmp_path):
-    for name in ("robot-dp-geometry", "robot-dk-geometry"):
+    for name in ("robot-teaching-dp", "robot-dp-copy", "robot-dp-calibration", "robot-dp-geometry",
+                 "robot-dp-replay-order", "robot-dp-fresh", "robot-dk-geometry", "robot-dp-lesson-use"):
         run_tiny(name, tmp_path)
     md = robot.results_section(tmp_path, tmp_path / "docs" / "RESULTS.md")
-    assert "**Door width and start heading**" in md and "**Docking tolerance**" in md
-    assert "| 48-in doors, facing +-45, 10 lessons |" in md
+    for head in ("**Calibration**", "**Copy bound**", "**Each calibrated change alone**", "**Replay order**",
+                 "**Fresh seeds**", "**Docking tolerance**"):
+        assert head in md, head
+    assert "One change isolates the rest" in md
+    assert "| SPEC: 36-in doors, 24-in edges, 10 lessons |" in md and "| copy 10 lessons |" in md
+    assert md.index("### robot-teaching-dp") < md.index("### robot-dp-copy") < md.index("### robot-dp-calibration")
     for name in ("robot-dp-geometry", "robot-dk-geometry"):
         assert (tmp_path / name / "panels.png").exists()
         assert (tmp_path / "docs" / "figures" / f"{name}-curves.png").exists()
@@ -30,3 +37,16 @@ def test_geometry_sections_draw_panels_and_notes(tmp_path):
 
 def test_results_section_without_runs(tmp_path):
     assert "No Ch. 5 results yet" in robot.results_section(tmp_path, tmp_path / "RESULTS.md")
+
+
+def test_speedup_tables_need_the_reference_row_to_reach_the_level():
+    xs = np.arange(0, 310, 10)
+
+    def curve(first):  # 0 before trial `first`, 6 from it on
+        return xs, np.where(xs >= first, 6.0, 0.0) if first is not None else np.zeros(xs.size), 7
+
+    keys = [("robot-teaching-dp", v) for v in ("no teaching", "3 lessons", "10 lessons")] + \
+        [("robot-lambda-dp", v) for v in ("lambda=0", "lambda=0.3", "lambda=0.7")]
+    md = "\n".join(robot._speedup_tables(dict(zip(keys, map(curve, (None, 200, 100, 280, 140, 70)), strict=True))))
+    assert "| 10 taught lessons | 100 | — | 10 | 28 |" in md  # no teaching never reached 2.5: no speedup
+    assert "| lambda = 0.7 | 70 | 4 | 65 | 4.3 |" in md  # 280 / 70

@@ -27,8 +27,11 @@ def test_taught_lessons_shipped_and_reencoded():
     np.testing.assert_array_equal(zero_one.inputs[:, :24], dp[0].inputs[:, :24])  # sonar untouched
     wf = taught_lessons("WFL", 1, binary_low=0.0)[0]
     np.testing.assert_array_equal(wf.inputs[:, 28:30], taught_lessons("WFL", 1)[0].inputs[:, 28:30])
-    with pytest.raises(ValueError, match="taught lessons asked for"):
-        taught_lessons("WFL", 6)
+    # more lessons than the file has: the teacher demonstrates afresh, the first ones are the file's
+    more = taught_lessons("DP", 12)
+    assert len(more) == 12 and all(lesson.rewards[-1] == 100.0 for lesson in more)
+    for a, b in zip(more[:10], dp, strict=True):
+        np.testing.assert_array_equal(a.inputs, b.inputs)
 
 
 def test_agent_config_matches_thesis():
@@ -46,14 +49,14 @@ def test_agent_config_matches_thesis():
 
 
 def test_other_geometry_gets_its_own_taught_lessons():
-    wide = robot.taught_lessons("DP", 3, -0.5, door_width=48.0)
-    again = robot.taught_lessons("DP", 3, -0.5, door_width=48.0)
+    wide = robot.taught_lessons("DP", 3, -0.5, door_width=36.0, edge_jump=24.0)
+    again = robot.taught_lessons("DP", 3, -0.5, door_width=36.0, edge_jump=24.0)
     shipped = robot.taught_lessons("DP", 3)
     for a, b in zip(wide, again, strict=True):  # deterministic
         np.testing.assert_array_equal(a.inputs, b.inputs)
-    # the teacher demonstrated in the 48-in layout: its first lesson is what the teacher does there
-    env = robot.make_env(RobotParams(door_width=48.0))
-    assert env.layout.doors["A"].width == 48.0
+    # the teacher demonstrated in the SPEC's 36-in layout with 24-in edges: its first lesson is what it does there
+    env = robot.make_env(RobotParams(door_width=36.0, edge_jump=24.0))
+    assert env.layout.doors["A"].width == 36.0 and env.unwrapped.sim.edge_jump == 24.0
     direct = make_taught_lessons("DP", n=1, seed=0, env=env)[0]
     np.testing.assert_array_equal(wide[0].inputs, direct.inputs)
     assert all(w.meta["success"] for w in wide)
@@ -62,10 +65,13 @@ def test_other_geometry_gets_its_own_taught_lessons():
     # docking tolerance matters for DK only
     assert all(np.array_equal(a.inputs, b.inputs) for a, b in
                zip(robot.taught_lessons("DP", 2, dock_tolerance=10.0), robot.taught_lessons("DP", 2), strict=True))
-    with pytest.raises(ValueError, match="the teacher made 10"):
-        robot.taught_lessons("DP", 11, door_width=48.0)
+    # the door-edge threshold changes DP's inputs only
+    edges = robot.taught_lessons("DP", 2, edge_jump=24.0)
+    assert not np.array_equal(edges[0].inputs[:, 24:48], shipped[0].inputs[:, 24:48])
+    assert all(np.array_equal(a.inputs, b.inputs) for a, b in
+               zip(robot.taught_lessons("DK", 2, edge_jump=24.0), robot.taught_lessons("DK", 2), strict=True))
     tiny = RobotParams(trials=4, test_every=2, test_tasks=3, lessons_per_trial=3)
-    r = run_robot(replace(tiny, door_width=48.0, dp_heading=45.0, lessons=3), np.random.default_rng(1))
+    r = run_robot(replace(tiny, door_width=36.0, dp_heading=45.0, lessons=3), np.random.default_rng(1))
     assert r.curve_x == [0, 2, 4]
 
 

@@ -2,7 +2,7 @@
 
 Description:
     A disc robot (radius 12 in) in a three-room office (Fig. 5.3): rooms A (south-west) and B
-    (south-east) open through two 36-in doorways onto room C (a strip along the north wall). A battery
+    (south-east) open through two 48-in doorways onto room C (a strip along the north wall). A battery
     charger with a light on top sits in A's south-west corner. This module holds the world only:
     the :class:`Layout` (plain JSON data under ``connrl/data/layouts/``), the robot's motion with
     control error and collision handling, its sensors (sonar, light, door-edge, collision, compass,
@@ -25,7 +25,7 @@ Sensors (``RobotSim.sense`` -> :class:`Reading`):
       of the robot's centre, and no wall or obstacle blocks the line of sight (the charger itself
       does not: the light sits on top of it).
     - door edge: 24 bits computed from the (noisy) sonar scan; when two neighbouring readings differ
-      by 24 in or more, the bit of the *nearer* reading is set (that is where the edge is).
+      by ``edge_jump`` (44 in) or more, the bit of the *nearer* reading is set (that is where the edge is).
     - collision: 4 bits in the order (front, back, left, right); set after a move that was
       cancelled, on the side where the body touched: front |angle| <= 45 deg, left 45..135,
       back >= 135, right -135..-45 (angle of the contact point relative to the heading).

@@ -12,7 +12,7 @@ SONAR_MAX = 127  # sonar range 0..127 in, 1-in resolution (5.2.1)
 SONAR_ERROR = 0.10  # reading uniform in [0.9x, 1.1x] (5.2.1)
 DROPOUT_PROB = 0.25  # one reading of every 4 scans set to 127 (5.2.1)
 CONTROL_ERROR = 0.08  # "about 8% control error" (5.2.1; R: uniform on length and angle)
-DOOR_EDGE_JUMP = 24  # neighbouring readings differing by this much mark a potential door edge (R)
+DOOR_EDGE_JUMP = 44  # neighbouring readings differing by this much mark a potential door edge (R, Fig. 5.3b)
 LIGHT_HALF_ANGLE = 7.5  # light bit k on when the light is within +-7.5 deg of ray k (R)
 LIGHT_RANGE = 120.0  # light detectable up to this distance from the centre (R)
 

@@ -13,6 +13,7 @@ from gymnasium import spaces
 from connrl.envs.robot.constants import (
     ACTION_NAMES,
     COLLISION_SIDES,
+    DOOR_EDGE_JUMP,
     MOVE_BACKWARD,
     MOVE_FORWARD,
     N_ACTIONS,
@@ -52,7 +53,8 @@ class RobotTaskEnv(gym.Env):
                  start_sampler: Callable[[np.random.Generator, Layout], tuple] | None = None,
                  dk_radius: float = 96.0, dp_offset: float | None = None,
                  dp_depth: tuple[float, float] = (24.0, 72.0), dp_heading: float = 180.0,
-                 dock_tolerance: float = 30.0, pass_depth: float = 0.0, render_rays: bool = False):
+                 dock_tolerance: float = 30.0, pass_depth: float = 0.0, render_rays: bool = False,
+                 edge_jump: float = DOOR_EDGE_JUMP):
         if task not in TASKS:
             raise ValueError(f"task must be one of {TASKS}, got {task!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -82,7 +84,8 @@ class RobotTaskEnv(gym.Env):
         self._dp_heading = float(dp_heading)
         sn = noise if sensor_noise is None else sensor_noise
         cn = noise if control_noise is None else control_noise
-        self.sim = RobotSim(self.layout, np.random.default_rng(), sensor_noise=sn, control_noise=cn)
+        self.sim = RobotSim(self.layout, np.random.default_rng(), sensor_noise=sn, control_noise=cn,
+                            edge_jump=edge_jump)
 
         n = OBS_SIZE[task]
         lo = np.full(n, min(self.binary_low, -0.25), dtype=np.float32)

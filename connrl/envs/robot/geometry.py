@@ -8,7 +8,6 @@ import numba as nb
 import numpy as np
 
 from connrl.envs.robot.constants import (
-    DOOR_EDGE_JUMP,
     DROPOUT_PROB,
     LIGHT_HALF_ANGLE,
     LIGHT_RANGE,
@@ -132,7 +131,8 @@ def _time_of_impact(x, y, dx, dy, segs, radius):
 
 
 @nb.njit(cache=True)
-def _scan(x, y, heading_deg, segs, kinds, lx, ly, radius, u, noise, true_out, sonar_out, light_out, door_out):
+def _scan(x, y, heading_deg, segs, kinds, lx, ly, radius, u, noise, edge_jump, true_out, sonar_out, light_out,
+          door_out):
     """One sensor sweep: true body ranges, noisy sonar, light bits and door-edge bits."""
     n = true_out.shape[0]
     _cast_rays(x, y, heading_deg, segs, true_out)
@@ -161,9 +161,9 @@ def _scan(x, y, heading_deg, segs, kinds, lx, ly, radius, u, noise, true_out, so
     for k in range(n):
         j = (k + 1) % n
         diff = sonar_out[k] - sonar_out[j]
-        if diff >= DOOR_EDGE_JUMP:
+        if diff >= edge_jump:
             door_out[j] = 1
-        elif -diff >= DOOR_EDGE_JUMP:
+        elif -diff >= edge_jump:
             door_out[k] = 1
 
 

@@ -156,7 +156,7 @@ class Layout:
 
     def with_door_width(self, width: float) -> Layout:
         """A copy whose doorways are ``width`` in wide, each about its own centre, the abutting collinear
-        wall segments cut back or extended to meet the new jambs (a sensitivity study of our reconstructed 36 in).
+        wall segments cut back or extended to meet the new jambs (the SPEC's 36 in, or a calibration's candidates).
         Layouts with a wall meeting a jamb at an angle (a door return) are refused rather than guessed."""
         if not (math.isfinite(width) and width > 2 * ROBOT_RADIUS):
             raise ValueError(f"door width must be a finite number of inches above the robot's diameter "

@@ -14,6 +14,7 @@ from connrl.envs.robot.constants import (
     ACTION_TURN_DEG,
     BACK,
     CONTROL_ERROR,
+    DOOR_EDGE_JUMP,
     FRONT,
     LEFT,
     N_ACTIONS,
@@ -63,10 +64,14 @@ class RobotSim:
         rng: the Generator all noise is drawn from (replace ``sim.rng`` to re-seed).
         sensor_noise: sonar noise and dropouts on (5.2.1). Off gives exact readings.
         control_noise: 8% control error on (5.2.1). Off gives exact 15/60 deg and 12 in.
+        edge_jump: neighbouring sonar readings differing by at least this many inches mark a door edge (R).
     """
 
     def __init__(self, layout: Layout | str = "default", rng: np.random.Generator | None = None, *,
-                 sensor_noise: bool = True, control_noise: bool = True):
+                 sensor_noise: bool = True, control_noise: bool = True, edge_jump: float = DOOR_EDGE_JUMP):
+        if not 0 < edge_jump < math.inf:
+            raise ValueError(f"edge_jump must be a finite number of inches > 0, got {edge_jump!r}")
+        self.edge_jump = float(edge_jump)
         self.layout = layout if isinstance(layout, Layout) else Layout.load(layout)
         self.rng = rng if rng is not None else np.random.default_rng()
         self.sensor_noise = bool(sensor_noise)
@@ -138,7 +143,7 @@ class RobotSim:
         ranges, sonar = np.empty(N_RAYS), np.empty(N_RAYS)
         light, door = np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8)
         _scan(self.x, self.y, self.heading, self._segs, self._kinds, self._light[0], self._light[1],
-              ROBOT_RADIUS, u, self.sensor_noise, ranges, sonar, light, door)
+              ROBOT_RADIUS, u, self.sensor_noise, self.edge_jump, ranges, sonar, light, door)
         return Reading(sonar, ranges, light, door, self.last_collision.copy(), self.heading, self.room)
 
     def true_ranges(self) -> np.ndarray:

@@ -1,0 +1,48 @@
+"""Door-edge threshold from the caption of Fig. 5.3b/c: at L3 (and L4) facing north "four edges are detected
+here, but only two of them are real door edges". For each threshold, the share of noisy scans at L3 and L4
+(facing north) that show exactly four door-edge bits; the calibrated ``edge_jump`` is the threshold with the
+largest share. Deterministic (seed 0); a few seconds.
+
+    python scripts/dp_calibration/edge_jump.py [--door-width 36] [--scans 1000]
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections import Counter
+
+import numpy as np
+
+from connrl.envs.robot import Layout, RobotSim
+
+
+def four_edge_share(layout: Layout, jump: float, scans: int, seed: int = 0) -> tuple[float, float]:
+    out = []
+    for name in ("L3", "L4"):
+        x, y = layout.locations[name][:2]
+        sim = RobotSim(layout, np.random.default_rng(seed), edge_jump=jump)
+        sim.place(x, y, 90.0)  # facing north, as in Fig. 5.3b/c
+        counts = Counter(int(sim.sense().door_edge.sum()) for _ in range(scans))
+        out.append(counts[4] / scans)
+    return out[0], out[1]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--door-width", type=float, default=36.0)
+    ap.add_argument("--scans", type=int, default=1000)
+    args = ap.parse_args()
+    layout = Layout.load("default")
+    if args.door_width != 36.0:
+        layout = layout.with_door_width(args.door_width)
+    rows = [(jump, *four_edge_share(layout, jump, args.scans)) for jump in range(12, 73, 4)]
+    print(f"{args.door_width:g}-in doors, {args.scans} noisy scans at L3 / L4 facing north")
+    print("edge_jump (in) | P(4 edges) at L3 | at L4")
+    for jump, a, b in rows:
+        print(f"{jump:14d} | {a:16.2f} | {b:.2f}")
+    best = max(rows, key=lambda r: r[1] + r[2])
+    print(f"calibrated edge_jump: {best[0]} in (largest share of four-edge scans)")
+
+
+if __name__ == "__main__":
+    main()
