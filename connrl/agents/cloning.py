@@ -5,9 +5,9 @@ here it teaches the choice itself: net a is trained towards +``margin`` and ever
 -``margin`` on each taught state (one-vs-rest regression, the same back-propagation, learning rate and momentum
 as the agent's own nets), until the greedy action is the taught one on every taught state or ``epochs`` run out.
 
-The greedy policy of such a copy is the best a learner can make of the lessons *alone*: if it cannot pass the
-test tasks, the inputs and lessons do not carry what the task needs, whatever the reinforcement learner does
-with them (docs/RECONSTRUCTION.md, "The copy bound").
+The greedy policy of such a copy is a reference for what the lessons *alone* can give, not a strict bound: it is one
+capped one-vs-rest regressor, and a reinforcement learner also learns from its own trials (docs/RECONSTRUCTION.md,
+"Calibration of door passing").
 """
 
 from __future__ import annotations

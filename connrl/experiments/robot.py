@@ -33,10 +33,10 @@ import numpy as np
 
 from connrl.core.replay import REPAIRS
 from connrl.core.rollout import TrialStats, run_trial
-from connrl.envs.robot import ROBOT_RADIUS
+from connrl.envs.robot import ROBOT_RADIUS, SONAR_MAX
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
-from connrl.tasks.robot import TAUGHT_COUNTS, TAUGHT_ORDERS, evaluate, make_agent, make_env
+from connrl.tasks.robot import DP_FAR, SHIPPED_WORLD, TAUGHT_COUNTS, TAUGHT_ORDERS, evaluate, make_agent, make_env
 
 MAX_TAUGHT = 200  # taught lessons an agent may ask for: the shipped ones, then fresh demonstrations
 THRESHOLDS = (2.5, 5.0)  # the two performance levels of the tables in 5.6
@@ -81,11 +81,11 @@ class RobotParams:
     test_tasks: int = 50  # fixed test tasks per run (5.4)
     paths: int = 0  # greedy solution paths recorded at the end of the run (Figs. 5.5-5.7)
     linear_output: bool = False  # single-layer nets only: linear output unit (7.4's linear OAON; diagnostic)
-    door_width: float = 48.0  # doorway width, in (R, calibrated: robot-dp-calibration; 36 = the SPEC reconstruction)
+    door_width: float = SHIPPED_WORLD["door_width"]  # doorway width, in: the layout's 48 (R, calibrated; SPEC 36)
     dp_heading: float = 180.0  # DP starts face within +-this many deg of the door (180 = any heading, 5.4)
     dock_tolerance: float = 30.0  # DK: a head-on charger contact within this many deg docks (R; robot-dk-geometry)
-    dp_far: float = 72.0  # DP starts lie 24..dp_far in from the door's wall (R)
-    edge_jump: float = 44.0  # neighbouring sonar readings this many in apart mark a door edge (R, Fig. 5.3b; SPEC 24)
+    dp_far: float = DP_FAR  # DP starts lie 24..dp_far in from the door's wall (R)
+    edge_jump: float = SHIPPED_WORLD["edge_jump"]  # readings this far apart mark a door edge (R, Fig. 5.3b; SPEC 24)
     lesson_starts: str = "random"  # DP teacher's starts: "random" headings or "spread" (hand-picked, R)
 
     def __post_init__(self):
@@ -95,12 +95,22 @@ class RobotParams:
             raise ValueError(f"parameter door_width must exceed the robot's diameter ({2 * ROBOT_RADIUS:g} in), "
                              f"got {self.door_width}")
 
-        if not self.dp_far >= 24.0:
-            raise ValueError(f"parameter dp_far must be at least 24 (in; DP starts lie 24..dp_far from the wall), "
-                             f"got {self.dp_far}")
+        if not 24.0 <= self.dp_far <= 96.0:
+            raise ValueError(f"parameter dp_far must be in [24, 96] (in; DP starts lie 24..dp_far from the door's "
+                             f"wall, near the door), got {self.dp_far}")
+        if self.edge_jump > SONAR_MAX:
+            raise ValueError(f"parameter edge_jump must be at most {SONAR_MAX} (the sonar's range; above it no door "
+                             f"edge is ever seen), got {self.edge_jump}")
         if self.lessons > MAX_TAUGHT:
             raise ValueError(f"parameter lessons must be at most {MAX_TAUGHT} (beyond the shipped "
                              f"{TAUGHT_COUNTS[self.task]} the teacher demonstrates afresh), got {self.lessons}")
+
+    def check_combination(self):
+        dp_only = [k for k, v in (("dp_heading", 180.0), ("dp_far", DP_FAR), ("lesson_starts", "random"),
+                                  ("edge_jump", SHIPPED_WORLD["edge_jump"])) if getattr(self, k) != v]
+        if self.task != "DP" and dp_only:
+            raise ValueError(f"parameter(s) {', '.join(dp_only)} apply to task DP only (its start region, teacher "
+                             f"and door-edge inputs), got task {self.task}")
 
 
 def quantity_name(level: float) -> str:

@@ -28,7 +28,8 @@ from connrl.nets import NetConfig
 LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
 TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5}  # lessons shipped per task (5.4.1)
 # The world the shipped taught lessons were made in: the default layout's doors, docking, door edges, starts.
-DEFAULT_GEOMETRY = {"door_width": 48.0, "dock_tolerance": 30.0, "edge_jump": float(DOOR_EDGE_JUMP), "spread": False}
+SHIPPED_WORLD = {"door_width": float(Layout.load("default").doors["A"].width), "dock_tolerance": 30.0,
+                 "edge_jump": float(DOOR_EDGE_JUMP), "spread": False}
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 DP_FAR = 72.0  # DP starts lie 24..DP_FAR in from the door's wall (R)
 
@@ -40,7 +41,7 @@ def lesson_path(task: str) -> Path:
 def make_env(p) -> RobotTaskEnv:
     """The task environment of a parameter set (the layout's doors resized when ``door_width`` asks)."""
     layout = Layout.load("default")
-    if p.door_width != DEFAULT_GEOMETRY["door_width"]:
+    if p.door_width != SHIPPED_WORLD["door_width"]:
         layout = layout.with_door_width(p.door_width)
     return RobotTaskEnv(p.task, layout=layout, binary_low=p.binary_low, max_steps=p.max_steps,
                         dp_heading=p.dp_heading, dp_depth=(24.0, p.dp_far), dock_tolerance=p.dock_tolerance,
@@ -120,12 +121,12 @@ def _demonstrated(task: str, n: int, door_width: float, dock_tolerance: float, e
     return tuple(make_taught_lessons(task, n, seed=0, env=env, max_tries=max(200, 20 * n), spread=spread))
 
 
-def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: float = 48.0,
+def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: float = SHIPPED_WORLD["door_width"],
                    dock_tolerance: float = 30.0, edge_jump: float = DOOR_EDGE_JUMP,
                    spread: bool = False) -> list[Lesson]:
     """The first ``n`` taught lessons of ``task``, re-encoded for ``binary_low`` (files use -0.5/+0.5).
 
-    In the world of the shipped lessons (DEFAULT_GEOMETRY), and for at most as many as the file has, they are read
+    In the world of the shipped lessons (SHIPPED_WORLD), and for at most as many as the file has, they are read
     from the file; otherwise the same scripted teacher demonstrates afresh (same seed and starts, deterministic),
     so the first lessons of a longer list are the file's.
     """
@@ -134,12 +135,12 @@ def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: floa
     world = {"door_width": float(door_width), "dock_tolerance": float(dock_tolerance), "edge_jump": float(edge_jump),
              "spread": bool(spread) and task == "DP"}
     if task != "DK":
-        world["dock_tolerance"] = DEFAULT_GEOMETRY["dock_tolerance"]  # only docking depends on it
+        world["dock_tolerance"] = SHIPPED_WORLD["dock_tolerance"]  # only docking depends on it
     if task == "DK":
-        world["door_width"] = DEFAULT_GEOMETRY["door_width"]  # docking happens away from the doors
+        world["door_width"] = SHIPPED_WORLD["door_width"]  # docking happens away from the doors
     if task != "DP":
-        world["edge_jump"] = DEFAULT_GEOMETRY["edge_jump"]  # only DP sees the door-edge bits
-    if world != DEFAULT_GEOMETRY or n > TAUGHT_COUNTS[task]:
+        world["edge_jump"] = SHIPPED_WORLD["edge_jump"]  # only DP sees the door-edge bits
+    if world != SHIPPED_WORLD or n > TAUGHT_COUNTS[task]:
         lessons = _demonstrated(task, n, **world)
     else:
         lessons = load_lessons(lesson_path(task), env_id=f"connrl/Robot-{task}-v0", input_dim=OBS_SIZE[task],

@@ -85,3 +85,25 @@ def test_wfl_single_layer_run():
 def test_bad_task_is_rejected():
     with pytest.raises(ValueError, match="task must be one of"):
         run_robot(replace(TINY, task="CHG"), np.random.default_rng(0))
+
+
+def test_defaults_are_the_shipped_world():
+    """RobotParams, the taught-lesson files' world and the environment agree on the calibrated geometry."""
+    from connrl.envs.robot import DOOR_EDGE_JUMP, Layout, RobotTaskEnv
+    from connrl.tasks.robot import SHIPPED_WORLD
+
+    p = RobotParams()
+    assert p.door_width == SHIPPED_WORLD["door_width"] == Layout.load("default").doors["B"].width == 48.0
+    assert p.edge_jump == SHIPPED_WORLD["edge_jump"] == DOOR_EDGE_JUMP == RobotTaskEnv("DP").sim.edge_jump == 44.0
+
+
+def test_copy_run_stops_at_full_agreement_and_the_teacher_passes():
+    from connrl.experiments.robot_bounds import CopyParams, run_copy
+
+    tiny = CopyParams(test_tasks=4, lessons=1, copy_epochs=300)
+    r = run_copy(tiny, np.random.default_rng(0))
+    assert r.metrics["agreement"] == 1.0 and r.metrics["epochs_to_copy"] < 300
+    assert r.curve_x[-1] == 300 and len(r.curve_x) == len(r.curve_y)  # a finished copy's value carried forward
+    assert r.curve_y[-1] == r.curve_y[r.curve_x.index(r.metrics["epochs_to_copy"])]
+    t = run_copy(CopyParams(test_tasks=4, lessons=0, policy="teacher"), np.random.default_rng(0))
+    assert t.metrics["passes"] == 4 and t.metrics["performance"] > 5  # the teacher reads the true pose
