@@ -27,7 +27,7 @@ def test_geometry_sections_draw_panels_and_notes(tmp_path):
     for head in ("**Calibration**", "**Copy bound**", "**Each calibrated change alone**", "**Replay order**",
                  "**Fresh seeds**", "**Docking tolerance**"):
         assert head in md, head
-    assert "One change isolates the rest" in md
+    assert "Changing one thing, 10 to 100 taught lessons" in md
     assert "| SPEC: 36-in doors, 24-in edges, 10 lessons |" in md and "| copy 10 lessons |" in md
     assert md.index("### robot-teaching-dp") < md.index("### robot-dp-copy") < md.index("### robot-dp-calibration")
     for name in ("robot-dp-geometry", "robot-dk-geometry"):
