@@ -12,6 +12,8 @@ _ENVS = {
     "connrl/Robot-DP-v0": ("connrl.envs.robot:RobotTaskEnv", {"task": "DP"}),
     "connrl/Robot-WFL-v0": ("connrl.envs.robot:RobotTaskEnv", {"task": "WFL"}),
     "connrl/Robot-WFR-v0": ("connrl.envs.robot:RobotTaskEnv", {"task": "WFR"}),
+    "connrl/Robot-CHG-v0": ("connrl.envs.robot.recharge:RechargeEnv", {"obs": "high"}),
+    "connrl/Robot-CHG-Flat-v0": ("connrl.envs.robot.recharge:RechargeEnv", {"obs": "flat"}),
 }
 
 for _id, (_entry, _kwargs) in _ENVS.items():

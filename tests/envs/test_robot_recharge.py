@@ -1,0 +1,105 @@
+"""The recharging task CHG (Ch. 6): Gymnasium API, the 16 high-level inputs by hand, the flat input, docking,
+time limit and per-room starts."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import connrl.envs  # noqa: F401
+from connrl.envs.robot import MOVE_FORWARD, TURN_LEFT_15, Layout, RobotTaskEnv
+from connrl.envs.robot.recharge import FLAT_SIZE, ROOMS, RechargeEnv, global_sonar, high_level_inputs
+from connrl.envs.robot.sim import Reading
+
+
+@pytest.mark.parametrize("env_id", ["connrl/Robot-CHG-v0", "connrl/Robot-CHG-Flat-v0"])
+def test_check_env(env_id):
+    check_env(gym.make(env_id).unwrapped, skip_render_check=True)
+
+
+def test_global_sonar_sectors_by_hand():
+    # facing east (heading 0) ray k points at 15k deg: north (sector 0) is rays 5, 6, 7; west (2) rays 11, 12, 13;
+    # east (6) rays 23, 0, 1. Facing north the same readings turn by 90 deg: north is rays 23, 0, 1.
+    s = np.arange(24.0)
+    assert global_sonar(s, 0.0).tolist() == [6, 9, 12, 15, 18, 21, 8, 3]
+    assert global_sonar(s, 90.0).tolist() == [8, 3, 6, 9, 12, 15, 18, 21]
+    assert global_sonar(s, 7.0).tolist() == global_sonar(s, 0.0).tolist()  # within a sector's half-width
+
+
+def test_high_level_inputs_by_hand():
+    L = Layout.load("default")
+    sonar = np.full(24, 32.0)
+    sonar[[5, 6, 7]] = 0.0  # something touching the robot's north side (heading 0)
+    bits = np.zeros(24, np.uint8)
+    rd = Reading(sonar, sonar, bits, bits.copy(), np.array([0, 0, 1, 0], np.uint8), 0.0, "B")
+    x = high_level_inputs(rd, 270.0, 105.0, L)
+    assert x[:8].tolist() == [1.0] + [0.5] * 7  # encoded sonar: 0 in -> 1, 32 in -> 0.5
+    assert x[8:11].tolist() == [0.5, -0.5, -0.5]  # collision on, no light, no door edge
+    assert x[11:14].tolist() == [-0.5, 0.5, -0.5]  # room B
+    assert x[14:16].tolist() == [0.25, -0.25]  # 270/360 - 0.5, 105/420 - 0.5
+
+
+def test_flat_input_holds_each_elementary_input_and_the_high_level_ones():
+    flat, high = RechargeEnv(obs="flat"), RechargeEnv(obs="high")
+    f, info = flat.reset(seed=3)
+    h, _ = high.reset(seed=3)
+    assert f.shape == (FLAT_SIZE,) == (100,)
+    np.testing.assert_array_equal(f[-16:], h)
+    np.testing.assert_array_equal(f[:48], info["task_obs"]["DK"][:48])
+    np.testing.assert_array_equal(f[48:72], info["task_obs"]["DP"][24:48])
+
+
+def test_docking_ends_the_trial_with_100_and_collisions_cost_only_if_asked():
+    env = RechargeEnv(noise=False)
+    env.reset(seed=0, options={"start": (40.0, 40.0, 225.0)})  # on the charger's diagonal, facing it
+    assert env.step(MOVE_FORWARD)[1:3] == (0.0, False)
+    _, r, term, trunc, info = env.step(MOVE_FORWARD)  # the body meets the box's corner head-on
+    assert (r, term, trunc, info["success"]) == (100.0, True, False, True)
+    env = RechargeEnv(noise=False, collision_penalty=-5.0)
+    env.reset(seed=0, options={"start": (100.0, 14.0, 270.0)})  # 2 in from the south wall, facing it
+    assert env.step(MOVE_FORWARD)[1] == -5.0
+    with pytest.raises(ValueError, match="collision_penalty"):
+        RechargeEnv(collision_penalty=5.0)
+
+
+def test_time_limit_truncates_after_max_steps():
+    env = RechargeEnv(max_steps=3)
+    env.reset(seed=1)
+    out = [env.step(TURN_LEFT_15) for _ in range(3)]
+    assert [o[3] for o in out] == [False, False, True] and not any(o[2] for o in out)
+
+
+def test_starts_per_room_and_all_rooms():
+    env = RechargeEnv()
+    for room in ROOMS:
+        for s in range(20):
+            _, info = env.reset(seed=s, options={"room": room})
+            assert info["room"] == info["start_room"] == room
+    rooms = [env.reset(seed=s)[1]["start_room"] for s in range(300)]
+    assert all(abs(rooms.count(r) / 300 - 1 / 3) < 0.08 for r in ROOMS)  # each room about a third
+    with pytest.raises(ValueError, match="start_room"):
+        RechargeEnv(start_room="D")
+    with pytest.raises(ValueError, match="unknown reset options"):
+        env.reset(options={"rooom": "A"})
+
+
+def test_deterministic_given_the_seed():
+    def run(seed):
+        env = RechargeEnv(obs="flat")
+        obs, _ = env.reset(seed=seed)
+        out = [obs]
+        for a in [4, 0, 4, 2, 4, 5]:
+            out.append(env.step(a)[0])
+        return np.array(out)
+
+    np.testing.assert_array_equal(run(5), run(5))
+    assert not np.array_equal(run(5), run(6))
+
+
+@pytest.mark.parametrize("task", ["DK", "DP", "WFL", "WFR"])
+def test_task_observations_equal_ch5_environments_on_the_same_scan(task):
+    """Same pose and seed, so the same noisy scan: each behaviour sees exactly what it saw when it was learned."""
+    start = (250.0, 120.0, 33.0)
+    _, info = RechargeEnv().reset(seed=11, options={"start": start})
+    ch5, _ = RobotTaskEnv(task).reset(seed=11, options={"start": start})
+    np.testing.assert_array_equal(info["task_obs"][task], ch5)
