@@ -1,4 +1,4 @@
-"""Command line: ``connrl list | run | show | plot | results | sweep | teach | make-lessons``."""
+"""Command line: ``connrl list | run | show | plot | results | sweep | teach | make-lessons | train-behaviours``."""
 
 from __future__ import annotations
 
@@ -200,6 +200,20 @@ def cmd_make_lessons(args) -> int:
     return 0
 
 
+def cmd_train_behaviours(args) -> int:
+    from connrl.experiments.behaviours import train_library
+    from connrl.tasks.behaviours import LIBRARY_DIR
+
+    out = Path(args.out) if args.out else LIBRARY_DIR
+    _writable(out)
+    index = train_library(out, seed=args.seed, trials=args.trials, workers=args.workers or 2)
+    for task, m in index.items():
+        print(f"{task}: {m['trials']} trials, final test {m['final_test_performance']:.2f} reinforcement/step, "
+              f"where Ch. 6 uses it {m['serve_rate']:.2f}")
+    print(f"library: {out}")
+    return 0
+
+
 def cmd_results(args) -> int:
     from connrl.report.page import write_results
 
@@ -271,7 +285,7 @@ def _add_experiment_commands(sub) -> None:
 
 
 def _add_tool_commands(sub) -> None:
-    """sweep, make-lessons, results."""
+    """sweep, make-lessons, train-behaviours, results."""
     s = sub.add_parser("sweep", help="run an experiment's setting with overrides over many seeds",
                        description="Run the experiment's full-profile parameters (or one variant's) with --set "
                        "overrides, one run per seed A..B-1, seeded as `connrl run` seeds its runs. Unknown keys "
@@ -291,10 +305,21 @@ def _add_tool_commands(sub) -> None:
     s = sub.add_parser("make-lessons", help="regenerate the shipped taught lessons",
                        description="Rewrite connrl/data/lessons/ for a world from its scripted teacher "
                        "(deterministic: the same seed gives the same files).")
-    s.add_argument("world", choices=("robot", "survival"), help="robot: robot-{dp,dk,wfl}.json; survival: "
+    s.add_argument("world", choices=("robot", "survival"), help="robot: robot-{dp,dk,wfl,wfr}.json; survival: "
                    "survival-{global,local}.json")
     s.add_argument("--seed", type=_seed, default=0, help="teacher seed (default 0, the shipped files)")
     s.set_defaults(func=cmd_make_lessons)
+
+    s = sub.add_parser("train-behaviours", help="train the Ch. 6 behaviour library (DK, DP, WFL, WFR)",
+                       description="Train Ch. 5's QCON-T for each behaviour (deterministic given --seed) and store "
+                       "it as NPZ + JSON with its provenance, plus library.json with each one's rate where Ch. 6 "
+                       "uses it. Without --out this rewrites the shipped library, connrl/data/behaviours/.")
+    s.add_argument("--out", default=None, help="library folder (default: the shipped connrl/data/behaviours)")
+    s.add_argument("--seed", type=_seed, default=0, help="seed of the first behaviour (default 0, the shipped one)")
+    s.add_argument("--trials", type=_positive_int, default=None,
+                   help="trials per behaviour (default: the plan's 1500)")
+    s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default 2)")
+    s.set_defaults(func=cmd_train_behaviours)
 
     s = sub.add_parser("results", help="write a results page (OUT/RESULTS.md) from stored summaries",
                        description="Collect every OUT/*/summary.json into a Markdown results page, by default "

@@ -116,3 +116,10 @@ def test_make_lessons_rewrites_the_shipped_files_exactly(world, files, tmp_path,
     assert cli.main(["make-lessons", world]) == 0
     for name in files:
         assert (tmp_path / name).read_bytes() == (shipped / name).read_bytes(), name
+
+
+def test_train_behaviours_writes_a_library(tmp_path, capsys):
+    assert cli.main(["train-behaviours", "--out", str(tmp_path), "--trials", "2", "--workers", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "DP: 2 trials" in out and (tmp_path / "library.json").exists()
+    assert sorted(p.name for p in tmp_path.glob("*.npz")) == ["dk.npz", "dp.npz", "wfl.npz", "wfr.npz"]

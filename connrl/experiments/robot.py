@@ -54,7 +54,7 @@ class RobotParams:
     """One Ch. 5 run: the thesis's values where it states them (5.3, 5.4), else marked R (reconstructed; see
     docs/RECONSTRUCTION.md, "HEROINE robot world" and "Learners and protocols")."""
 
-    task: str = "DP"  # "DP" | "DK" | "WFL" (5.4)
+    task: str = "DP"  # "DP" | "DK" | "WFL" (5.4) | "WFR" (Ch. 6's behaviour library)
     lessons: int = 10  # taught lessons given to the agent (5.4.1: 0/3/10 DP, DK; 0/2/5 WFL)
     hidden_fraction: float = 0.3  # hidden units ~ 30 % of inputs (5.3.3); 0 = single-layer (5.4.4)
     lr: float = 0.05  # back-propagation learning rate (5.3.3; 5.4.4: 0.04 DP/DK, 0.03 WFL)
@@ -89,7 +89,7 @@ class RobotParams:
     lesson_starts: str = "random"  # DP teacher's starts: "random" headings or "spread" (hand-picked, R)
 
     def __post_init__(self):
-        check_types(self, ROBOT_RANGES, task=("DP", "DK", "WFL"), repair=REPAIRS, taught_order=TAUGHT_ORDERS,
+        check_types(self, ROBOT_RANGES, task=("DP", "DK", "WFL", "WFR"), repair=REPAIRS, taught_order=TAUGHT_ORDERS,
                     lesson_starts=("random", "spread"))
         if not self.door_width > 2 * ROBOT_RADIUS:
             raise ValueError(f"parameter door_width must exceed the robot's diameter ({2 * ROBOT_RADIUS:g} in), "

@@ -26,7 +26,7 @@ from connrl.envs.robot import DOOR_EDGE_JUMP, OBS_SIZE, Layout, RobotTaskEnv, te
 from connrl.nets import NetConfig
 
 LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
-TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5}  # lessons shipped per task (5.4.1)
+TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5, "WFR": 5}  # lessons shipped per task (5.4.1; WFR for Ch. 6)
 # The world the shipped taught lessons were made in: the default layout's doors, docking, door edges, starts.
 SHIPPED_WORLD = {"door_width": float(Layout.load("default").doors["A"].width), "dock_tolerance": 30.0,
                  "edge_jump": float(DOOR_EDGE_JUMP), "spread": False}

@@ -1,0 +1,110 @@
+"""The behaviour library of Ch. 6: DK, DP, WFL and WFR as trained QCON-T skills (Ch. 5's machinery), stored as plain
+files, with the applicability test of 6.4.3.
+
+A behaviour is its six OAON Q-nets plus what it needs to act: the task (which of Ch. 5's observations it reads), the
+binary encoding and the provenance of its training. On disk it is ``NAME.npz`` (the weight arrays, read with
+``allow_pickle=False``) beside ``NAME.json`` (format version, task, shapes, value range, provenance). Loading checks
+the task and every shape and refuses a mismatch with one line.
+
+Applicability (6.4.3): DP applies where the largest of its Q-values exceeds 30, DK where it exceeds 25, wall
+following everywhere (``APPLICABLE_ABOVE``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from connrl.envs.robot import OBS_SIZE
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS
+from connrl.nets import OAON, NetConfig
+from connrl.storage import atomic_save_npz, atomic_write_text
+
+FORMAT = 1
+APPLICABLE_ABOVE = {"DP": 30.0, "DK": 25.0, "WFL": -math.inf, "WFR": -math.inf}  # 6.4.3
+LIBRARY_DIR = Path(__file__).resolve().parent.parent / "data" / "behaviours"
+
+
+@dataclass
+class Behaviour:
+    """One learned skill: ``q_values(obs)`` on its own task's observation, ``act`` greedy (the test policy of 5.4)."""
+
+    task: str
+    q: OAON
+    binary_low: float = -0.5
+    meta: dict = field(default_factory=dict)
+
+    def q_values(self, obs: np.ndarray) -> np.ndarray:
+        return self.q.values(np.asarray(obs, dtype=np.float64))
+
+    def act(self, obs: np.ndarray, info=None, *, greedy: bool = True) -> int:
+        return int(np.argmax(self.q_values(obs)))
+
+    # the agent protocol, so ``run_trial`` and ``evaluate`` can drive a stored behaviour (greedy, never learning)
+    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = False) -> None:
+        if learning:
+            raise ValueError("a stored behaviour does not learn; train it with connrl.experiments.behaviours")
+
+    def end_trial(self) -> None:
+        pass
+
+    def applicable(self, obs: np.ndarray) -> bool:
+        """6.4.3: the largest Q-value above the task's threshold (always, for wall following)."""
+        return bool(self.q_values(obs).max() > APPLICABLE_ABOVE[self.task])
+
+
+def save_behaviour(b: Behaviour, path) -> tuple[Path, Path]:
+    """Write ``path``.npz (weights) and ``path``.json (the rest), each atomically."""
+    path = Path(path)
+    c = b.q.config
+    npz, meta = path.with_suffix(".npz"), path.with_suffix(".json")
+    atomic_save_npz(npz, w1=b.q.w1, w2=b.q.w2)
+    atomic_write_text(meta, json.dumps({
+        "format": FORMAT, "kind": "connrl behaviour", "task": b.task, "n_inputs": c.n_inputs, "n_hidden": c.n_hidden,
+        "n_actions": b.q.n_nets, "value_range": c.value_range, "binary_low": b.binary_low, "provenance": b.meta},
+        indent=1) + "\n")
+    return npz, meta
+
+
+def load_behaviour(path, task: str | None = None) -> Behaviour:
+    """Read a behaviour written by ``save_behaviour``; ``task`` (if given) must match. ValueError on any mismatch."""
+    path = Path(path)
+    npz, meta = path.with_suffix(".npz"), path.with_suffix(".json")
+    try:
+        m = json.loads(meta.read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{meta}: not a readable behaviour file ({exc})") from None
+    if not isinstance(m, dict) or m.get("kind") != "connrl behaviour" or m.get("format") != FORMAT:
+        raise ValueError(f"{meta}: not a connrl behaviour file of format {FORMAT}")
+    if m.get("task") not in BEHAVIOUR_TASKS or (task is not None and m["task"] != task):
+        wanted = task or f"one of {', '.join(BEHAVIOUR_TASKS)}"
+        raise ValueError(f"{meta}: holds behaviour {m.get('task')!r}, expected {wanted}")
+    n_in, n_hid, n_act = m.get("n_inputs"), m.get("n_hidden"), m.get("n_actions")
+    if (n_in, n_act) != (OBS_SIZE[m["task"]], 6) or not isinstance(n_hid, int) or n_hid < 1:
+        raise ValueError(f"{meta}: task {m['task']} needs {OBS_SIZE[m['task']]} inputs, 6 actions and >= 1 hidden "
+                         f"unit, the file says {n_in} inputs, {n_act} actions, {n_hid} hidden")
+    try:
+        with np.load(npz, allow_pickle=False) as z:
+            w1, w2 = np.asarray(z["w1"], dtype=np.float64), np.asarray(z["w2"], dtype=np.float64)
+    except (OSError, ValueError, KeyError) as exc:
+        raise ValueError(f"{npz}: not a readable weight file ({exc})") from None
+    if w1.shape != (n_act, n_hid, n_in + 1) or w2.shape != (n_act, n_hid + 1) or not (
+            np.isfinite(w1).all() and np.isfinite(w2).all()):
+        raise ValueError(f"{npz}: weights of shape {w1.shape} / {w2.shape} do not match the {n_in}-{n_hid}-1 nets of "
+                         f"{meta.name}, or are not finite")
+    q = OAON(NetConfig(n_in, n_hid, value_range=float(m["value_range"])), n_act, np.random.default_rng(0))
+    q.w1, q.w2 = w1, w2
+    return Behaviour(m["task"], q, float(m.get("binary_low", -0.5)), dict(m.get("provenance") or {}))
+
+
+def library_paths(directory=LIBRARY_DIR) -> dict[str, Path]:
+    return {t: Path(directory) / t.lower() for t in BEHAVIOUR_TASKS}
+
+
+def load_library(directory=LIBRARY_DIR) -> dict[str, Behaviour]:
+    """The four behaviours of a library folder (the shipped one by default)."""
+    return {t: load_behaviour(p, t) for t, p in library_paths(directory).items()}
