@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.envs.robot import OBS_SIZE
-from connrl.envs.robot.recharge import BEHAVIOUR_TASKS
+from connrl.envs.robot import OBS_SIZE, Layout, RobotSim
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, task_observations
 from connrl.nets import OAON, NetConfig
 from connrl.storage import atomic_save_npz, atomic_write_text
 
@@ -99,6 +99,27 @@ def load_behaviour(path, task: str | None = None) -> Behaviour:
     q = OAON(NetConfig(n_in, n_hid, value_range=float(m["value_range"])), n_act, np.random.default_rng(0))
     q.w1, q.w2 = w1, w2
     return Behaviour(m["task"], q, float(m.get("binary_low", -0.5)), dict(m.get("provenance") or {}))
+
+
+def q_value_map(b: Behaviour, layout: Layout, spacing: float = 12.0,
+                headings: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Figs. 6.3 / 6.4: at each grid point where the robot fits, the largest Q-value over actions and the given
+    headings (noise-free scans, so the map is deterministic); NaN where the robot does not fit. Returns (xs, ys, grid)
+    with ``grid[i, j]`` at ``(xs[j], ys[i])``."""
+    w, h = layout.size
+    xs, ys = np.arange(spacing / 2, w, spacing), np.arange(spacing / 2, h, spacing)
+    grid = np.full((ys.size, xs.size), np.nan)
+    sim = RobotSim(layout, np.random.default_rng(0), sensor_noise=False, control_noise=False)
+    for i, y in enumerate(ys):
+        for j, x in enumerate(xs):
+            if not layout.is_free(float(x), float(y)):
+                continue
+            best = -np.inf
+            for heading in headings:
+                sim.place(float(x), float(y), heading)
+                best = max(best, float(b.q_values(task_observations(sim.sense(), b.binary_low)[b.task]).max()))
+            grid[i, j] = best
+    return xs, ys, grid
 
 
 def library_paths(directory=LIBRARY_DIR) -> dict[str, Path]:

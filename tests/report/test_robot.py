@@ -50,3 +50,12 @@ def test_speedup_tables_need_the_reference_row_to_reach_the_level():
     md = "\n".join(robot._speedup_tables(dict(zip(keys, map(curve, (None, 200, 100, 280, 140, 70)), strict=True))))
     assert "| 10 taught lessons | 100 | — | 10 | 28 |" in md  # no teaching never reached 2.5: no speedup
     assert "| lambda = 0.7 | 70 | 4 | 65 | 4.3 |" in md  # 280 / 70
+
+
+def test_chapter_6_section_shows_the_shipped_library_and_its_q_maps(tmp_path):
+    from connrl.report import recharge
+
+    md = recharge.results_section(tmp_path, tmp_path / "docs" / "RESULTS.md")
+    assert "## Chapter 6" in md and "| DP | 1500 | 10 | 25% |" in md
+    for name in ("behaviour-dp-q-map", "behaviour-dk-q-map"):
+        assert (tmp_path / "docs" / "figures" / f"{name}.png").exists()

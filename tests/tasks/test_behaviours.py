@@ -83,7 +83,7 @@ def test_shipped_library_loads_and_records_its_provenance():
     index = json.loads((library_paths()["DK"].parent / "library.json").read_text())["behaviours"]
     for task, b in lib.items():
         assert b.meta["trials"] == 1500 and b.meta["code"]["connrl"] and index[task]["seed"] == b.meta["seed"]
-    assert lib["DP"].meta["far_share"] == 0.1 and lib["WFL"].meta["lessons"] == 5
+    assert lib["DP"].meta["far_share"] == lib["DK"].meta["far_share"] == 0.25 and lib["WFL"].meta["lessons"] == 5
 
 
 def test_training_is_deterministic_and_a_library_round_trips(tmp_path):
@@ -95,3 +95,32 @@ def test_training_is_deterministic_and_a_library_round_trips(tmp_path):
         [7, 8, 9, 10]
     assert all(0.0 <= m["serve_rate"] <= 1.0 for m in index.values())
     assert load_library(tmp_path)["WFR"].task == "WFR"
+
+
+class FrontSonarQ:
+    """Q = 100 x the encoded reading straight ahead, for every action: the map is then computable by hand."""
+
+    n_nets = 6
+
+    def values(self, x):
+        return np.full(6, 100.0 * x[0])
+
+
+def test_q_value_map_is_the_max_over_headings_and_nan_where_the_robot_does_not_fit():
+    from connrl.envs.robot import Layout, RobotSim, encode_sonar
+    from connrl.tasks.behaviours import q_value_map
+
+    layout = Layout.load("default")
+    xs, ys, grid = q_value_map(Behaviour("DP", FrontSonarQ()), layout, spacing=60.0)
+    assert grid.shape == (ys.size, xs.size) == (7, 6)
+    sim = RobotSim(layout, np.random.default_rng(0), sensor_noise=False, control_noise=False)
+    for i, y in enumerate(ys):
+        for j, x in enumerate(xs):
+            if not layout.is_free(x, y):
+                assert np.isnan(grid[i, j])
+                continue
+            best = -np.inf
+            for h in (0.0, 90.0, 180.0, 270.0):
+                sim.place(x, y, h)
+                best = max(best, 100.0 * float(encode_sonar(sim.true_ranges()[:1].clip(0, 127))[0]))
+            assert grid[i, j] == pytest.approx(best, abs=0.8)  # the scan rounds readings to 1 in

@@ -1,0 +1,66 @@
+"""docs/RESULTS.md section for Ch. 6 (recharging over learned behaviours): so far the behaviour library -- each
+behaviour's training and rate where Ch. 6 uses it, and the Q-value maps of Figs. 6.3 / 6.4 with the applicability
+thresholds of 6.4.3. Generated from the shipped library (``connrl train-behaviours``), not from runs."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from connrl.envs.robot import Layout
+from connrl.envs.robot.render import draw_layout
+from connrl.report.page import figure
+from connrl.report.plots import save_figure
+from connrl.tasks.behaviours import APPLICABLE_ABOVE, LIBRARY_DIR, load_library, q_value_map
+
+EXPERIMENTS: list = []  # the Ch. 6 experiments are not built yet
+WHERE_USED = {"DK": "docks from within 24 in of subgoal 2", "DP": "passes the door from subgoals 3-6",
+              "WFL": "steps earning 8-10 (clearance kept, moving forward)", "WFR": "steps earning 8-10"}
+
+
+def draw_q_map(task: str, xs, ys, grid, layout: Layout, file: Path) -> Path:
+    """Figs. 6.3 / 6.4: the largest Q over actions and 4 headings on the room map, the applicability contour."""
+    fig, ax = plt.subplots(figsize=(5.2, 6), dpi=110)
+    draw_layout(ax, layout, labels=True)  # rooms first: the map is drawn over them, the walls drawn again on top
+    im = ax.imshow(grid, origin="lower", extent=(0, layout.size[0], 0, layout.size[1]), cmap="viridis",
+                   vmin=-100, vmax=100, alpha=0.9, zorder=2)
+    ax.contour(xs, ys, np.nan_to_num(grid, nan=-100.0), levels=[APPLICABLE_ABOVE[task]], colors="r", linewidths=1.2,
+               zorder=3)
+    for w in layout.walls:
+        ax.plot([w[0], w[2]], [w[1], w[3]], color="black", lw=3, zorder=4)
+    fig.colorbar(im, ax=ax, shrink=0.7, label="max Q over actions and 4 headings")
+    ax.set_title(f"{task}: applicable where Q > {APPLICABLE_ABOVE[task]:g} (red line)", fontsize=9)
+    fig.tight_layout()
+    save_figure(fig, file)
+    plt.close(fig)
+    return file
+
+
+def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
+    out_dir, doc = Path(out_dir), Path(doc)
+    index_file = LIBRARY_DIR / "library.json"
+    if not index_file.exists():
+        return ""
+    index = json.loads(index_file.read_text())["behaviours"]
+    lines = ["## Chapter 6: hierarchical learning (in progress: the behaviour library)", "",
+             "The high-level learner and Experiments 1-5 are not built yet. The four behaviours it will coordinate are "
+             "Ch. 5's QCON-T skills, trained by `connrl train-behaviours` and shipped in `connrl/data/behaviours/` "
+             "(one seed each; docs/RECONSTRUCTION.md, \"Behaviour library\").", "",
+             "| behaviour | trials | taught lessons | far-from-goal starts | final test (reinforcement/step, 50 "
+             "tasks) | where Ch. 6 uses it | rate |", "|---|---|---|---|---|---|---|"]
+    for t, m in index.items():
+        lines.append(f"| {t} | {m['trials']} | {m['lessons']} | {m['far_share']:.0%} | "
+                     f"{m['final_test_performance']:.2f} | {WHERE_USED[t]} | {m['serve_rate']:.2f} |")
+    lines += [""]
+    layout, lib = Layout.load("default"), load_library()
+    for task in ("DP", "DK"):
+        xs, ys, grid = q_value_map(lib[task], layout)
+        png = draw_q_map(task, xs, ys, grid, layout, out_dir / "behaviours" / f"{task.lower()}-q-map.png")
+        share = float(np.mean(grid[~np.isnan(grid)] > APPLICABLE_ABOVE[task]))
+        lines += [f"Fig. {'6.3' if task == 'DP' else '6.4'} from our {task} behaviour (noise-free scans every 12 in): "
+                  f"applicable on {share:.0%} of the places the robot fits.", "",
+                  figure(png, doc, f"behaviour-{task.lower()}-q-map"), ""]
+    return "\n".join(lines)
