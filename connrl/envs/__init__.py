@@ -14,6 +14,8 @@ _ENVS = {
     "connrl/Robot-WFR-v0": ("connrl.envs.robot:RobotTaskEnv", {"task": "WFR"}),
     "connrl/Robot-CHG-v0": ("connrl.envs.robot.recharge:RechargeEnv", {"obs": "high"}),
     "connrl/Robot-CHG-Flat-v0": ("connrl.envs.robot.recharge:RechargeEnv", {"obs": "flat"}),
+    # actions = the shipped learned behaviours; built by connrl.tasks (the world itself knows no learner)
+    "connrl/Robot-CHG-Behaviours-v0": ("connrl.tasks.recharge:BehaviourEnv", {}),
 }
 
 for _id, (_entry, _kwargs) in _ENVS.items():

@@ -46,7 +46,8 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
         return ""
     index = json.loads(index_file.read_text())["behaviours"]
     lines = ["## Chapter 6: hierarchical learning (in progress: the behaviour library)", "",
-             "The high-level learner and Experiments 1-5 are not built yet. The four behaviours it will coordinate are "
+             "The task over behaviours is built (`connrl/Robot-CHG-Behaviours-v0`); the high-level learner and "
+             "Experiments 1-5 are not yet. The four behaviours it will coordinate are "
              "Ch. 5's QCON-T skills, trained by `connrl train-behaviours` and shipped in `connrl/data/behaviours/` "
              "(one seed each; docs/RECONSTRUCTION.md, \"Behaviour library\").", "",
              "| behaviour | trials | taught lessons | far-from-goal starts | final test (reinforcement/step, 50 "

@@ -1,0 +1,64 @@
+"""Ch. 6 wiring: the recharging task whose actions are the learned behaviours (6.5).
+
+``BehaviourEnv`` wraps the world ``connrl.envs.robot.recharge.RechargeEnv`` (16 high-level inputs) and a behaviour
+library (``connrl.tasks.behaviours``; the shipped one by default). Its action is a behaviour -- 0 DK, 1 DP, 2 WFL,
+3 WFR -- and each step applies ONE primitive step of that behaviour's greedy policy, chosen on the behaviour's own
+Ch. 5 observation of the current scan: the robot decides which behaviour to follow on every primitive step (6.5).
+``info["applicable"]`` holds each behaviour's applicability (6.4.3) in the state reached, so a high-level learner can
+weight its choices by W(b) (Eq. 6.6); ``info["primitive"]`` the primitive action taken.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, RechargeEnv
+from connrl.tasks.behaviours import Behaviour, load_library
+
+
+class BehaviourEnv(gym.Env):
+    """CHG over behaviours: ``Discrete(4)`` actions (DK, DP, WFL, WFR), the 16 high-level inputs (6.4.2)."""
+
+    metadata = {"render_modes": [], "render_fps": 4}
+
+    def __init__(self, library: dict[str, Behaviour] | str | None = None, **world):
+        if world.get("obs", "high") != "high":
+            raise ValueError("the behaviour-level task observes the 16 high-level inputs (obs='high')")
+        if library is None:
+            library = load_library()  # the shipped library
+        self.library = load_library(library) if isinstance(library, str) else library
+        missing = [t for t in BEHAVIOUR_TASKS if t not in self.library]
+        if missing:
+            raise ValueError(f"the behaviour library lacks {', '.join(missing)}; it needs {', '.join(BEHAVIOUR_TASKS)}")
+        self.world = RechargeEnv(obs="high", **{k: v for k, v in world.items() if k != "obs"})
+        self.observation_space = self.world.observation_space
+        self.action_space = spaces.Discrete(len(BEHAVIOUR_TASKS))
+        self._task_obs: dict | None = None
+
+    def _with_applicability(self, info: dict) -> dict:
+        self._task_obs = info["task_obs"]
+        info["applicable"] = np.array([self.library[t].applicable(self._task_obs[t]) for t in BEHAVIOUR_TASKS])
+        return info
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        obs, info = self.world.reset(seed=seed, options=options)
+        return obs, self._with_applicability(info)
+
+    def step(self, action):
+        if self._task_obs is None:
+            raise RuntimeError("call reset() before step()")
+        b = int(action)
+        if b != action or not 0 <= b < len(BEHAVIOUR_TASKS):
+            raise ValueError(f"action must be a behaviour 0..3 {BEHAVIOUR_TASKS}, got {action!r}")
+        task = BEHAVIOUR_TASKS[b]
+        primitive = self.library[task].act(self._task_obs[task])
+        obs, r, terminated, truncated, info = self.world.step(primitive)
+        info["primitive"], info["behaviour"] = primitive, task
+        return obs, r, terminated, truncated, self._with_applicability(info)
+
+    @property
+    def trace(self):
+        return self.world.trace
