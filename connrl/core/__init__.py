@@ -1,5 +1,6 @@
 """The thesis's algorithms, knowing no world: returns, lessons, App. A.2 sampling, Fig. 5.1 replay, relaxation
-planning (4.2.5) and exploration (Boltzmann, schedules, stuck detection)."""
+planning (4.2.5) and exploration (Boltzmann, Eq. 6.6's weighted Boltzmann and persistence rule, schedules, stuck
+detection)."""
 
 from connrl.core.exploration import (
     StuckConfig,
@@ -7,6 +8,8 @@ from connrl.core.exploration import (
     TemperatureSchedule,
     boltzmann_probabilities,
     boltzmann_select,
+    persistence_weights,
+    weighted_boltzmann_probabilities,
 )
 from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
 from connrl.core.lessons import Lesson, LessonMemory, LessonRecorder, recency_index
@@ -26,5 +29,6 @@ from connrl.core.rollout import TrialStats, run_trial
 __all__ = ["REPAIRS", "Lesson", "LessonFileError", "LessonMemory", "LessonRecorder", "QFunction", "ReplayParams",
            "StuckConfig", "StuckDetector", "TemperatureSchedule", "TrialStats", "batch_targets",
            "boltzmann_probabilities",
-           "boltzmann_select", "lambda_returns", "load_lessons", "recency_index", "repair_step", "replay_ahc",
-           "replay_q", "replay_q_reference", "run_trial", "save_lessons", "td_lambda_target"]
+           "boltzmann_select", "lambda_returns", "load_lessons", "persistence_weights", "recency_index", "repair_step",
+           "replay_ahc", "replay_q", "replay_q_reference", "run_trial", "save_lessons", "td_lambda_target",
+           "weighted_boltzmann_probabilities"]

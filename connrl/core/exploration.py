@@ -28,6 +28,38 @@ def boltzmann_probabilities(merits: np.ndarray, temperature: float) -> np.ndarra
     return p / p.sum()
 
 
+def weighted_boltzmann_probabilities(merits: np.ndarray, weights: np.ndarray, temperature: float) -> np.ndarray:
+    """Eq. 6.6: ``P(b) = W(b) exp(Q(b)/T) / sum_k W(b_k) exp(Q(b_k)/T)``. A weight of 0 rules a choice out; T = 0
+    gives the greedy choice among the allowed ones (ties share the mass, whatever their weights)."""
+    m, w = np.asarray(merits, dtype=np.float64), np.asarray(weights, dtype=np.float64)
+    if m.shape != w.shape or not np.all(w >= 0) or not np.any(w > 0):
+        raise ValueError(f"weights must be >= 0, one per choice, not all 0; got {w.tolist()} for {m.size} choices")
+    if temperature < 0:
+        raise ValueError(f"temperature must be >= 0, got {temperature}")
+    allowed = w > 0
+    top = m[allowed].max()
+    if temperature == 0:
+        best = allowed & (m == top)
+        return best / best.sum()
+    p = np.where(allowed, w * np.exp((m - top) / temperature), 0.0)  # shifted by the allowed maximum: no overflow
+    return p / p.sum()
+
+
+def persistence_weights(applicable: np.ndarray, was_applicable: np.ndarray | None, active: int | None,
+                        goal_reached: bool, persist: float = 100.0) -> np.ndarray:
+    """W(b) of Experiment 3's persistence rule (6.5.1, 6.6.3): 0 for an inapplicable behaviour; ``persist`` (100) for
+    the active one while its last reinforcement was not its goal's and no inapplicable behaviour became applicable;
+    1 otherwise. With ``active=None`` (the first step) it is Experiment 2's 0/1."""
+    app = np.asarray(applicable, dtype=bool)
+    w = app.astype(np.float64)
+    if active is None or not app[active] or goal_reached:
+        return w
+    if was_applicable is not None and np.any(app & ~np.asarray(was_applicable, dtype=bool)):
+        return w  # a significant change: a behaviour became applicable
+    w[active] = persist
+    return w
+
+
 def boltzmann_select(merits: np.ndarray, temperature: float, rng: np.random.Generator) -> tuple[int, np.ndarray]:
     """Draw an action from Eq. 3.4/3.6; returns (action, probabilities)."""
     p = boltzmann_probabilities(merits, temperature)

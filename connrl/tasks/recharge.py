@@ -5,7 +5,9 @@ library (``connrl.tasks.behaviours``; the shipped one by default). Its action is
 3 WFR -- and each step applies ONE primitive step of that behaviour's greedy policy, chosen on the behaviour's own
 Ch. 5 observation of the current scan: the robot decides which behaviour to follow on every primitive step (6.5).
 ``info["applicable"]`` holds each behaviour's applicability (6.4.3) in the state reached, so a high-level learner can
-weight its choices by W(b) (Eq. 6.6); ``info["primitive"]`` the primitive action taken.
+weight its choices by W(b) (Eq. 6.6); ``info["primitive"]`` the primitive action taken; ``info["behaviour_goal"]``
+whether that step reached the chosen behaviour's own goal (DK docked, DP into another room), which ends persistence
+(6.6.3).
 """
 
 from __future__ import annotations
@@ -55,8 +57,11 @@ class BehaviourEnv(gym.Env):
             raise ValueError(f"action must be a behaviour 0..3 {BEHAVIOUR_TASKS}, got {action!r}")
         task = BEHAVIOUR_TASKS[b]
         primitive = self.library[task].act(self._task_obs[task])
+        room = self.world.sim.room
         obs, r, terminated, truncated, info = self.world.step(primitive)
-        info["primitive"], info["behaviour"] = primitive, task
+        # the behaviour's own goal (its reinforcement of 100 in Ch. 5): docked (DK), into another room (DP)
+        goal = bool(info["success"]) if task == "DK" else (task == "DP" and info["room"] not in (None, room))
+        info["primitive"], info["behaviour"], info["behaviour_goal"] = primitive, task, goal
         return obs, r, terminated, truncated, self._with_applicability(info)
 
     @property

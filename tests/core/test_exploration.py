@@ -55,3 +55,31 @@ def test_stuck_detection_raises_temperature_only_when_stuck():
     assert [d.factor((0, 0)) for _ in range(4)] == [1, 1, 1, 3.0]  # staying put
     d.reset()
     assert [d.factor((i * 2, 0)) for i in range(6)][-1] == 1.0  # moving on
+
+
+# --- Eq. 6.6 and the persistence rule (Ch. 6) ------------------------------------------------------
+def test_weighted_boltzmann_by_hand():
+    from connrl.core.exploration import weighted_boltzmann_probabilities as wb
+
+    q, t = np.array([0.0, 0.1, 0.2, 0.0]), 0.1
+    w = np.array([1.0, 0.0, 1.0, 100.0])
+    e = np.array([1.0, 0.0, np.e ** 2, 100.0])  # W(b) exp(Q/T): 1, 0, e^2, 100
+    np.testing.assert_allclose(wb(q, w, t), e / e.sum(), rtol=1e-12)
+    np.testing.assert_allclose(wb(q, np.ones(4), t), boltzmann_probabilities(q, t), rtol=1e-12)  # W = 1: Eq. 3.4
+    assert wb(q, w, 0.0).tolist() == [0.0, 0.0, 1.0, 0.0]  # greedy among the applicable (b = 1 is ruled out)
+    assert wb(np.array([1e4, -1e4]), np.array([1.0, 1.0]), 0.01).tolist() == [1.0, 0.0]  # no overflow
+    for bad in ([0.0, 0.0, 0.0, 0.0], [1.0, -1.0, 1.0, 1.0], [1.0, 1.0]):
+        with pytest.raises(ValueError, match="weights"):
+            wb(q, np.array(bad), t)
+
+
+def test_persistence_weights_follow_experiment_3():
+    from connrl.core.exploration import persistence_weights as pw
+
+    app = np.array([False, True, True, True])  # DK inapplicable; DP, WFL, WFR applicable
+    assert pw(app, None, None, False).tolist() == [0, 1, 1, 1]  # the first step: Exp. 2's 0/1
+    assert pw(app, app, 2, False).tolist() == [0, 1, 100, 1]  # keep following WFL
+    assert pw(app, app, 1, True).tolist() == [0, 1, 1, 1]  # DP just passed its door: no persistence
+    before = np.array([False, False, True, True])
+    assert pw(app, before, 2, False).tolist() == [0, 1, 1, 1]  # DP became applicable: a significant change
+    assert pw(np.array([False, False, True, True]), app, 1, False).tolist() == [0, 0, 1, 1]  # active DP inapplicable

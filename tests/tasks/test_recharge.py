@@ -60,3 +60,18 @@ def test_shipped_docking_behaviour_docks_from_subgoal_2():
                 break
         docked += r == 100.0 and info["success"]
     assert docked >= 4
+
+
+def test_behaviour_goal_marks_the_step_that_passes_the_door():
+    env = BehaviourEnv()
+    _, info = env.reset(seed=0, options={"start": (114.0, 270.0, 90.0)})  # subgoal 3, facing the A-door
+    rooms, goals = [info["room"]], []
+    for _ in range(20):
+        _, _, _, _, info = env.step(1)  # DP
+        rooms.append(info["room"])
+        goals.append(info["behaviour_goal"])
+        if info["behaviour_goal"]:
+            break
+    assert goals[-1] and not any(goals[:-1]) and rooms[-1] == "C" and set(rooms[:-1]) == {"A"}
+    _, _, _, _, info = env.step(2)  # WFL has no goal of its own
+    assert info["behaviour_goal"] is False
