@@ -81,10 +81,13 @@ class ReplayConfig:
                 raise ValueError(f"{name} must be in [0, 1), got {v}")
 
     def threshold_for_age(self, age: int) -> float:
-        """P_t for a lesson ``age`` trials old (0 = the latest)."""
+        """P_t for a lesson ``age`` trials old (0 = the latest): log-linear from ``p_threshold`` to
+        ``p_threshold_oldest`` (App. B), or linear when the latest's is 0 (6.6: "between 0 and 0.02")."""
         if self.p_threshold_oldest is None or self.capacity == 1:
             return self.p_threshold
         frac = min(age / (self.capacity - 1), 1.0)
+        if self.p_threshold == 0:
+            return self.p_threshold_oldest * frac
         lo, hi = math.log(self.p_threshold), math.log(self.p_threshold_oldest)
         return math.exp(lo + (hi - lo) * frac)
 

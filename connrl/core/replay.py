@@ -18,7 +18,7 @@ from typing import Protocol
 
 import numpy as np
 
-from connrl.core.exploration import boltzmann_probabilities
+from connrl.core.exploration import boltzmann_probabilities, weighted_boltzmann_probabilities
 from connrl.core.lessons import Lesson
 from connrl.core.returns import lambda_returns, td_lambda_target
 
@@ -47,11 +47,14 @@ class ReplayParams:
     clip: float | None = None  # truncate targets above this value (4.2.4)
 
 
-def is_policy_action(merits: np.ndarray, a: int, params: ReplayParams) -> bool:
-    """3.5.1: an action is a policy action when its Boltzmann probability is at least P_t."""
+def is_policy_action(merits: np.ndarray, a: int, params: ReplayParams, weights: np.ndarray | None = None) -> bool:
+    """3.5.1: an action is a policy action when its Boltzmann probability is at least P_t; with ``weights`` the
+    probability is Eq. 6.6's, W(b) as it was when the step was taken (6.6: bad behaviour choices not replayed)."""
     if params.p_threshold <= 0:
         return True
-    return bool(boltzmann_probabilities(merits, params.temperature)[a] >= params.p_threshold)
+    p = (boltzmann_probabilities(merits, params.temperature) if weights is None
+         else weighted_boltzmann_probabilities(merits, weights, params.temperature))
+    return bool(p[a] >= params.p_threshold)
 
 
 def repair_step(q: QFunction, x: np.ndarray, a: int, mode: str) -> int:
@@ -100,11 +103,13 @@ def batch_targets(values: np.ndarray, actions: np.ndarray, rewards: np.ndarray, 
     return lambda_returns(rewards, u, params.gamma, lams, params.clip), policy
 
 
-def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "none") -> int:
+def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "none",
+                       weights: np.ndarray | None = None) -> int:
     """Fig. 5.1(a), the plain loop: replay a lesson backward into a Q-function; returns the experiences used.
 
     With ``repair`` (taught lessons, 5.4.3) the repair check follows the TD update of each experience, with
-    the net as it is then (the thesis does not say when within the replay).
+    the net as it is then (the thesis does not say when within the replay). ``weights`` (n, actions): each step's
+    W of Eq. 6.6 for the non-policy test (Ch. 6).
     """
     x, acts, rews = lesson.inputs, lesson.actions, lesson.rewards
     n = len(lesson)
@@ -126,7 +131,7 @@ def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repai
         if params.clip is not None and e > params.clip:
             e = params.clip
         a = int(acts[t])
-        next_policy = is_policy_action(q.values(x[t]), a, params)
+        next_policy = is_policy_action(q.values(x[t]), a, params, None if weights is None else weights[t])
         if next_policy:
             q.update(x[t], a, e)
             used += 1
@@ -145,11 +150,13 @@ def register_fast_path(q_type: type, fn: Callable[..., int]) -> None:
     FAST_PATHS[q_type] = fn
 
 
-def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "none", fast: bool = True) -> int:
-    """Fig. 5.1(a): the registered fast path for ``type(q)`` in incremental mode, else the reference loop."""
-    fn = FAST_PATHS.get(type(q)) if fast and not params.batch else None
+def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "none", fast: bool = True,
+             weights: np.ndarray | None = None) -> int:
+    """Fig. 5.1(a): the registered fast path for ``type(q)`` in incremental mode, else the reference loop (always
+    with per-step ``weights``, which the compiled kernel does not take)."""
+    fn = FAST_PATHS.get(type(q)) if fast and not params.batch and weights is None else None
     if fn is None:
-        return replay_q_reference(q, lesson, params, repair)
+        return replay_q_reference(q, lesson, params, repair, weights)
     if repair not in REPAIRS:
         raise ValueError(f"repair must be one of {REPAIRS}, got {repair!r}")
     return fn(q, lesson, params, REPAIRS.index(repair))

@@ -12,6 +12,7 @@ SPEC_MODULES = (
     "connrl.experiments.hidden_state",
     "connrl.experiments.robot",
     "connrl.experiments.robot_bounds",
+    "connrl.experiments.recharge",
 )
 
 

@@ -12,11 +12,17 @@ whether that step reached the chosen behaviour's own goal (DK docked, DP into an
 
 from __future__ import annotations
 
+import functools
+
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, RechargeEnv
+from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents.behaviour_level import BehaviourQCON
+from connrl.core.exploration import TemperatureSchedule
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, HIGH_SIZE, RechargeEnv
+from connrl.nets import NetConfig
 from connrl.tasks.behaviours import Behaviour, load_library
 
 
@@ -67,3 +73,24 @@ class BehaviourEnv(gym.Env):
     @property
     def trace(self):
         return self.world.trace
+
+
+@functools.lru_cache(maxsize=1)
+def _shipped_library() -> dict[str, Behaviour]:
+    return load_library()  # read once per process; behaviours are only read, never trained, here
+
+
+def make_recharge_env(p) -> BehaviourEnv:
+    """The behaviour-level task of a Ch. 6 parameter set (``connrl.experiments.recharge.RechargeParams``)."""
+    return BehaviourEnv(_shipped_library(), max_steps=p.max_steps)
+
+
+def make_high_level_agent(p, rng: np.random.Generator) -> BehaviourQCON:
+    """Q(state, behaviour) of 6.5-6.6 from a Ch. 6 parameter set."""
+    net = NetConfig(HIGH_SIZE, p.hidden, value_range=100.0, init_range=p.init_range, lr=p.lr, momentum=p.momentum)
+    replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
+                                                                                p.lessons_per_trial),
+                          p_threshold=0.0, p_threshold_oldest=p.p_oldest)
+    cfg = QCONConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials), gamma=p.gamma,
+                     lam=p.lam, online=p.online, replay=replay)
+    return BehaviourQCON(cfg, len(BEHAVIOUR_TASKS), rng, persistence=p.persistence)

@@ -104,3 +104,10 @@ def test_taught_lessons_replayed_after_or_shuffled_among_the_experienced(order):
         assert places == set(range(16))
     with pytest.raises(ValueError, match="taught_order must be one of after, shuffled"):
         ReplayConfig(taught_order="first")
+
+
+def test_p_threshold_moves_linearly_from_zero_for_the_latest_lesson():
+    """6.6: P_l "between 0 and 0.02, depending on the recency" (0 for the latest): linear, as log-linear cannot
+    start at 0."""
+    r = ReplayConfig(capacity=101, p_threshold=0.0, p_threshold_oldest=0.02)
+    assert [r.threshold_for_age(a) for a in (0, 50, 100, 150)] == [0.0, 0.01, 0.02, 0.02]

@@ -297,11 +297,11 @@ def _fast_path_must_not_run(*args, **kwargs):
     raise AssertionError("the fast path ran")
 
 
-@pytest.mark.parametrize("how", ["fast=False", "batch", "other type"])
+@pytest.mark.parametrize("how", ["fast=False", "batch", "other type", "weights"])
 def test_replay_q_falls_back_to_the_reference_loop(monkeypatch, how):
     calls = []
 
-    def reference(q, lesson, params, repair="none"):
+    def reference(q, lesson, params, repair="none", weights=None):
         calls.append((q, lesson, params, repair))
         return 7
 
@@ -311,7 +311,8 @@ def test_replay_q_falls_back_to_the_reference_loop(monkeypatch, how):
     lesson = _lesson(np.random.default_rng(0))
     params = ReplayParams(gamma=0.9, lam=0.7, batch=how == "batch")
     q = PlainQ(net) if how == "other type" else net
-    assert replay_q(q, lesson, params, "none", fast=how != "fast=False") == 7
+    w = np.ones((len(lesson), 4)) if how == "weights" else None
+    assert replay_q(q, lesson, params, "none", fast=how != "fast=False", weights=w) == 7
     assert calls == [(q, lesson, params, "none")]
 
 
@@ -326,3 +327,19 @@ class PlainQ:
 
     def update(self, x, a, t):
         return self.net.update(x, a, t)
+
+
+def test_weighted_replay_drops_the_steps_whose_choice_was_ruled_out():
+    """Ch. 6: with W = 1 everywhere Eq. 6.6 is Eq. 3.4 and the replay is unchanged; a step whose taken action had
+    W = 0 (not applicable) has probability 0 < P_t, so it is not replayed and lambda restarts there."""
+    lesson = _lesson(np.random.default_rng(3))
+    params = ReplayParams(gamma=0.99, lam=0.8, temperature=5.0, p_threshold=0.01)
+    a, b = _pair(5)
+    used_plain = replay_q_reference(a, lesson, params)
+    used_ones = replay_q_reference(b, lesson, params, weights=np.ones((len(lesson), 4)))
+    assert used_plain == used_ones
+    np.testing.assert_array_equal(a.w1, b.w1)
+    w = np.ones((len(lesson), 4))
+    w[[2, 5], lesson.actions[[2, 5]]] = 0.0
+    c, _ = _pair(5)
+    assert replay_q_reference(c, lesson, params, weights=w) == used_plain - 2

@@ -1,0 +1,116 @@
+"""Ch. 6: learning to recharge over learned behaviours (Experiments 2 and 3, Fig. 6.6).
+
+Protocol (6.6): each run learns Q(state, behaviour) (``connrl.agents.behaviour_level.BehaviourQCON``) on top of the
+shipped behaviour library, choosing a behaviour on every primitive step (``connrl.tasks.recharge.BehaviourEnv``).
+A trial starts in room A, B or C (a room drawn uniformly, then a free place in it, any heading) and ends on docking or
+after 200 primitive steps. Before the first trial and after every 10 the greedy policy is tested on fixed tasks, the
+same number from each room; performance = reinforcement per primitive step over them, overall and per start room.
+Experiment 2 weights the choice by applicability only (W = 0 / 1); Experiment 3 adds the persistence rule (0 / 100 /
+1). The thesis's other settings (6.6): 16 inputs (6.4.2), 8 hidden units, lr 0.05, gamma 0.99, lambda 0.8,
+T 0.05 -> 0.02, about 60 lessons replayed per trial, P_l from 0 (latest) to 0.02 by recency. Values it does not give
+(momentum, initial weights, memory size, on-line learning, the test tasks) are Ch. 5's (R; docs/RECONSTRUCTION.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from connrl.core.rollout import run_trial
+from connrl.envs.robot.recharge import ROOMS
+from connrl.experiments.protocol import train_and_test
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
+from connrl.tasks.recharge import make_high_level_agent, make_recharge_env
+
+RANGES = {"hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1", "lam": "0..1",
+          "t_start": ">0", "t_end": ">0", "lessons_per_trial": ">=0", "capacity": ">=1", "p_oldest": "0..<1",
+          "trials": ">=1", "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1"}
+
+
+@dataclass(frozen=True)
+class RechargeParams:
+    """One Ch. 6 run: the thesis's values where 6.6 gives them, else Ch. 5's (R)."""
+
+    persistence: bool = True  # Exp. 3's persistence rule (6.5.1); False = Exp. 2
+    hidden: int = 8  # hidden units of each Q-net (6.6)
+    lr: float = 0.05  # (6.6)
+    momentum: float = 0.9  # (R, Ch. 5)
+    init_range: float = 0.5  # (R, Ch. 5)
+    gamma: float = 0.99  # (6.6.2)
+    lam: float = 0.8  # (6.6.2)
+    t_start: float = 0.05  # T 0.05 -> 0.02 over the run, on Q / 100 (6.6; the scale as in Ch. 5)
+    t_end: float = 0.02
+    lessons_per_trial: int = 60  # "approximately 60 lessons" (6.6)
+    capacity: int = 100  # latest lessons kept (App. A.2)
+    p_oldest: float = 0.02  # P_l from 0 for the latest lesson to this for the oldest (6.6)
+    online: bool = True  # Q-learning on each step as well as replay (R, as Ch. 5)
+    trials: int = 150  # (Fig. 6.6 / 6.7: "after 150 learning trials")
+    max_steps: int = 200  # (6.6)
+    test_every: int = 10
+    tests_per_room: int = 10  # fixed greedy test tasks per start room (R)
+
+    def __post_init__(self):
+        check_types(self, RANGES)
+
+
+def _test(env, agent, tasks, seeds) -> dict[str, tuple[float, int, int]]:
+    """Per room: (total reinforcement, steps, dockings) of the greedy policy on the fixed tasks."""
+    out = {r: [0.0, 0, 0] for r in ROOMS}
+    for (room, start), s in zip(tasks, seeds, strict=True):
+        stats = run_trial(env, agent, trial=0, learning=False, seed=int(s), options={"start": start})
+        out[room][0] += stats.total_reward
+        out[room][1] += stats.steps
+        out[room][2] += bool(stats.info.get("success"))
+    return {r: tuple(v) for r, v in out.items()}
+
+
+def run_recharge(p: RechargeParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
+    env, test_env = make_recharge_env(p), make_recharge_env(p)
+    task_rng = np.random.default_rng(rng.integers(2**63))
+    tasks = [(r, test_env.world.sample_start(task_rng, r)) for r in ROOMS for _ in range(p.tests_per_room)]
+    seeds = task_rng.integers(2**31, size=len(tasks))
+    agent = make_high_level_agent(p, rng)
+    env.reset(seed=int(rng.integers(2**31)))
+    xs, ys, rows = [], [], []
+
+    def test(n):
+        by_room = _test(test_env, agent, tasks, seeds)
+        total, steps = sum(v[0] for v in by_room.values()), sum(v[1] for v in by_room.values())
+        xs.append(n)
+        ys.append(total / steps)
+        rows.append({"trials": n, "performance": total / steps,
+                     **{f"perf_{r}": v[0] / v[1] for r, v in by_room.items()},
+                     **{f"docked_{r}": v[2] / p.tests_per_room for r, v in by_room.items()}})
+
+    train_and_test(p.trials, lambda k: run_trial(env, agent, trial=k, learning=True), test, test_every=p.test_every,
+                   test_first=True, progress=progress, agent=agent)
+    last = rows[-3:]
+    metrics = {"final_performance": float(np.mean(ys[-3:])), "mean_performance": float(np.mean(ys)),
+               **{f"final_docked_{r}": float(np.mean([row[f"docked_{r}"] for row in last])) for r in ROOMS}}
+    return RunResult(xs, ys, metrics, rows)
+
+
+def _q(name, text, better="higher"):
+    return Quantity(name, text, better, "6.6")
+
+
+QUANTITIES = (_q("final_performance", "reinforcement per primitive step, mean of the last 3 tests"),
+              _q("mean_performance", "reinforcement per primitive step over all tests (area under the curve)"),
+              *(_q(f"final_docked_{r}", f"share of test tasks from room {r} docked, last 3 tests") for r in ROOMS))
+
+PROFILES = {"tiny": {"runs": 1, "trials": 2, "test_every": 1, "tests_per_room": 1, "lessons_per_trial": 2,
+                     "max_steps": 20},
+            "quick": {"runs": 2, "trials": 60, "tests_per_room": 5}, "full": {"runs": 7}}
+
+EXPERIMENTS = [
+    ExperimentSpec(
+        name="recharge-behaviours", title="Exps 2 and 3: recharging over learned behaviours, without and with the "
+        "persistence rule", section="6.6.2, 6.6.3 Fig. 6.6", run="connrl.experiments.recharge:run_recharge",
+        params=override(RechargeParams(), {}, "experiment recharge-behaviours"), profiles=PROFILES,
+        variants=(Variant("Exp. 2: W = 0/1", {"persistence": False}),
+                  Variant("Exp. 3: persistence rule", {"persistence": True})),
+        quantities=QUANTITIES, x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
+        description="the shipped behaviour library (connrl train-behaviours); thesis: Exp. 3 near-optimal from all "
+                    "rooms within 60 trials, from A and C within 20; Exp. 2 poor at 150"),
+]

@@ -1,0 +1,62 @@
+"""The Ch. 6 high-level learner: Eq. 6.6 choices (ruled-out behaviours never chosen, persistence), the weights kept
+with each lesson for replay, and a run on a tiny behaviour-level world."""
+
+import numpy as np
+import pytest
+
+from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents.behaviour_level import BehaviourQCON
+from connrl.core.exploration import TemperatureSchedule
+from connrl.nets import NetConfig
+
+
+def agent(persistence=False, seed=0, t=0.05):
+    cfg = QCONConfig(net=NetConfig(3, 4, value_range=100.0, init_range=0.5, lr=0.05),
+                     temperature=TemperatureSchedule.direct(t, t, 10), gamma=0.99, lam=0.8,
+                     replay=ReplayConfig(capacity=10, lessons_per_trial=LinearSchedule(2, 2), p_threshold=0.0,
+                                         p_threshold_oldest=0.02))
+    return BehaviourQCON(cfg, 4, np.random.default_rng(seed), persistence=persistence)
+
+
+def info(app, goal=False):
+    return {"applicable": np.array(app, dtype=bool), "behaviour_goal": goal}
+
+
+def test_inapplicable_behaviours_are_never_chosen():
+    a = agent(t=10.0)  # nearly uniform among the allowed ones
+    a.begin_trial(np.zeros(3), info([True, False, True, False]), trial=0, learning=True)
+    picks = {a.act(np.zeros(3), info([True, False, True, False])) for _ in range(200)}
+    assert picks == {0, 2}
+    with pytest.raises(ValueError, match="applicable"):
+        a.act(np.zeros(3), {})
+
+
+def test_persistence_keeps_the_active_behaviour_until_its_goal_or_a_new_applicable_one():
+    a = agent(persistence=True, t=10.0)  # a hot choice: without persistence the picks would spread
+    x = np.zeros(3)
+    a.begin_trial(x, info([False, False, True, True]), trial=0, learning=True)
+    first = a.act(x, info([False, False, True, True]))
+    w = a.weights(info([False, False, True, True]))
+    assert w[first] == 100.0 and sorted(w.tolist()) == [0.0, 0.0, 1.0, 100.0]
+    assert a.weights(info([False, False, True, True], goal=True)).tolist() == [0, 0, 1, 1]  # its goal: no persisting
+    assert a.weights(info([False, True, True, True])).tolist() == [0, 1, 1, 1]  # DP came into sight
+    no = agent(persistence=False)
+    no.begin_trial(x, info([False, False, True, True]), trial=0, learning=True)
+    no.act(x, info([False, False, True, True]))
+    assert no.weights(info([False, False, True, True])).tolist() == [0, 0, 1, 1]  # Exp. 2
+
+
+def test_each_lesson_keeps_its_steps_weights_for_replay():
+    a = agent(persistence=True)
+    x = np.zeros(3)
+    a.begin_trial(x, info([True, True, True, True]), trial=0, learning=True)
+    used = []
+    for k in range(3):
+        app = [k != 1, True, True, True]
+        b = a.act(x, info(app))
+        used.append(a._w.copy())  # W as the choice saw it
+        a.observe(b, 0.0, x, False, k == 2, info(app))
+    a.end_trial()
+    lesson = a.book.memory.lessons[-1]
+    np.testing.assert_array_equal(lesson.meta["weights"], np.array(used))
+    assert lesson.meta["weights"].shape == (3, 4)
