@@ -13,7 +13,7 @@ import numpy as np
 from connrl.envs.robot import Layout
 from connrl.envs.robot.render import draw_layout
 from connrl.experiments.recharge import EXPERIMENTS  # the experiments this section covers
-from connrl.report.page import figure, load_summary, summary_table
+from connrl.report.page import figure, load_summary, note, summary_table
 from connrl.report.plots import save_figure
 from connrl.tasks.behaviours import APPLICABLE_ABOVE, LIBRARY_DIR, load_library, q_value_map
 
@@ -70,5 +70,6 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
         lines += [f"### {spec.name}: {spec.title} (thesis {spec.section})", "", summary_table(summary), "",
                   "Thesis (6.6.2-6.6.3): Exp. 3 connects from most places in rooms A and C within 20 trials and nearly "
                   "optimally from everywhere within 60; Exp. 2 is poor after 150 trials, though from room A it "
-                  "succeeds within about 10.", "", figure(out_dir / spec.name / "curve.png", doc, spec.name), ""]
+                  "succeeds within about 10.", "", figure(out_dir / spec.name / "curve.png", doc, spec.name), "",
+                  note("recharge-status"), ""]
     return "\n".join(lines)
