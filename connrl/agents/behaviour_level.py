@@ -56,7 +56,8 @@ class BehaviourQCON(QCON):
         w = self.weights(info)
         t = 0.0 if greedy else self.explore.temperature(info) * self.merit_scale
         p = weighted_boltzmann_probabilities(q, w, t)
-        b = int(self.rng.choice(p.size, p=p))
+        # greedy tests take the first best without drawing, so testing never moves the learner's random stream
+        b = int(np.argmax(p)) if t == 0 else int(self.rng.choice(p.size, p=p))
         self._active, self._was_applicable, self._w = b, np.asarray(info["applicable"], dtype=bool), w
         self.last_probabilities = p
         return b

@@ -114,8 +114,8 @@ def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repai
     x, acts, rews = lesson.inputs, lesson.actions, lesson.rewards
     n = len(lesson)
     if params.batch:
-        if repair != "none":
-            raise ValueError("the 5.4.3 repairs are defined for incremental replay only")
+        if repair != "none" or weights is not None:
+            raise ValueError("the 5.4.3 repairs and per-step weights are defined for incremental replay only")
         targets, policy = batch_targets(np.array([q.values(x[t]) for t in range(n + 1)]), acts, rews,
                                         lesson.terminated, params)
         for t in range(n - 1, -1, -1):

@@ -87,18 +87,26 @@ def load_behaviour(path, task: str | None = None) -> Behaviour:
     if (n_in, n_act) != (OBS_SIZE[m["task"]], 6) or not isinstance(n_hid, int) or n_hid < 1:
         raise ValueError(f"{meta}: task {m['task']} needs {OBS_SIZE[m['task']]} inputs, 6 actions and >= 1 hidden "
                          f"unit, the file says {n_in} inputs, {n_act} actions, {n_hid} hidden")
+    vr, low, prov = m.get("value_range"), m.get("binary_low", -0.5), m.get("provenance", {})
+    if not (isinstance(vr, (int, float)) and not isinstance(vr, bool) and 0 < vr < math.inf) or low not in (-0.5, 0.0) \
+            or not isinstance(prov, dict):
+        raise ValueError(f"{meta}: value_range must be a number > 0, binary_low -0.5 or 0 and provenance an object; "
+                         f"got {vr!r}, {low!r}, {type(prov).__name__}")
     try:
-        with np.load(npz, allow_pickle=False) as z:
+        z = np.load(npz, allow_pickle=False)
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise ValueError("an .npy array, not an .npz archive")
+        with z:
             w1, w2 = np.asarray(z["w1"], dtype=np.float64), np.asarray(z["w2"], dtype=np.float64)
-    except (OSError, ValueError, KeyError) as exc:
-        raise ValueError(f"{npz}: not a readable weight file ({exc})") from None
+    except Exception as exc:  # any unreadable archive (missing, truncated, pickled, wrong keys) is one clear line
+        raise ValueError(f"{npz}: not a readable weight file ({type(exc).__name__}: {exc})") from None
     if w1.shape != (n_act, n_hid, n_in + 1) or w2.shape != (n_act, n_hid + 1) or not (
             np.isfinite(w1).all() and np.isfinite(w2).all()):
         raise ValueError(f"{npz}: weights of shape {w1.shape} / {w2.shape} do not match the {n_in}-{n_hid}-1 nets of "
                          f"{meta.name}, or are not finite")
-    q = OAON(NetConfig(n_in, n_hid, value_range=float(m["value_range"])), n_act, np.random.default_rng(0))
+    q = OAON(NetConfig(n_in, n_hid, value_range=float(vr)), n_act, np.random.default_rng(0))
     q.w1, q.w2 = w1, w2
-    return Behaviour(m["task"], q, float(m.get("binary_low", -0.5)), dict(m.get("provenance") or {}))
+    return Behaviour(m["task"], q, float(low), dict(prov))
 
 
 def q_value_map(b: Behaviour, layout: Layout, spacing: float = 12.0,

@@ -66,7 +66,8 @@ class BehaviourEnv(gym.Env):
         room = self.world.sim.room
         obs, r, terminated, truncated, info = self.world.step(primitive)
         # the behaviour's own goal (its reinforcement of 100 in Ch. 5): docked (DK), into another room (DP)
-        goal = bool(info["success"]) if task == "DK" else (task == "DP" and info["room"] not in (None, room))
+        goal = bool(info["success"]) if task == "DK" else (  # as Ch. 5's DP success: into another room, no collision
+            task == "DP" and not info["collision"] and info["room"] != room)
         info["primitive"], info["behaviour"], info["behaviour_goal"] = primitive, task, goal
         return obs, r, terminated, truncated, self._with_applicability(info)
 

@@ -46,17 +46,40 @@ def test_persistence_keeps_the_active_behaviour_until_its_goal_or_a_new_applicab
     assert no.weights(info([False, False, True, True])).tolist() == [0, 0, 1, 1]  # Exp. 2
 
 
-def test_each_lesson_keeps_its_steps_weights_for_replay():
-    a = agent(persistence=True)
+def test_each_lesson_keeps_its_steps_weights_for_replay(monkeypatch):
+    a = agent(persistence=False)
     x = np.zeros(3)
     a.begin_trial(x, info([True, True, True, True]), trial=0, learning=True)
-    used = []
-    for k in range(3):
-        app = [k != 1, True, True, True]
+    apps = [[False, True, True, True], [True, True, True, True], [True, False, True, False]]
+    for k, app in enumerate(apps):
         b = a.act(x, info(app))
-        used.append(a._w.copy())  # W as the choice saw it
         a.observe(b, 0.0, x, False, k == 2, info(app))
     a.end_trial()
     lesson = a.book.memory.lessons[-1]
-    np.testing.assert_array_equal(lesson.meta["weights"], np.array(used))
-    assert lesson.meta["weights"].shape == (3, 4)
+    np.testing.assert_array_equal(lesson.meta["weights"], np.array(apps, dtype=float))  # Exp. 2's W = applicability
+    seen = []
+    monkeypatch.setattr("connrl.agents.behaviour_level.replay_q",
+                        lambda q, lesson, params, weights=None: seen.append(weights))
+    a.replay_lesson(lesson, 0.01)
+    assert seen[0] is lesson.meta["weights"]  # replay's non-policy test sees them
+
+
+def test_persistence_holds_a_hot_choice_and_resets_between_trials():
+    x, app = np.zeros(3), [True, True, True, True]
+    switches = {}
+    for persistence in (False, True):
+        a = agent(persistence=persistence, t=10.0, seed=3)  # T = 10 on Q/100: nearly uniform among the allowed
+        a.begin_trial(x, info(app), trial=0, learning=True)
+        picks = [a.act(x, info(app)) for _ in range(100)]
+        switches[persistence] = sum(p != q for p, q in zip(picks[:-1], picks[1:], strict=True))
+        a.begin_trial(x, info(app), trial=1, learning=True)  # a new trial forgets the active behaviour
+        assert a.weights(info(app)).tolist() == [1, 1, 1, 1]
+    assert switches[False] > 50 and switches[True] < 10  # 100 : 1 : 1 : 1 keeps the active one ~97 % of steps
+
+
+def test_greedy_choice_draws_no_random_numbers():
+    a = agent()
+    a.begin_trial(np.zeros(3), info([True] * 4), trial=0, learning=False)
+    state = a.rng.bit_generator.state
+    a.act(np.zeros(3), info([True, False, True, True]), greedy=True)
+    assert a.rng.bit_generator.state == state

@@ -124,3 +124,26 @@ def test_q_value_map_is_the_max_over_headings_and_nan_where_the_robot_does_not_f
                 sim.place(x, y, h)
                 best = max(best, 100.0 * float(encode_sonar(sim.true_ranges()[:1].clip(0, 127))[0]))
             assert grid[i, j] == pytest.approx(best, abs=0.8)  # the scan rounds readings to 1 in
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"value_range": None}, "value_range must be a number > 0"), ({"value_range": "x"}, "value_range must be"),
+    ({"binary_low": 5}, "binary_low -0.5 or 0"), ({"provenance": [1]}, "provenance an object")])
+def test_bad_fields_are_one_line(tmp_path, change, message):
+    save_behaviour(random_behaviour(), tmp_path / "dp")
+    meta = json.loads((tmp_path / "dp.json").read_text())
+    (tmp_path / "dp.json").write_text(json.dumps({**meta, **change}))
+    with pytest.raises(ValueError, match=message):
+        load_behaviour(tmp_path / "dp")
+
+
+@pytest.mark.parametrize("content", [b"", b"not an archive", "npy"])
+def test_unreadable_weight_files_are_one_line(tmp_path, content):
+    save_behaviour(random_behaviour(), tmp_path / "dp")
+    if content == "npy":
+        np.save(tmp_path / "x.npy", np.zeros(3))
+        (tmp_path / "dp.npz").write_bytes((tmp_path / "x.npy").read_bytes())
+    else:
+        (tmp_path / "dp.npz").write_bytes(content)
+    with pytest.raises(ValueError, match="not a readable weight file"):
+        load_behaviour(tmp_path / "dp")
