@@ -36,7 +36,8 @@ class RechargeParams:
     hidden: int = 8  # hidden units of each Q-net (6.6)
     lr: float = 0.05  # (6.6)
     momentum: float = 0.9  # (R, Ch. 5)
-    init_range: float = 0.5  # (R, Ch. 5)
+    init_range: float = 0.1  # (R) Ch. 5's 0.5 lets untrained nets differ by tens of Q units: a behaviour falls
+    # below the others at once and is never tried again (docs/RECONSTRUCTION.md, "High-level learner")
     gamma: float = 0.99  # (6.6.2)
     lam: float = 0.8  # (6.6.2)
     t_start: float = 0.05  # T 0.05 -> 0.02 over the run, on Q / 100 (6.6; the scale as in Ch. 5)
