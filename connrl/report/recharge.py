@@ -4,6 +4,7 @@ training and rate where Ch. 6 uses it, and the Q-value maps of Figs. 6.3 / 6.4 w
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
@@ -11,8 +12,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from connrl.envs.robot import Layout
+from connrl.envs.robot.recharge import ROOMS
 from connrl.envs.robot.render import draw_layout
 from connrl.experiments.recharge import EXPERIMENTS  # the experiments this section covers
+from connrl.experiments.runner import make_jobs
 from connrl.report.page import figure, load_summary, note, summary_table
 from connrl.report.plots import save_figure
 from connrl.tasks.behaviours import APPLICABLE_ABOVE, LIBRARY_DIR, load_library, q_value_map
@@ -37,6 +40,36 @@ def draw_q_map(task: str, xs, ys, grid, layout: Layout, file: Path) -> Path:
     save_figure(fig, file)
     plt.close(fig)
     return file
+
+
+def draw_room_curves(spec, summary: dict, out_dir: Path, file: Path) -> Path | None:
+    """Per start room, the mean over runs of the share of test tasks docked, one panel per variant (Fig. 6.6 split
+    by room), from the runs' CSV rows."""
+    jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], out_dir)
+    fig, axes = plt.subplots(1, len(spec.variants), figsize=(4.5 * len(spec.variants), 3.4), dpi=110, sharey=True,
+                             squeeze=False)
+    drawn = False
+    for ax, v in zip(axes[0], spec.variants, strict=True):
+        files = [Path(f"{j.path}.csv") for j in jobs if j.variant == v.label]
+        rows = [list(csv.DictReader(f.open())) for f in files if f.exists()]
+        rows = [r for r in rows if r and len(r) == len(rows[0])]
+        if not rows:
+            continue
+        xs = [float(r["trials"]) for r in rows[0]]
+        for i, room in enumerate(ROOMS):
+            ax.plot(xs, np.mean([[float(r[f"docked_{room}"]) for r in run] for run in rows], axis=0), color=f"C{i}",
+                    label=f"from room {room}")
+        ax.set_title(f"{v.label} ({len(rows)} runs)", fontsize=9)
+        ax.set_xlabel("trials")
+        ax.grid(alpha=0.3)
+        drawn = True
+    axes[0][0].set_ylabel("share of test tasks docked")
+    axes[0][0].legend(fontsize=8)
+    fig.tight_layout()
+    if drawn:
+        save_figure(fig, file)
+    plt.close(fig)
+    return file if drawn else None
 
 
 def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
@@ -70,6 +103,9 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
         lines += [f"### {spec.name}: {spec.title} (thesis {spec.section})", "", summary_table(summary), "",
                   "Thesis (6.6.2-6.6.3): Exp. 3 connects from most places in rooms A and C within 20 trials and nearly "
                   "optimally from everywhere within 60; Exp. 2 is poor after 150 trials, though from room A it "
-                  "succeeds within about 10.", "", figure(out_dir / spec.name / "curve.png", doc, spec.name), "",
-                  note("recharge-status"), ""]
+                  "succeeds within about 10.", "", figure(out_dir / spec.name / "curve.png", doc, spec.name), ""]
+        rooms = draw_room_curves(spec, summary, out_dir, out_dir / spec.name / "rooms.png")
+        if rooms is not None:
+            lines += ["By start room (mean over runs):", "", figure(rooms, doc, f"{spec.name}-rooms"), ""]
+        lines += [note("recharge-status"), ""]
     return "\n".join(lines)

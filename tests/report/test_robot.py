@@ -55,7 +55,10 @@ def test_speedup_tables_need_the_reference_row_to_reach_the_level():
 def test_chapter_6_section_shows_the_shipped_library_and_its_q_maps(tmp_path):
     from connrl.report import recharge
 
+    run_tiny("recharge-behaviours", tmp_path)
     md = recharge.results_section(tmp_path, tmp_path / "docs" / "RESULTS.md")
     assert "## Chapter 6" in md and "| DP | 1500 | 10 | 25% |" in md
+    assert "### recharge-behaviours" in md and "By start room" in md
+    assert (tmp_path / "docs" / "figures" / "recharge-behaviours-rooms.png").exists()
     for name in ("behaviour-dp-q-map", "behaviour-dk-q-map"):
         assert (tmp_path / "docs" / "figures" / f"{name}.png").exists()
