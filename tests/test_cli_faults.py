@@ -436,6 +436,8 @@ def test_ctrl_c_stops_the_runs_in_flight_and_keeps_what_finished(tmp_path):
     ("robot-teaching-dk", "edge_jump=24", "parameter(s) edge_jump apply to task DP only"),
     ("robot-teaching-wfl", "lesson_starts=spread", "parameter(s) lesson_starts apply to task DP only"),
     ("robot-dp-copy", "lessons=0", "parameter lessons must be >= 1 when policy is 'copy'"),
+    ("recharge-behaviours", "library=abc", "parameter library must be the shipped behaviour library's digest"),
+    ("recharge-behaviours", "hidden=0", "parameter hidden must be >= 1, got 0"),
     ("robot-teaching-dp", "taught_order=first", "parameter taught_order must be one of 'after', 'shuffled'"),
     ("robot-dp-copy", "policy=random", "parameter policy must be one of 'copy', 'teacher'"),
     ("robot-dp-copy", "copy_epochs=-1", "parameter copy_epochs must be >= 0, got -1"),

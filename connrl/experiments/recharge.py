@@ -21,7 +21,10 @@ from connrl.core.rollout import run_trial
 from connrl.envs.robot.recharge import ROOMS
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
+from connrl.tasks.behaviours import library_digest
 from connrl.tasks.recharge import make_high_level_agent, make_recharge_env
+
+SHIPPED_LIBRARY = library_digest()
 
 RANGES = {"hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1", "lam": "0..1",
           "t_start": ">0", "t_end": ">0", "lessons_per_trial": ">=0", "capacity": ">=1", "p_oldest": "0..<1",
@@ -50,9 +53,13 @@ class RechargeParams:
     max_steps: int = 200  # (6.6)
     test_every: int = 10
     tests_per_room: int = 10  # fixed greedy test tasks per start room (R)
+    library: str = SHIPPED_LIBRARY  # digest of the behaviour library (connrl train-behaviours): new library, new runs
 
     def __post_init__(self):
         check_types(self, RANGES)
+        if self.library != SHIPPED_LIBRARY:
+            raise ValueError(f"parameter library must be the shipped behaviour library's digest {SHIPPED_LIBRARY} "
+                             f"(connrl train-behaviours changes it), got {self.library!r}")
 
 
 def _test(env, agent, tasks, seeds) -> dict[str, tuple[float, int, int]]:

@@ -12,6 +12,7 @@ following everywhere (``APPLICABLE_ABOVE``).
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from dataclasses import dataclass, field
@@ -132,6 +133,16 @@ def q_value_map(b: Behaviour, layout: Layout, spacing: float = 12.0,
 
 def library_paths(directory=LIBRARY_DIR) -> dict[str, Path]:
     return {t: Path(directory) / t.lower() for t in BEHAVIOUR_TASKS}
+
+
+def library_digest(directory=LIBRARY_DIR) -> str:
+    """A short SHA-256 of the four behaviours' files: runs record it, so a retrained library gives new runs."""
+    h = hashlib.sha256()
+    for path in library_paths(directory).values():
+        for f in (path.with_suffix(".json"), path.with_suffix(".npz")):
+            h.update(f.name.encode())
+            h.update(f.read_bytes() if f.exists() else b"missing")
+    return h.hexdigest()[:12]
 
 
 def load_library(directory=LIBRARY_DIR) -> dict[str, Behaviour]:

@@ -147,3 +147,15 @@ def test_unreadable_weight_files_are_one_line(tmp_path, content):
         (tmp_path / "dp.npz").write_bytes(content)
     with pytest.raises(ValueError, match="not a readable weight file"):
         load_behaviour(tmp_path / "dp")
+
+
+def test_library_digest_changes_with_any_behaviour_file(tmp_path):
+    from connrl.tasks.behaviours import library_digest
+
+    for t, seed in (("DK", 0), ("DP", 1), ("WFL", 2), ("WFR", 3)):
+        n_in = 52 if t in ("DK", "DP") else 36
+        save_behaviour(random_behaviour(t, n_in, seed), library_paths(tmp_path)[t])
+    before = library_digest(tmp_path)
+    assert before == library_digest(tmp_path) and len(before) == 12
+    save_behaviour(random_behaviour("WFR", 36, 9), library_paths(tmp_path)["WFR"])
+    assert library_digest(tmp_path) != before
