@@ -54,8 +54,7 @@ def train_behaviour(plan: TrainingPlan, seed: int) -> Behaviour:
     layout = run.env.unwrapped.layout
     for k in range(p.trials):
         far = plan.far_share > 0 and rng.random() < plan.far_share
-        run_trial(run.env, run.agent, trial=k, learning=True,
-                  options={"start": sample_anywhere(rng, layout)} if far else None)
+        run.train(k, options={"start": sample_anywhere(rng, layout)} if far else None)
     meta = {"seed": seed, "trials": plan.trials, "lessons": plan.lessons, "far_share": plan.far_share,
             "final_test_performance": round(float(run.test()), 4), "params": "RobotParams defaults (5.3)",
             "trainer": "connrl.experiments.behaviours.train_behaviour",
@@ -85,9 +84,9 @@ def serve_rate(b: Behaviour, seed: int = 0, n: int = 200) -> float:
     env = RobotTaskEnv(b.task, binary_low=b.binary_low)
     good = steps = 0
     for start in _serve_starts(b.task, rng, env.layout, n):
-        stats = run_trial(env, b, trial=0, learning=False, seed=int(rng.integers(2**31)), options={"start": start},
-                          on_step=None)
+        seed = int(rng.integers(2**31))  # one trial seed per start (wall following draws its own below)
         if b.task in ("DP", "DK"):
+            stats = run_trial(env, b, trial=0, learning=False, seed=seed, options={"start": start})
             good += bool(stats.info.get("success"))
         else:
             good += _good_wf_steps(env, b, start, rng)

@@ -27,7 +27,7 @@ single-layer docking, is docs/notes/robot-dp-gap.md.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -106,8 +106,8 @@ class RobotParams:
                              f"{TAUGHT_COUNTS[self.task]} the teacher demonstrates afresh), got {self.lessons}")
 
     def check_combination(self):
-        dp_only = [k for k, v in (("dp_heading", 180.0), ("dp_far", DP_FAR), ("lesson_starts", "random"),
-                                  ("edge_jump", SHIPPED_WORLD["edge_jump"])) if getattr(self, k) != v]
+        defaults = {f.name: f.default for f in fields(RobotParams)}
+        dp_only = [k for k in ("dp_heading", "dp_far", "lesson_starts", "edge_jump") if getattr(self, k) != defaults[k]]
         if self.task != "DP" and dp_only:
             raise ValueError(f"parameter(s) {', '.join(dp_only)} apply to task DP only (its start region, teacher "
                              f"and door-edge inputs), got task {self.task}")
@@ -141,9 +141,9 @@ class RobotRun:
         self.agent = make_agent(p, rng)
         self.env.reset(seed=int(rng.integers(2**31)))
 
-    def train(self, k: int, on_step=None) -> TrialStats:
-        """Training trial ``k`` (stochastic actions, learning on)."""
-        return run_trial(self.env, self.agent, trial=k, learning=True, on_step=on_step)
+    def train(self, k: int, on_step=None, options: dict | None = None) -> TrialStats:
+        """Training trial ``k`` (stochastic actions, learning on); ``options`` as for ``env.reset`` (e.g. a start)."""
+        return run_trial(self.env, self.agent, trial=k, learning=True, on_step=on_step, options=options)
 
     def test(self, paths: list | None = None) -> float:
         """The greedy test of 5.4 on the run's fixed tasks: reinforcement per step."""

@@ -40,7 +40,7 @@ from gymnasium import spaces
 from connrl.envs.robot.constants import DOOR_EDGE_JUMP, MOVE_FORWARD, N_ACTIONS, ROBOT_RADIUS, SEG_CHARGER
 from connrl.envs.robot.layout import Layout
 from connrl.envs.robot.sim import Reading, RobotSim
-from connrl.envs.robot.tasks import R_SUCCESS, _fill_obs, _side_features, encode_sonar
+from connrl.envs.robot.tasks import R_SUCCESS, _fill_obs, _rejection, _side_features, _uniform_heading, encode_sonar
 
 ROOMS = ("A", "B", "C")
 HIGH_SIZE = 16
@@ -86,11 +86,12 @@ def task_observations(rd: Reading, low: float = -0.5) -> dict[str, np.ndarray]:
 def sample_in_room(rng: np.random.Generator, layout: Layout, room: str) -> tuple[float, float, float]:
     """A free position uniform in ``room`` (rejection), any heading."""
     x0, y0, x1, y1 = layout.rooms[room]
-    for _ in range(10_000):
-        x, y = float(rng.uniform(x0, x1)), float(rng.uniform(y0, y1))
-        if layout.room_at(x, y) == room and layout.is_free(x, y):
-            return (x, y, float(rng.uniform(0.0, 360.0)))
-    raise RuntimeError(f"no free start found in room {room!r} of layout {layout.name!r}")
+
+    def sample():
+        return (float(rng.uniform(x0, x1)), float(rng.uniform(y0, y1)))
+
+    x, y = _rejection(rng, sample, lambda p: layout.room_at(*p) == room and layout.is_free(*p), f"room {room}")
+    return (x, y, _uniform_heading(rng))
 
 
 class RechargeEnv(gym.Env):
