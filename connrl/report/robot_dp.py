@@ -103,11 +103,10 @@ def _copy_bound(curves, copy_summary, seeds) -> list[str]:
 
 def _changes(curves, seeds) -> list[str]:
     out: list[str] = []
-    teach = TEACH
     geo = {label: [("robot-dp-geometry", f"{label}, {n} lessons") for n in (0, 10)]
            for label in (SPEC_DP, "36-in doors only", "24-in edges only")}
-    if all(k in curves for ks in geo.values() for k in ks) and all(k in curves for k in teach):
-        rows = {**geo, "calibrated (48-in doors, 44-in edges)": [teach[0], teach[2]]}
+    if all(k in curves for ks in geo.values() for k in ks) and all(k in curves for k in TEACH):
+        rows = {**geo, "calibrated (48-in doors, 44-in edges)": [TEACH[0], TEACH[2]]}
         out += [f"**Each calibrated change alone** (`robot-dp-geometry`, seeds {seeds['robot-dp-geometry']}; "
                 "calibrated = robot-teaching-dp): mean-curve trials to 2.5 with 10 lessons / without teaching, and "
                 "final performance with 10 lessons: " + "; ".join(
