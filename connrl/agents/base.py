@@ -69,12 +69,15 @@ class ReplayConfig:
     taught_probability: LinearSchedule = LinearSchedule(1.0, 1.0)  # chance a taught lesson is replayed (4.2.7)
     taught_p_threshold: float = 0.0  # P_t for taught lessons (3.7: 0 for near-optimal teachers)
     taught_order: str = "after"  # "after" the experienced lessons, or "shuffled" in among them (not in the thesis)
+    grouping: tuple[float, float] | None = None  # state grouping (6.6.4): mu ~ U(low, high); None = off
 
     def __post_init__(self):
         if self.capacity < 1:
             raise ValueError(f"replay capacity must be >= 1 lesson, got {self.capacity}")
         if self.taught_order not in TAUGHT_ORDERS:
             raise ValueError(f"taught_order must be one of {', '.join(TAUGHT_ORDERS)}, got {self.taught_order!r}")
+        if self.grouping is not None and not (len(self.grouping) == 2 and 0 <= self.grouping[0] <= self.grouping[1]):
+            raise ValueError(f"grouping must be None or (mu_low, mu_high) with 0 <= low <= high, got {self.grouping}")
         for name in ("p_threshold", "taught_p_threshold"):
             v = getattr(self, name)
             if not 0 <= v < 1:

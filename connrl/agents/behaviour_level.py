@@ -5,6 +5,8 @@ b_k)/T)``. W comes from the environment's ``info["applicable"]`` (6.4.3): 0 for 
 (Experiment 2), and with ``persistence`` 100 for the behaviour being followed until its own goal is reached or a
 behaviour becomes applicable (Experiment 3, 6.5.1; ``info["behaviour_goal"]``). Each step's W is kept with its lesson
 so that replay drops the choices Eq. 6.6 then gave less than P_l ("bad behavior choices were not replayed", 6.6).
+With ``target_max="applicable"`` the Q target's max (on-line and in replay) ranges over the behaviours applicable in
+the next state only, whose nets may never have been trained there otherwise; ``"all"`` takes it over all four.
 Temperatures act on Q / ``merit_scale`` (Q in +-100 with the reward of 100), as for Ch. 5's skills.
 """
 
@@ -15,7 +17,7 @@ import numpy as np
 from connrl.agents.qcon import QCON, QCONConfig
 from connrl.core.exploration import persistence_weights, weighted_boltzmann_probabilities
 from connrl.core.lessons import Lesson
-from connrl.core.replay import ReplayParams, replay_q
+from connrl.core.replay import ReplayParams
 
 
 class BehaviourQCON(QCON):
@@ -24,10 +26,14 @@ class BehaviourQCON(QCON):
     replay_at_most_stored = True  # "approximately 60 lessons" (6.6): fewer while fewer are stored, as in 5.3.5
 
     def __init__(self, config: QCONConfig, n_behaviours: int, rng: np.random.Generator, *, persistence: bool = False,
-                 persist_weight: float = 100.0, merit_scale: float = 100.0):
+                 persist_weight: float = 100.0, merit_scale: float = 100.0, target_max: str = "all"):
         super().__init__(config, n_behaviours, rng)
         if not merit_scale > 0 or not persist_weight > 0:
             raise ValueError(f"merit_scale and persist_weight must be > 0, got {merit_scale}, {persist_weight}")
+        if target_max not in TARGET_MAX:
+            raise ValueError(f"target_max must be one of {TARGET_MAX}, got {target_max!r}")
+        self.target_max = target_max
+        self._trial_applicable: list[np.ndarray] = []
         self.persistence, self.persist_weight, self.merit_scale = bool(persistence), float(persist_weight), merit_scale
         self._active: int | None = None
         self._was_applicable: np.ndarray | None = None
@@ -37,6 +43,7 @@ class BehaviourQCON(QCON):
     def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
         super().begin_trial(obs, info, trial=trial, learning=learning)
         self._active, self._was_applicable, self._trial_weights = None, None, []
+        self._trial_applicable = [_applicable(info)] if info is not None and "applicable" in info else []
 
     def weights(self, info: dict) -> np.ndarray:
         """W(b) for the state of ``info`` (applicability, and the persistence rule when on)."""
@@ -63,8 +70,20 @@ class BehaviourQCON(QCON):
         return b
 
     def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
-        super().observe(action, reward, next_obs, terminated, truncated, info)
+        if self.target_max == "all":
+            super().observe(action, reward, next_obs, terminated, truncated, info)
+        else:  # QCON.observe with the max over the next state's applicable behaviours (Fig. 3.4 step 4)
+            x, y = self._x, self.encode(next_obs)
+            if self.config.online:
+                v = self.q.values(y)
+                u = 0.0 if terminated else float(v[_applicable(info)].max())
+                self.q.update(x, action, reward + self.config.gamma * u)
+            self.book.recorder.add(x, action, reward, y)
+            self.book.ended = (bool(terminated), bool(truncated))
+            self._x = y
         self._trial_weights.append(self._w)
+        if info is not None and "applicable" in info:
+            self._trial_applicable.append(_applicable(info))
 
     def end_trial(self) -> None:
         if not self.learning:
@@ -72,6 +91,8 @@ class BehaviourQCON(QCON):
         lesson = self.book.close_trial()
         if lesson is not None:
             lesson.meta["weights"] = np.array(self._trial_weights)  # W of each step, for the non-policy test
+            if len(self._trial_applicable) == len(lesson) + 1:
+                lesson.meta["applicable"] = np.array(self._trial_applicable)  # each state's, for the target's max
         return None
 
     def replay_params(self, p_threshold: float) -> ReplayParams:
@@ -79,5 +100,13 @@ class BehaviourQCON(QCON):
         return ReplayParams(gamma=self.config.gamma, lam=self.config.lam,
                             temperature=self.explore.base * self.merit_scale, p_threshold=p_threshold, batch=r.batch)
 
-    def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
-        replay_q(self.q, lesson, self.replay_params(p_threshold), weights=lesson.meta.get("weights"))
+    def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
+        allowed = lesson.meta.get("applicable") if self.target_max == "applicable" else None
+        super().replay_lesson(lesson, p_threshold, lesson.meta.get("weights"), allowed)
+
+
+TARGET_MAX = ("all", "applicable")
+
+
+def _applicable(info: dict) -> np.ndarray:
+    return np.asarray(info["applicable"], dtype=bool)

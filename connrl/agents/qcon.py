@@ -12,6 +12,7 @@ import numpy as np
 
 from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
 from connrl.core.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
+from connrl.core.grouping import group_lesson
 from connrl.core.lessons import Lesson
 from connrl.core.replay import QFunction, ReplayParams, replay_q
 from connrl.nets import OAON, NetConfig
@@ -56,6 +57,7 @@ class QCON(LessonAgent):
         self.last_probabilities: np.ndarray | None = None
         # relaxation planning with an action model (QCON-M, 3.6.2): connrl.core.planning.RelaxationPlanner
         self.planner = planner
+        self.grouped_steps = self.groups = 0  # state grouping's tally: mean group size = grouped_steps / groups
 
     def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
         super().begin_trial(obs, info, trial=trial, learning=learning)
@@ -95,6 +97,15 @@ class QCON(LessonAgent):
         return ReplayParams(gamma=self.config.gamma, lam=self.config.lam, temperature=self.explore.base,
                             p_threshold=p_threshold, batch=r.batch, clip=self.config.target_clip)
 
-    def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
-        replay_q(self.q, lesson, self.replay_params(p_threshold))
+    def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
+        """Replay one lesson (Fig. 5.1), over its groups of similar states when ``replay.grouping`` is set (6.6.4);
+        ``weights`` / ``allowed`` as ``connrl.core.replay.replay_q``'s."""
+        params, grouping = self.replay_params(p_threshold), self.config.replay.grouping
+        if grouping is None:
+            replay_q(self.q, lesson, params, weights=weights, allowed=allowed)
+            return
+        g = group_lesson(lesson, self.config.gamma, grouping, self.rng, weights, allowed)
+        self.grouped_steps += len(lesson)
+        self.groups += len(g.lesson)
+        replay_q(self.q, g.lesson, params, weights=g.weights, allowed=g.allowed, discounts=g.discounts)
 

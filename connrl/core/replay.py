@@ -104,18 +104,22 @@ def batch_targets(values: np.ndarray, actions: np.ndarray, rewards: np.ndarray, 
 
 
 def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "none",
-                       weights: np.ndarray | None = None) -> int:
+                       weights: np.ndarray | None = None, allowed: np.ndarray | None = None,
+                       discounts: np.ndarray | None = None) -> int:
     """Fig. 5.1(a), the plain loop: replay a lesson backward into a Q-function; returns the experiences used.
 
     With ``repair`` (taught lessons, 5.4.3) the repair check follows the TD update of each experience, with
-    the net as it is then (the thesis does not say when within the replay). ``weights`` (n, actions): each step's
-    W of Eq. 6.6 for the non-policy test (Ch. 6).
+    the net as it is then (the thesis does not say when within the replay). Ch. 6's options: ``weights`` (n,
+    actions), each step's W of Eq. 6.6 for the non-policy test; ``allowed`` (n+1, actions, bool), the actions the
+    target's max ranges over in each state (all where none is allowed); ``discounts`` (n,), each step's discount in
+    place of gamma (gamma^k for a step that stands for k, as ``group_lesson`` makes, 6.6.4).
     """
     x, acts, rews = lesson.inputs, lesson.actions, lesson.rewards
     n = len(lesson)
+    _check_step_arrays(lesson, weights, allowed, discounts)
     if params.batch:
-        if repair != "none" or weights is not None:
-            raise ValueError("the 5.4.3 repairs and per-step weights are defined for incremental replay only")
+        if repair != "none" or weights is not None or allowed is not None or discounts is not None:
+            raise ValueError("the 5.4.3 repairs and the per-step options are defined for incremental replay only")
         targets, policy = batch_targets(np.array([q.values(x[t]) for t in range(n + 1)]), acts, rews,
                                         lesson.terminated, params)
         for t in range(n - 1, -1, -1):
@@ -125,9 +129,14 @@ def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repai
     used = 0
     e_next, next_policy = 0.0, False
     for t in range(n - 1, -1, -1):
-        u = 0.0 if (t == n - 1 and lesson.terminated) else float(q.values(x[t + 1]).max())
+        u = 0.0
+        if not (t == n - 1 and lesson.terminated):
+            v = np.asarray(q.values(x[t + 1]), dtype=np.float64)
+            ok = None if allowed is None else np.asarray(allowed[t + 1], dtype=bool)
+            u = float(v[ok].max()) if ok is not None and ok.any() else float(v.max())
         lam_t = params.lam if (t < n - 1 and next_policy) else 0.0
-        e = td_lambda_target(rews[t], u, e_next, params.gamma, lam_t)
+        gamma = params.gamma if discounts is None else float(discounts[t])
+        e = td_lambda_target(rews[t], u, e_next, gamma, lam_t)
         if params.clip is not None and e > params.clip:
             e = params.clip
         a = int(acts[t])
@@ -141,7 +150,15 @@ def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repai
     return used
 
 
-# type of Q-function -> compiled whole-lesson replay ``fn(q, lesson, params, repair_index) -> used``
+def _check_step_arrays(lesson: Lesson, weights, allowed, discounts) -> None:
+    n = len(lesson)
+    for name, arr, rows in (("weights", weights, n), ("allowed", allowed, n + 1), ("discounts", discounts, n)):
+        if arr is not None and len(arr) != rows:
+            raise ValueError(f"{name} must have {rows} rows for a lesson of {n} steps, got {len(arr)}")
+
+
+# type of Q-function -> compiled whole-lesson replay ``fn(q, lesson, params, repair_index, weights, allowed,
+# discounts) -> used``
 FAST_PATHS: dict[type, Callable[..., int]] = {}
 
 
@@ -151,15 +168,17 @@ def register_fast_path(q_type: type, fn: Callable[..., int]) -> None:
 
 
 def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "none", fast: bool = True,
-             weights: np.ndarray | None = None) -> int:
-    """Fig. 5.1(a): the registered fast path for ``type(q)`` in incremental mode, else the reference loop (always
-    with per-step ``weights``, which the compiled kernel does not take)."""
-    fn = FAST_PATHS.get(type(q)) if fast and not params.batch and weights is None else None
+             weights: np.ndarray | None = None, allowed: np.ndarray | None = None,
+             discounts: np.ndarray | None = None) -> int:
+    """Fig. 5.1(a): the registered fast path for ``type(q)`` in incremental mode, else the reference loop (the
+    per-step options as ``replay_q_reference``'s)."""
+    fn = FAST_PATHS.get(type(q)) if fast and not params.batch else None
     if fn is None:
-        return replay_q_reference(q, lesson, params, repair, weights)
+        return replay_q_reference(q, lesson, params, repair, weights, allowed, discounts)
     if repair not in REPAIRS:
         raise ValueError(f"repair must be one of {REPAIRS}, got {repair!r}")
-    return fn(q, lesson, params, REPAIRS.index(repair))
+    _check_step_arrays(lesson, weights, allowed, discounts)
+    return fn(q, lesson, params, REPAIRS.index(repair), weights, allowed, discounts)
 
 
 def replay_ahc(v_net, policy_net, lesson: Lesson, params: ReplayParams) -> int:

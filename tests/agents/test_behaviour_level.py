@@ -10,12 +10,12 @@ from connrl.core.exploration import TemperatureSchedule
 from connrl.nets import NetConfig
 
 
-def agent(persistence=False, seed=0, t=0.05):
+def agent(persistence=False, seed=0, t=0.05, target_max="all", grouping=None):
     cfg = QCONConfig(net=NetConfig(3, 4, value_range=100.0, init_range=0.5, lr=0.05),
                      temperature=TemperatureSchedule.direct(t, t, 10), gamma=0.99, lam=0.8,
                      replay=ReplayConfig(capacity=10, lessons_per_trial=LinearSchedule(2, 2), p_threshold=0.0,
-                                         p_threshold_oldest=0.02))
-    return BehaviourQCON(cfg, 4, np.random.default_rng(seed), persistence=persistence)
+                                         p_threshold_oldest=0.02, grouping=grouping))
+    return BehaviourQCON(cfg, 4, np.random.default_rng(seed), persistence=persistence, target_max=target_max)
 
 
 def info(app, goal=False):
@@ -46,8 +46,9 @@ def test_persistence_keeps_the_active_behaviour_until_its_goal_or_a_new_applicab
     assert no.weights(info([False, False, True, True])).tolist() == [0, 0, 1, 1]  # Exp. 2
 
 
-def test_each_lesson_keeps_its_steps_weights_for_replay(monkeypatch):
-    a = agent(persistence=False)
+@pytest.mark.parametrize("target_max", ["all", "applicable"])
+def test_each_lesson_keeps_its_steps_weights_for_replay(monkeypatch, target_max):
+    a = agent(persistence=False, target_max=target_max)
     x = np.zeros(3)
     a.begin_trial(x, info([True, True, True, True]), trial=0, learning=True)
     apps = [[False, True, True, True], [True, True, True, True], [True, False, True, False]]
@@ -57,11 +58,42 @@ def test_each_lesson_keeps_its_steps_weights_for_replay(monkeypatch):
     a.end_trial()
     lesson = a.book.memory.lessons[-1]
     np.testing.assert_array_equal(lesson.meta["weights"], np.array(apps, dtype=float))  # Exp. 2's W = applicability
+    np.testing.assert_array_equal(lesson.meta["applicable"], [[True] * 4] + apps)  # each state's, start included
     seen = []
-    monkeypatch.setattr("connrl.agents.behaviour_level.replay_q",
-                        lambda q, lesson, params, weights=None: seen.append(weights))
+    monkeypatch.setattr("connrl.agents.qcon.replay_q",
+                        lambda q, lesson, params, weights=None, allowed=None: seen.append((weights, allowed)))
     a.replay_lesson(lesson, 0.01)
-    assert seen[0] is lesson.meta["weights"]  # replay's non-policy test sees them
+    assert seen[0][0] is lesson.meta["weights"]  # replay's non-policy test sees them
+    assert seen[0][1] is (lesson.meta["applicable"] if target_max == "applicable" else None)
+
+
+def test_online_target_max_ranges_over_the_next_states_applicable_behaviours():
+    """Fig. 3.4 step 4 with target_max="applicable": r + gamma * max over the applicable nets of the next state."""
+    x, y = np.zeros(3), np.ones(3)
+    for target_max in ("all", "applicable"):
+        a = agent(target_max=target_max)
+        q_y = a.q.values(y)
+        app = np.array([True, False, False, False]) if q_y.argmax() != 0 else np.array([False, True, False, False])
+        want = 5.0 + 0.99 * (q_y.max() if target_max == "all" else q_y[app].max())
+        seen = []
+        a.q.update = lambda x, b, target, seen=seen: seen.append(target)
+        a.begin_trial(x, info([True] * 4), trial=0, learning=True)
+        a.observe(a.act(x, info([True] * 4)), 5.0, y, False, False, info(app))
+        assert seen == [pytest.approx(want)]
+    with pytest.raises(ValueError, match="target_max must be one of"):
+        agent(target_max="some")
+
+
+def test_grouping_replays_fewer_steps_and_tallies_group_sizes():
+    a = agent(grouping=(0.5, 2.5))
+    x = np.zeros(3)
+    a.begin_trial(x, info([True] * 4), trial=0, learning=True)
+    for k in range(30):  # 30 steps in three runs of identical inputs: groups never span a jump of 10
+        a.observe(a.act(x, info([True] * 4)), 0.0, np.full(3, 10.0 * ((k + 1) // 10)), False, k == 29,
+                  info([True] * 4))
+    a.end_trial()
+    a.replay_lesson(a.book.memory.lessons[-1], 0.0)
+    assert a.grouped_steps == 30 and a.groups == 3  # inputs 0 (states 0-9), 10 (10-19), 20 (20-29); 30 is final
 
 
 def test_persistence_holds_a_hot_choice_and_resets_between_trials():

@@ -273,7 +273,7 @@ def test_the_oaon_kernel_is_the_registered_fast_path():
 def test_replay_q_on_an_oaon_uses_the_registered_fast_path(monkeypatch, repair):
     calls = []
 
-    def spy(q, lesson, params, repair_index):
+    def spy(q, lesson, params, repair_index, weights, allowed, discounts):
         calls.append((q, lesson, params, repair_index))
         return 123
 
@@ -297,11 +297,11 @@ def _fast_path_must_not_run(*args, **kwargs):
     raise AssertionError("the fast path ran")
 
 
-@pytest.mark.parametrize("how", ["fast=False", "batch", "other type", "weights"])
+@pytest.mark.parametrize("how", ["fast=False", "batch", "other type"])
 def test_replay_q_falls_back_to_the_reference_loop(monkeypatch, how):
     calls = []
 
-    def reference(q, lesson, params, repair="none", weights=None):
+    def reference(q, lesson, params, repair="none", weights=None, allowed=None, discounts=None):
         calls.append((q, lesson, params, repair))
         return 7
 
@@ -311,8 +311,7 @@ def test_replay_q_falls_back_to_the_reference_loop(monkeypatch, how):
     lesson = _lesson(np.random.default_rng(0))
     params = ReplayParams(gamma=0.9, lam=0.7, batch=how == "batch")
     q = PlainQ(net) if how == "other type" else net
-    w = np.ones((len(lesson), 4)) if how == "weights" else None
-    assert replay_q(q, lesson, params, "none", fast=how != "fast=False", weights=w) == 7
+    assert replay_q(q, lesson, params, "none", fast=how != "fast=False") == 7
     assert calls == [(q, lesson, params, "none")]
 
 
@@ -343,3 +342,52 @@ def test_weighted_replay_drops_the_steps_whose_choice_was_ruled_out():
     w[[2, 5], lesson.actions[[2, 5]]] = 0.0
     c, _ = _pair(5)
     assert replay_q_reference(c, lesson, params, weights=w) == used_plain - 2
+
+
+@pytest.mark.parametrize("hidden", [5, 0])
+@pytest.mark.parametrize("options", ["weights", "allowed", "discounts", "all"])
+def test_kernel_per_step_options_equal_reference(hidden, options):
+    """Ch. 6's per-step options (Eq. 6.6 weights, a max over allowed choices, per-step discounts) in the kernel
+    match the plain loop."""
+    rng = np.random.default_rng(7)
+    lesson = _lesson(rng, n=20, terminated=False)
+    w = rng.choice([0.0, 1.0, 100.0], (20, 4))
+    w[np.arange(20), rng.integers(0, 4, 20)] = 1.0  # never all zero
+    kw = {"weights": w, "allowed": rng.random((21, 4)) < 0.5, "discounts": 0.99 ** rng.integers(1, 12, 20)}
+    kw = kw if options == "all" else {options: kw[options]}
+    fast, ref = _pair(hidden)
+    params = ReplayParams(gamma=0.99, lam=0.8, temperature=5.0, p_threshold=0.02)
+    assert replay_oaon(fast, lesson, params, 0, **kw) == replay_q_reference(ref, lesson, params, **kw)
+    _assert_same_nets(fast, ref)
+    plain, _ = _pair(hidden)
+    replay_q_reference(plain, lesson, params)
+    assert not np.allclose(plain.w2, ref.w2)  # the option did change the replay
+
+
+def test_allowed_and_discounts_targets_by_hand():
+    """A 2-step lesson into a table: the target of step 0 is r0 + d0 * max over the allowed actions of Q(x1)."""
+    x = np.array([[0.0], [1.0], [2.0]])
+    lesson = Lesson(x, np.array([0, 1]), np.array([1.0, 0.0]), terminated=False, truncated=True)
+    q = _StateTable([[0.0, 0.0], [5.0, 50.0], [2.0, 3.0]])
+    allowed = np.array([[True, True], [True, False], [True, True]])
+    replay_q_reference(q, lesson, ReplayParams(gamma=0.9, lam=0.0), allowed=allowed, discounts=np.array([0.5, 0.9]))
+    # backward: step 1 target 0 + 0.9 * max(2, 3); step 0 target 1 + 0.5 * 5 (50 is not allowed)
+    assert q.calls == [(1, 1, pytest.approx(2.7)), (0, 0, pytest.approx(3.5))]
+    with pytest.raises(ValueError, match="allowed must have 3 rows"):
+        replay_q_reference(q, lesson, ReplayParams(gamma=0.9), allowed=allowed[:2])
+
+
+class _StateTable:
+    """A table indexed by the input's single value; updates are only recorded."""
+
+    n_actions = 2
+
+    def __init__(self, v):
+        self.v, self.calls = np.array(v, dtype=float), []
+
+    def values(self, x):
+        return self.v[int(x[0])].copy()
+
+    def update(self, x, a, target):
+        self.calls.append((int(x[0]), a, target))
+        return self.v[int(x[0]), a]
