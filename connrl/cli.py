@@ -192,10 +192,15 @@ def cmd_sweep(args) -> int:
 
 def cmd_make_lessons(args) -> int:
     if args.world == "robot":
+        from connrl.tasks.recharge import write_chg_lessons
         from connrl.tasks.robot import write_taught_lessons
+
+        paths = [*write_taught_lessons(seed=args.seed), write_chg_lessons(seed=args.seed)]
     else:
         from connrl.tasks.survival import write_taught_lessons
-    for path in write_taught_lessons(seed=args.seed):
+
+        paths = write_taught_lessons(seed=args.seed)
+    for path in paths:
         print(path)
     return 0
 

@@ -23,11 +23,13 @@ import numpy as np
 
 from connrl.core.rollout import run_trial
 from connrl.envs.robot import Layout, RobotTaskEnv
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS
 from connrl.envs.robot.tasks import sample_anywhere
 from connrl.experiments.robot import RobotParams, RobotRun
 from connrl.experiments.store import environment_info
 from connrl.storage import atomic_write_text
 from connrl.tasks.behaviours import Behaviour, library_paths, load_library, save_behaviour
+from connrl.tasks.robot import TAUGHT_COUNTS
 
 
 @dataclass(frozen=True)
@@ -60,6 +62,20 @@ def train_behaviour(plan: TrainingPlan, seed: int) -> Behaviour:
             "trainer": "connrl.experiments.behaviours.train_behaviour",
             "code": {k: environment_info()[k] for k in ("connrl", "git_commit")}}
     return Behaviour(plan.task, run.agent.q, p.binary_low, meta)
+
+
+def pretrain_behaviours(steps: int, rng: np.random.Generator) -> tuple[dict, dict[str, int]]:
+    """Experiment 5 (6.6.5): train each behaviour alone (Ch. 5's QCON-T and task, the thesis's taught lessons) until
+    ``steps`` primitive steps are spent; returns the learning agents and the trials each took."""
+    agents, trials = {}, {}
+    for task in BEHAVIOUR_TASKS:
+        run = RobotRun(RobotParams(task=task, lessons=TAUGHT_COUNTS[task]), np.random.default_rng(rng.integers(2**63)))
+        spent = k = 0
+        while spent < steps:
+            spent += run.train(k).steps
+            k += 1
+        agents[task], trials[task] = run.agent, k
+    return agents, trials
 
 
 def _serve_starts(task: str, rng: np.random.Generator, layout: Layout, n: int) -> list[tuple]:

@@ -17,18 +17,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from connrl.agents.behaviour_level import TARGET_MAX
 from connrl.core.rollout import run_trial
 from connrl.envs.robot.recharge import ROOMS
+from connrl.experiments.behaviours import pretrain_behaviours
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
-from connrl.tasks.behaviours import library_digest
-from connrl.tasks.recharge import make_high_level_agent, make_recharge_env
+from connrl.tasks.behaviours import Behaviour, library_digest
+from connrl.tasks.recharge import BehaviourEnv, make_high_level_agent, make_recharge_env
+from connrl.tasks.recharge_together import TrainingBehaviourEnv
 
 SHIPPED_LIBRARY = library_digest()
 
 RANGES = {"hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1", "lam": "0..1",
           "t_start": ">0", "t_end": ">0", "lessons_per_trial": ">=0", "capacity": ">=1", "p_oldest": "0..<1",
-          "trials": ">=1", "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1"}
+          "trials": ">=1", "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1", "step_scale": ">0",
+          "success_reward": ">0", "mu_low": ">=0", "mu_high": ">=0", "pretrain_steps": ">=0"}
 
 
 @dataclass(frozen=True)
@@ -54,31 +58,50 @@ class RechargeParams:
     test_every: int = 10
     tests_per_room: int = 10  # fixed greedy test tasks per start room (R)
     library: str = SHIPPED_LIBRARY  # digest of the behaviour library (connrl train-behaviours): new library, new runs
+    target_max: str = "all"  # the Q target's max over "all" behaviours or the next state's "applicable" ones (R)
+    step_scale: float = 1.0  # primitive actions shrunk to this fraction (Exp. 4, 6.6.4: 1/5)
+    success_reward: float = 100.0  # reinforcement for docking (6.4; Exp. 4: 500); Q-nets and T scale with it
+    grouping: bool = False  # state grouping in replay (Exp. 4, 6.6.4) ...
+    mu_low: float = 0.5  # ... with mu ~ U(mu_low, mu_high) per group (6.6.4)
+    mu_high: float = 2.5
+    pretrain_steps: int = 0  # Exp. 5 (6.6.5): behaviours pre-trained this many primitive steps, then trained along
+    # with the high level; 0 = the shipped library, never trained further
 
     def __post_init__(self):
-        check_types(self, RANGES)
+        check_types(self, RANGES, target_max=TARGET_MAX)
+        if self.step_scale > 1 or self.mu_low > self.mu_high:
+            raise ValueError(f"parameter step_scale must be in (0, 1] and mu_low <= mu_high, got step_scale "
+                             f"{self.step_scale}, mu ({self.mu_low}, {self.mu_high})")
         if self.library != SHIPPED_LIBRARY:
             raise ValueError(f"parameter library must be the shipped behaviour library's digest {SHIPPED_LIBRARY} "
                              f"(connrl train-behaviours changes it), got {self.library!r}")
 
 
-def _test(env, agent, tasks, seeds) -> dict[str, tuple[float, int, int]]:
-    """Per room: (total reinforcement, steps, dockings) of the greedy policy on the fixed tasks."""
-    out = {r: [0.0, 0, 0] for r in ROOMS}
+def _test(env, agent, tasks, seeds) -> dict[str, tuple[float, int, int, int]]:
+    """Per room: (total reinforcement, steps, dockings, collisions) of the greedy policy on the fixed tasks."""
+    out = {r: [0.0, 0, 0, 0] for r in ROOMS}
     for (room, start), s in zip(tasks, seeds, strict=True):
-        stats = run_trial(env, agent, trial=0, learning=False, seed=int(s), options={"start": start})
+        hits = []
+        stats = run_trial(env, agent, trial=0, learning=False, seed=int(s), options={"start": start},
+                          on_step=lambda info, hits=hits: hits.append(info["collision"]))
         out[room][0] += stats.total_reward
         out[room][1] += stats.steps
         out[room][2] += bool(stats.info.get("success"))
+        out[room][3] += sum(hits)
     return {r: tuple(v) for r, v in out.items()}
 
 
-def run_recharge(p: RechargeParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
-    env, test_env = make_recharge_env(p), make_recharge_env(p)
+def run_rooms(p, rng: np.random.Generator, make_env, make_agent, progress=lambda done, total: None,
+              after_trial=lambda env: None):
+    """The Ch. 6 protocol (module docstring) for any world and agent: fixed greedy test tasks per start room, tested
+    before the first trial and every ``p.test_every``; ``after_trial(env)`` follows each training trial. Returns
+    (RunResult, agent)."""
+    env, test_env = make_env(p), make_env(p)
+    world = getattr(test_env, "world", test_env)
     task_rng = np.random.default_rng(rng.integers(2**63))
-    tasks = [(r, test_env.world.sample_start(task_rng, r)) for r in ROOMS for _ in range(p.tests_per_room)]
+    tasks = [(r, world.sample_start(task_rng, r)) for r in ROOMS for _ in range(p.tests_per_room)]
     seeds = task_rng.integers(2**31, size=len(tasks))
-    agent = make_high_level_agent(p, rng)
+    agent = make_agent(p, rng)
     env.reset(seed=int(rng.integers(2**31)))
     xs, ys, rows = [], [], []
 
@@ -88,15 +111,38 @@ def run_recharge(p: RechargeParams, rng: np.random.Generator, progress=lambda do
         xs.append(n)
         ys.append(total / steps)
         rows.append({"trials": n, "performance": total / steps,
+                     "collisions": sum(v[3] for v in by_room.values()) / steps,
                      **{f"perf_{r}": v[0] / v[1] for r, v in by_room.items()},
                      **{f"docked_{r}": v[2] / p.tests_per_room for r, v in by_room.items()}})
 
-    train_and_test(p.trials, lambda k: run_trial(env, agent, trial=k, learning=True), test, test_every=p.test_every,
-                   test_first=True, progress=progress, agent=agent)
+    def train(k):
+        run_trial(env, agent, trial=k, learning=True)
+        after_trial(env)
+
+    train_and_test(p.trials, train, test, test_every=p.test_every, test_first=True, progress=progress, agent=agent)
     last = rows[-3:]
     metrics = {"final_performance": float(np.mean(ys[-3:])), "mean_performance": float(np.mean(ys)),
-               **{f"final_docked_{r}": float(np.mean([row[f"docked_{r}"] for row in last])) for r in ROOMS}}
-    return RunResult(xs, ys, metrics, rows)
+               **{f"final_docked_{r}": float(np.mean([row[f"docked_{r}"] for row in last])) for r in ROOMS},
+               "collision_share": float(np.mean([row["collisions"] for row in last]))}
+    return RunResult(xs, ys, metrics, rows), agent
+
+
+def run_recharge(p: RechargeParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
+    if p.pretrain_steps:  # Exp. 5: fresh behaviours, pre-trained briefly, learning on beside the high level
+        agents, trials = pretrain_behaviours(p.pretrain_steps, rng)
+
+        world = {"max_steps": p.max_steps, "step_scale": p.step_scale, "success_reward": p.success_reward}
+        # run_rooms makes the training world first, then the test world (the same live nets, greedy)
+        envs = iter([TrainingBehaviourEnv(agents, **world),
+                     BehaviourEnv({t: Behaviour(t, a.q) for t, a in agents.items()}, **world)])
+        result, agent = run_rooms(p, rng, lambda p: next(envs), make_high_level_agent, progress,
+                                  after_trial=lambda env: env.learn_behaviours())
+        result.metrics.update({f"pretrain_trials_{t}": float(k) for t, k in trials.items()})
+        return result
+    result, agent = run_rooms(p, rng, make_recharge_env, make_high_level_agent, progress)
+    if p.grouping:
+        result.metrics["mean_group_size"] = agent.grouped_steps / max(agent.groups, 1)
+    return result
 
 
 def _q(name, text, better="higher"):
@@ -106,6 +152,7 @@ def _q(name, text, better="higher"):
 QUANTITIES = (_q("final_performance", "reinforcement per primitive step, mean of the last 3 tests"),
               _q("mean_performance", "reinforcement per primitive step over all tests (area under the curve)"),
               *(_q(f"final_docked_{r}", f"share of test tasks from room {r} docked, last 3 tests") for r in ROOMS))
+GROUPING = Quantity("mean_group_size", "primitive steps per group in replay (thesis: about 11)", section="6.6.4")
 
 PROFILES = {"tiny": {"runs": 1, "trials": 2, "test_every": 1, "tests_per_room": 1, "lessons_per_trial": 2,
                      "max_steps": 20},
@@ -121,4 +168,28 @@ EXPERIMENTS = [
         quantities=QUANTITIES, x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
         description="the shipped behaviour library (connrl train-behaviours); thesis: Exp. 3 near-optimal from all "
                     "rooms within 60 trials, from A and C within 20; Exp. 2 poor at 150"),
+    ExperimentSpec(
+        name="recharge-long-delay", title="Exp. 4: primitive steps shrunk to a fifth, without and with state "
+        "grouping", section="6.6.4 Fig. 6.6", run="connrl.experiments.recharge:run_recharge",
+        params=override(RechargeParams(), {"step_scale": 0.2, "max_steps": 1000, "success_reward": 500.0,
+                                           "gamma": 0.998}, "experiment recharge-long-delay"),
+        profiles={**PROFILES, "tiny": {**PROFILES["tiny"], "max_steps": 40}},
+        variants=(Variant("Exp. 4, no grouping, lambda 0.9", {"lam": 0.9}),
+                  # mu scaled by 0.35 to the thesis's mean group size of 11 (scripts/ch6/group_size.py; R)
+                  Variant("Exp. 4, state grouping, lambda 0.8", {"lam": 0.8, "grouping": True, "mu_low": 0.175,
+                                                                 "mu_high": 0.875})),
+        quantities=(*QUANTITIES, GROUPING), x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
+        description="the persistence rule of Exp. 3 with 5x the reward delay: timeout 1000, reward 500, gamma 0.998; "
+                    "thesis: without grouping it fails from room B, with grouping it is comparable to Exp. 3"),
+    ExperimentSpec(
+        name="recharge-together", title="Exp. 5: behaviours pre-trained only 300 steps, then learned alongside the "
+        "high level", section="6.6.5 Fig. 6.6", run="connrl.experiments.recharge:run_recharge",
+        params=override(RechargeParams(), {"pretrain_steps": 300}, "experiment recharge-together"),
+        profiles=PROFILES, variants=(Variant("Exp. 5: behaviours learned alongside", {}),),
+        quantities=(*QUANTITIES, *(Quantity(f"pretrain_trials_{t}", f"{t}'s trials of its 300 pre-training steps",
+                                            section="6.6.5") for t in ("DK", "DP", "WFL", "WFR"))),
+        x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
+        description="Exp. 3's learner over fresh behaviours (10/10/5/5 taught lessons, about 300 primitive steps "
+                    "each), which go on learning from their own reinforcement; thesis: little progress for 50 "
+                    "trials, then slightly below Exp. 3, docking from every room by the end"),
 ]

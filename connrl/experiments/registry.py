@@ -13,6 +13,7 @@ SPEC_MODULES = (
     "connrl.experiments.robot",
     "connrl.experiments.robot_bounds",
     "connrl.experiments.recharge",
+    "connrl.experiments.recharge_flat",
 )
 
 

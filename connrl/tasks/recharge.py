@@ -1,4 +1,4 @@
-"""Ch. 6 wiring: the recharging task whose actions are the learned behaviours (6.5).
+"""Ch. 6 wiring: the recharging task whose actions are the learned behaviours (6.5), and Experiment 1's flat learner.
 
 ``BehaviourEnv`` wraps the world ``connrl.envs.robot.recharge.RechargeEnv`` (16 high-level inputs) and a behaviour
 library (``connrl.tasks.behaviours``; the shipped one by default). Its action is a behaviour -- 0 DK, 1 DP, 2 WFL,
@@ -8,6 +8,10 @@ Ch. 5 observation of the current scan: the robot decides which behaviour to foll
 weight its choices by W(b) (Eq. 6.6); ``info["primitive"]`` the primitive action taken; ``info["behaviour_goal"]``
 whether that step reached the chosen behaviour's own goal (DK docked, DP into another room), which ends persistence
 (6.6.3).
+
+Experiment 1 (6.6.1) learns Q(state, action) on the flat input with QCON-T (``make_flat_agent``) and 10 taught
+lessons of the scripted recharging teacher (``connrl.envs.robot.teachers.teach_chg``; ``connrl make-lessons robot``
+writes them to ``connrl/data/lessons/robot-chg.json``).
 """
 
 from __future__ import annotations
@@ -20,10 +24,18 @@ from gymnasium import spaces
 
 from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
 from connrl.agents.behaviour_level import BehaviourQCON
-from connrl.core.exploration import TemperatureSchedule
-from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, HIGH_SIZE, RechargeEnv
+from connrl.agents.teaching import TeachingConfig, TeachingQCON
+from connrl.core.exploration import StuckConfig, TemperatureSchedule
+from connrl.core.lesson_files import load_lessons, save_lessons
+from connrl.core.lessons import Lesson
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, FLAT_SIZE, HIGH_SIZE, RechargeEnv
+from connrl.envs.robot.teachers import teach_chg
 from connrl.nets import NetConfig
 from connrl.tasks.behaviours import Behaviour, load_library
+from connrl.tasks.robot import LESSON_DIR
+
+CHG_LESSONS = LESSON_DIR / "robot-chg.json"
+CHG_TAUGHT = 10  # taught lessons of Experiment 1 (6.6.1)
 
 
 class BehaviourEnv(gym.Env):
@@ -83,15 +95,81 @@ def _shipped_library() -> dict[str, Behaviour]:
 
 def make_recharge_env(p) -> BehaviourEnv:
     """The behaviour-level task of a Ch. 6 parameter set (``connrl.experiments.recharge.RechargeParams``)."""
-    return BehaviourEnv(_shipped_library(), max_steps=p.max_steps)
+    return BehaviourEnv(_shipped_library(), max_steps=p.max_steps, step_scale=p.step_scale,
+                        success_reward=p.success_reward)
 
 
 def make_high_level_agent(p, rng: np.random.Generator) -> BehaviourQCON:
     """Q(state, behaviour) of 6.5-6.6 from a Ch. 6 parameter set."""
-    net = NetConfig(HIGH_SIZE, p.hidden, value_range=100.0, init_range=p.init_range, lr=p.lr, momentum=p.momentum)
+    # Q in +-success_reward and T on Q / success_reward, so Exp. 4's reward of 500 keeps Exp. 3's choices (6.6.4)
+    net = NetConfig(HIGH_SIZE, p.hidden, value_range=p.success_reward, init_range=p.init_range, lr=p.lr,
+                    momentum=p.momentum)
     replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
                                                                                 p.lessons_per_trial),
-                          p_threshold=0.0, p_threshold_oldest=p.p_oldest)
+                          p_threshold=0.0, p_threshold_oldest=p.p_oldest,
+                          grouping=(p.mu_low, p.mu_high) if p.grouping else None)
     cfg = QCONConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials), gamma=p.gamma,
                      lam=p.lam, online=p.online, replay=replay)
-    return BehaviourQCON(cfg, len(BEHAVIOUR_TASKS), rng, persistence=p.persistence)
+    return BehaviourQCON(cfg, len(BEHAVIOUR_TASKS), rng, persistence=p.persistence, merit_scale=p.success_reward,
+                         target_max=p.target_max)
+
+
+def make_chg_lessons(n: int = CHG_TAUGHT, seed: int = 0, max_tries: int = 100) -> list[Lesson]:
+    """Demonstrations of the recharging teacher on the flat task, the k-th from room B, C, A in turn (so every
+    room is taught), kept when they dock (positive examples, as Ch. 5's). Deterministic given ``seed``."""
+    env = RechargeEnv(obs="flat")
+    rng = np.random.default_rng(seed)
+    out: list[Lesson] = []
+    for i in range(max_tries):
+        if len(out) == n:
+            break
+        room = ("B", "C", "A")[len(out) % 3]
+        start = env.sample_start(rng, room)
+        play_seed = int(rng.integers(2**31))
+        steps = teach_chg(env, start, seed=play_seed)
+        if not steps[-1][4]:
+            continue
+        out.append(Lesson.from_steps(steps, taught=True, meta={
+            "teacher": "connrl.envs.robot.teachers.teach_chg", "room": room, "start": [round(v, 3) for v in start],
+            "play_seed": play_seed, "attempt": i, "steps": len(steps), "success": True}))
+    if len(out) < n:
+        raise RuntimeError(f"the recharging teacher docked only {len(out)} times in {max_tries} tries")
+    return out
+
+
+def write_chg_lessons(seed: int = 0):
+    """Regenerate connrl/data/lessons/robot-chg.json (``connrl make-lessons robot``)."""
+    lessons = make_chg_lessons(seed=seed)
+    save_lessons(CHG_LESSONS, lessons, env_id="connrl/Robot-CHG-Flat-v0", env_kwargs={},
+                 source=f"connrl.tasks.recharge.make_chg_lessons(n={len(lessons)}, seed={seed}): scripted teacher, "
+                        "not a person")
+    return CHG_LESSONS
+
+
+def chg_lessons(n: int) -> list[Lesson]:
+    """The first ``n`` shipped taught lessons of the flat recharging task."""
+    lessons = load_lessons(CHG_LESSONS, env_id="connrl/Robot-CHG-Flat-v0", input_dim=FLAT_SIZE, n_actions=6)
+    if n > len(lessons):
+        raise ValueError(f"CHG: {n} taught lessons asked for, the file has {len(lessons)}")
+    return lessons[:n]
+
+
+def make_flat_env(p) -> RechargeEnv:
+    """Experiment 1's world: the flat input, primitive actions (``connrl.experiments.recharge_flat.FlatParams``)."""
+    return RechargeEnv(obs="flat", max_steps=p.max_steps, collision_penalty=p.collision_penalty)
+
+
+def make_flat_agent(p, rng: np.random.Generator) -> TeachingQCON:
+    """Experiment 1's monolithic QCON-T: "the same learning technique used to train the elementary behaviors"
+    (6.6.1), i.e. Ch. 5's, with Ch. 6's gamma, lambda and net size."""
+    net = NetConfig(FLAT_SIZE, p.hidden, value_range=100.0, init_range=p.init_range, lr=p.lr, momentum=p.momentum)
+    replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
+                                                                                p.lessons_per_trial),
+                          p_threshold=p.p_threshold)
+    cfg = QCONConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials), gamma=p.gamma,
+                     lam=p.lam, online=p.online, replay=replay,
+                     stuck=StuckConfig(p.stuck_window, p.stuck_radius, p.stuck_boost))
+    agent = TeachingQCON(cfg, 6, rng, TeachingConfig(merit_scale=100.0))
+    agent.add_taught_lessons(chg_lessons(p.lessons))
+    return agent
+

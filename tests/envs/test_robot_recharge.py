@@ -103,3 +103,21 @@ def test_task_observations_equal_ch5_environments_on_the_same_scan(task):
     _, info = RechargeEnv().reset(seed=11, options={"start": start})
     ch5, _ = RobotTaskEnv(task).reset(seed=11, options={"start": start})
     np.testing.assert_array_equal(info["task_obs"][task], ch5)
+
+
+def test_step_scale_shrinks_moves_and_turns_and_the_reward_is_settable():
+    """Experiment 4 (6.6.4): a fifth of each primitive action, "2.4 inches at a time"; docking pays success_reward."""
+    env = RechargeEnv(noise=False, step_scale=0.2, success_reward=500.0)
+    env.reset(seed=0, options={"start": (40.0, 250.0, 0.0)})  # open floor of room A, facing east
+    env.step(MOVE_FORWARD)
+    assert env.sim.pose == pytest.approx((42.4, 250.0, 0.0))
+    env.step(TURN_LEFT_15)
+    assert env.sim.pose[2] == pytest.approx(3.0)
+    env.reset(seed=0, options={"start": (40.0, 40.0, 225.0)})  # 19 in from the charger's corner, facing it
+    steps = []
+    while not steps or not steps[-1][2]:
+        steps.append(env.step(MOVE_FORWARD))
+    assert len(steps) == 8 and [s[1] for s in steps] == [0.0] * 7 + [500.0]  # 19.1 / 2.4 -> the 8th move docks
+    for bad in ({"step_scale": 0.0}, {"step_scale": 1.5}, {"success_reward": 0.0}):
+        with pytest.raises(ValueError, match=next(iter(bad))):
+            RechargeEnv(**bad)

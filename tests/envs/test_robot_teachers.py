@@ -26,3 +26,16 @@ def test_wall_following_teacher_earns_reward():
     env = RobotTaskEnv("WFL")
     lesson = teach(env, (32, 150, 90), seed=0)
     assert len(lesson) == 30 and lesson[-1][5] and sum(t[2] for t in lesson) > 150
+
+
+@pytest.mark.parametrize("room", ["A", "B", "C"])
+def test_recharging_teacher_docks_from_every_room(room):
+    """The scripted recharging teacher (Exp. 1's lessons): docking is the world's own success test."""
+    from connrl.envs.robot.recharge import RechargeEnv
+    from connrl.envs.robot.teachers import teach_chg
+
+    env = RechargeEnv(obs="flat")
+    rng = np.random.default_rng(7)
+    lessons = [teach_chg(env, env.sample_start(rng, room), seed=i) for i in range(5)]
+    assert all(lesson[-1][4] and lesson[-1][2] == 100.0 for lesson in lessons)
+    assert all(len(lesson) < {"A": 60, "B": 120, "C": 90}[room] for lesson in lessons)  # a route, not a wander

@@ -75,3 +75,53 @@ def test_behaviour_goal_marks_the_step_that_passes_the_door():
     assert goals[-1] and not any(goals[:-1]) and rooms[-1] == "C" and set(rooms[:-1]) == {"A"}
     _, _, _, _, info = env.step(2)  # WFL has no goal of its own
     assert info["behaviour_goal"] is False
+
+
+def test_shipped_recharging_lessons_are_the_teachers_demonstrations():
+    """robot-chg.json holds 10 docking demonstrations (rooms B, C, A in turn) of about 500 teaching steps in all
+    (6.7), and the teacher makes them again exactly from its seed."""
+    from connrl.tasks.recharge import chg_lessons, make_chg_lessons
+
+    shipped = chg_lessons(10)
+    assert [lesson.meta["room"] for lesson in shipped] == ["B", "C", "A"] * 3 + ["B"]
+    assert all(lesson.terminated and lesson.rewards[-1] == 100.0 for lesson in shipped)
+    assert 400 <= sum(len(lesson) for lesson in shipped) <= 600
+    again = make_chg_lessons(3, seed=0)
+    for a, b in zip(again, shipped[:3], strict=False):
+        np.testing.assert_allclose(a.inputs, b.inputs, atol=1e-6)
+        assert a.actions.tolist() == b.actions.tolist()
+    with pytest.raises(ValueError, match="the file has 10"):
+        chg_lessons(11)
+
+
+def test_own_rewards_are_each_behaviours_ch5_reinforcement():
+    from connrl.tasks.recharge_together import own_reward
+
+    far = np.full(24, 60.0)
+    assert own_reward("DK", 4, False, True, False, None) == 100.0
+    assert own_reward("DK", 4, True, False, False, None) == -10.0
+    assert own_reward("DP", 4, False, False, True, None) == 100.0
+    assert own_reward("DP", 0, False, False, False, None) == 0.0
+    assert own_reward("WFL", 5, False, False, False, far) == -3.0  # backing up
+    assert own_reward("WFR", 4, True, False, False, far) == -10.0
+    assert own_reward("WFL", 4, False, False, False, far) == 0.0  # no wall within 32 in on the left
+
+
+def test_training_env_files_each_run_of_one_behaviour_as_its_lesson():
+    """Exp. 5: the chosen behaviour acts and learns; switching behaviour closes its lesson, learn_behaviours replays."""
+    from connrl.experiments.behaviours import pretrain_behaviours
+    from connrl.tasks.recharge_together import TrainingBehaviourEnv
+
+    agents, trials = pretrain_behaviours(30, np.random.default_rng(0))
+    assert all(k >= 1 for k in trials.values())
+    before = {t: len(a.book.memory) for t, a in agents.items()}
+    env = TrainingBehaviourEnv(agents, max_steps=12)
+    env.reset(seed=1, options={"room": "B"})
+    for b in [2] * 5 + [3] * 4 + [2] * 3:  # WFL 5 steps, WFR 4, WFL 3: three lessons, the last cut by the time limit
+        *_, trunc, info = env.step(b)
+        assert info["behaviour"] == ("WFL", "DP", "WFL", "WFR")[b]
+    assert trunc
+    env.learn_behaviours()
+    wfl, wfr = agents["WFL"].book.memory.lessons, agents["WFR"].book.memory.lessons
+    assert len(wfl) == before["WFL"] + 2 and len(wfr) == before["WFR"] + 1
+    assert [len(wfl[-2]), len(wfr[-1]), len(wfl[-1])] == [5, 4, 3] and wfl[-1].truncated

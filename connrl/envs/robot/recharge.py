@@ -18,12 +18,15 @@ Observation (``obs="high"`` or ``"flat"``):
     ``info["task_obs"]`` always carries the four elementary observations of the same scan (DK, DP, WFL, WFR: Ch. 5's
     encodings), so behaviours can act on their own inputs.
 
-Rewards (6.4): +100 on docking, else 0; ``collision_penalty`` (default 0: none in Exps 2-5; 6.6.1 also tried -5 and
--10 for Exp. 1) is added on each collision.
+Rewards (6.4): ``success_reward`` (+100; Experiment 4's 500) on docking, else 0; ``collision_penalty`` (default 0:
+none in Exps 2-5; 6.6.1 also tried -5 and -10 for Exp. 1) is added on each collision.
 
 Starting State: a room drawn uniformly from A, B, C (or ``start_room``), a free position uniform in it, any heading.
 
 Episode End: ``terminated`` on docking; ``truncated`` after ``max_steps`` (200, 6.6) primitive steps.
+
+``step_scale`` shrinks every primitive action (Experiment 4, 6.6.4: one fifth, "the robot could move 12 inches
+forward in a single step, while here it could only move 2.4 inches"; turns shrink alike).
 
 Differences from the thesis: the X-Y scaling, the global sonar sectors, the uniform choice of start room and the
 flat input's size (100, not 102) are ours (docs/RECONSTRUCTION.md, "Recharging (Ch. 6)").
@@ -53,10 +56,7 @@ def global_sonar(sonar: np.ndarray, heading: float) -> np.ndarray:
     bearing 90 + 45 j (north, north-west, west, ...), whatever the robot's heading (6.4.2)."""
     bearings = (heading + 15.0 * np.arange(sonar.size)) % 360.0
     sector = np.floor(((bearings - 90.0 + 22.5) % 360.0) / 45.0).astype(int)
-    out = np.zeros(8)
-    for j in range(8):
-        out[j] = sonar[sector == j].mean()
-    return out
+    return np.bincount(sector, weights=sonar, minlength=8) / np.bincount(sector, minlength=8)
 
 
 def high_level_inputs(rd: Reading, x: float, y: float, layout: Layout, low: float = -0.5) -> np.ndarray:
@@ -101,7 +101,8 @@ class RechargeEnv(gym.Env):
 
     def __init__(self, layout: Layout | str = "default", obs: str = "high", max_steps: int = 200,
                  start_room: str | None = None, collision_penalty: float = 0.0, dock_tolerance: float = 30.0,
-                 binary_low: float = -0.5, edge_jump: float = DOOR_EDGE_JUMP, noise: bool = True):
+                 binary_low: float = -0.5, edge_jump: float = DOOR_EDGE_JUMP, noise: bool = True,
+                 step_scale: float = 1.0, success_reward: float = R_SUCCESS):
         if obs not in ("high", "flat"):
             raise ValueError(f"obs must be 'high' (16 units, 6.4.2) or 'flat' (100, Exp. 1), got {obs!r}")
         if start_room is not None and start_room not in ROOMS:
@@ -110,12 +111,15 @@ class RechargeEnv(gym.Env):
             raise ValueError(f"max_steps must be a positive integer, got {max_steps!r}")
         if not (math.isfinite(collision_penalty) and collision_penalty <= 0):
             raise ValueError(f"collision_penalty must be a finite number <= 0, got {collision_penalty!r}")
+        if not (math.isfinite(success_reward) and success_reward > 0):
+            raise ValueError(f"success_reward must be a finite number > 0, got {success_reward!r}")
+        self.success_reward = float(success_reward)
         self.layout = layout if isinstance(layout, Layout) else Layout.load(layout)
         self.obs_mode, self.max_steps, self.start_room = obs, int(max_steps), start_room
         self.collision_penalty, self.dock_tolerance = float(collision_penalty), float(dock_tolerance)
         self.binary_low = float(binary_low)
         self.sim = RobotSim(self.layout, np.random.default_rng(), sensor_noise=noise, control_noise=noise,
-                            edge_jump=edge_jump)
+                            edge_jump=edge_jump, step_scale=step_scale)
         n = HIGH_SIZE if obs == "high" else FLAT_SIZE
         lo, hi = min(self.binary_low, -0.5), max(self.binary_low + 1.0, 1.0)
         self.observation_space = spaces.Box(np.full(n, lo, np.float32), np.full(n, hi, np.float32), dtype=np.float32)
@@ -164,7 +168,7 @@ class RechargeEnv(gym.Env):
         self._steps += 1
         docked = (m.collided and a == MOVE_FORWARD and m.contact_kind == SEG_CHARGER
                   and abs(m.contact_angle) <= self.dock_tolerance)
-        reward = R_SUCCESS if docked else (self.collision_penalty if m.collided else 0.0)
+        reward = self.success_reward if docked else (self.collision_penalty if m.collided else 0.0)
         self._trace.append(self.sim.pose)
         obs, tasks = self._observe(rd)
         truncated = not docked and self._steps >= self.max_steps

@@ -65,12 +65,17 @@ class RobotSim:
         sensor_noise: sonar noise and dropouts on (5.2.1). Off gives exact readings.
         control_noise: 8% control error on (5.2.1). Off gives exact 15/60 deg and 12 in.
         edge_jump: neighbouring sonar readings differing by at least this many inches mark a door edge (R).
+        step_scale: every turn and move is this fraction of its size (Ch. 6's Experiment 4: 1/5).
     """
 
     def __init__(self, layout: Layout | str = "default", rng: np.random.Generator | None = None, *,
-                 sensor_noise: bool = True, control_noise: bool = True, edge_jump: float = DOOR_EDGE_JUMP):
+                 sensor_noise: bool = True, control_noise: bool = True, edge_jump: float = DOOR_EDGE_JUMP,
+                 step_scale: float = 1.0):
         if not 0 < edge_jump < math.inf:
             raise ValueError(f"edge_jump must be a finite number of inches > 0, got {edge_jump!r}")
+        if not 0 < step_scale <= 1:
+            raise ValueError(f"step_scale must be in (0, 1] (a fraction of the primitive actions), got {step_scale!r}")
+        self.step_scale = float(step_scale)
         self.edge_jump = float(edge_jump)
         self.layout = layout if isinstance(layout, Layout) else Layout.load(layout)
         self.rng = rng if rng is not None else np.random.default_rng()
@@ -115,7 +120,7 @@ class RobotSim:
                              f"got {action!r}")
         action = int(action)
         u = self.rng.random()  # drawn unconditionally: noise on/off keeps the stream aligned
-        scale = 1.0 - CONTROL_ERROR + 2.0 * CONTROL_ERROR * u if self.control_noise else 1.0
+        scale = (1.0 - CONTROL_ERROR + 2.0 * CONTROL_ERROR * u if self.control_noise else 1.0) * self.step_scale
         self.last_collision = np.zeros(4, dtype=np.uint8)
         self.last_action = action
         turn = ACTION_TURN_DEG[action]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import heapq
 import math
 
 import numpy as np
@@ -96,11 +97,8 @@ def teach_dp(env, start, seed: int | None = None) -> list[tuple]:
     return _run(env, start, policy, seed)
 
 
-def teach_dk(env, start, seed: int | None = None) -> list[tuple]:
-    """Demonstrate docking from ``start``: reach the charger's approach axis (a point 60 in out, or
-    anywhere within 20 deg of the axis), face the light and drive into the charger; back off after a
-    collision."""
-    u = env.unwrapped
+def _dk_policy(u):
+    """The docking teacher's policy (``teach_dk``), a closure over its phase."""
     light = np.asarray(u.layout.light)
     axis = np.asarray(u.layout.charger_approach)
     pre = light + 60.0 * axis
@@ -119,7 +117,91 @@ def teach_dk(env, start, seed: int | None = None) -> list[tuple]:
             return _steer(e.sim.pose, pre)
         return _steer(e.sim.pose, light, tol=7.5)
 
-    return _run(env, start, policy, seed)
+    return policy
+
+
+def teach_dk(env, start, seed: int | None = None) -> list[tuple]:
+    """Demonstrate docking from ``start``: reach the charger's approach axis (a point 60 in out, or
+    anywhere within 20 deg of the axis), face the light and drive into the charger; back off after a
+    collision."""
+    return _run(env, start, _dk_policy(env.unwrapped), seed)
+
+
+GRID = 12.0  # in: the CHG teacher's route grid
+ROUTE_CLEARANCE = ROBOT_RADIUS + 8.0  # route points keep the body 8 in off every surface
+
+
+def _route_field(layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Grid points with room to pass, and each one's path length to the docking teacher's start region (Dijkstra
+    over 8-neighbour moves between free points): (xs, ys, distance (ny, nx), inf where unreachable or not free)."""
+    w, h = layout.size
+    xs, ys = np.arange(GRID / 2, w, GRID), np.arange(GRID / 2, h, GRID)
+    free = np.array([[layout.room_at(x, y) is not None and layout.clearance(x, y) >= ROUTE_CLEARANCE for x in xs]
+                     for y in ys])
+    goal = np.asarray(layout.light) + 60.0 * np.asarray(layout.charger_approach)
+    dist = np.full(free.shape, np.inf)
+    gi = min(zip(*np.nonzero(free), strict=True), key=lambda ij: math.hypot(xs[ij[1]] - goal[0], ys[ij[0]] - goal[1]))
+    dist[gi] = 0.0
+    heap = [(0.0, gi)]
+    while heap:
+        d, (i, j) = heapq.heappop(heap)
+        if d > dist[i, j]:
+            continue
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                a, b = i + di, j + dj
+                if (di or dj) and 0 <= a < free.shape[0] and 0 <= b < free.shape[1] and free[a, b]:
+                    nd = d + GRID * math.hypot(di, dj)
+                    if nd < dist[a, b]:
+                        dist[a, b] = nd
+                        heapq.heappush(heap, (nd, (a, b)))
+    return xs, ys, dist
+
+
+def _clear_line(layout, p, q, margin: float = ROBOT_RADIUS + 2.0) -> bool:
+    n = max(2, int(math.hypot(q[0] - p[0], q[1] - p[1]) / 4.0))
+    return all(layout.clearance(p[0] + (q[0] - p[0]) * t, p[1] + (q[1] - p[1]) * t) >= margin
+               for t in np.linspace(0.0, 1.0, n))
+
+
+def chg_policy(u):
+    """The recharging teacher (R): follow the shortest grid route to the docking region, steering at the farthest
+    route point in clear sight (within 4 grid steps); then the docking teacher takes over."""
+    xs, ys, dist = _route_field(u.layout)
+    dock = _dk_policy(u)
+    light, axis = np.asarray(u.layout.light), np.asarray(u.layout.charger_approach)
+    state = {"docking": False}
+
+    def policy(e):
+        p = np.array([e.sim.x, e.sim.y])
+        v = p - light
+        near = np.linalg.norm(v) < 90.0 and float(np.dot(v, axis)) > 0
+        if state["docking"] or near:
+            state["docking"] = True
+            return dock(e)
+        if e.sim.last_collision.any() and e.sim.last_action != MOVE_BACKWARD:
+            return MOVE_BACKWARD
+        i, j = int(np.clip(round((p[1] - ys[0]) / GRID), 0, len(ys) - 1)), int(np.clip(
+            round((p[0] - xs[0]) / GRID), 0, len(xs) - 1))
+        near_pts = [(a, b) for a in range(i - 2, i + 3) for b in range(j - 2, j + 3)
+                    if 0 <= a < len(ys) and 0 <= b < len(xs) and np.isfinite(dist[a, b])]
+        cur = min(near_pts, key=lambda ab: (math.hypot(xs[ab[1]] - p[0], ys[ab[0]] - p[1]), dist[ab]))
+        target = cur
+        for _ in range(4):  # walk down the distance field, keeping the farthest point in clear sight
+            a, b = target
+            nxt = min(((a + da, b + db) for da in (-1, 0, 1) for db in (-1, 0, 1)
+                       if 0 <= a + da < len(ys) and 0 <= b + db < len(xs)), key=lambda ab: dist[ab])
+            if dist[nxt] >= dist[target] or not _clear_line(u.layout, p, (xs[nxt[1]], ys[nxt[0]])):
+                break
+            target = nxt
+        return _steer(e.sim.pose, (xs[target[1]], ys[target[0]]), tol=15.0)
+
+    return policy
+
+
+def teach_chg(env, start, seed: int | None = None) -> list[tuple]:
+    """Demonstrate recharging (Ch. 6) from ``start``: route to the charger's docking region, then dock."""
+    return _run(env, start, chg_policy(env.unwrapped), seed)
 
 
 def _nearest_surface(sim: RobotSim) -> np.ndarray:

@@ -1,0 +1,79 @@
+"""Ch. 6, Experiment 1 (6.6.1, Fig. 6.5): learning to recharge without the hierarchy.
+
+One monolithic QCON-T learns Q(state, action) over the six primitive actions on the flat input (every elementary
+input and the 16 high-level ones, ``connrl.envs.robot.recharge``), with 10 taught lessons of the scripted recharging
+teacher and "the same learning technique used to train the elementary behaviors" (Ch. 5: stuck detection, P_l 0.02,
+taught lessons replayed after every trial), 30 hidden units, gamma 0.99, lambda 0.8, 300 trials of at most 200
+steps. No collision penalty (6.6.1; ``collision_penalty`` tries the thesis's -5 / -10). The protocol and the test
+tasks are Exps 2-3's (``connrl.experiments.recharge.run_rooms``: fixed tasks per start room, tested every 10 trials).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from connrl.experiments.recharge import PROFILES, QUANTITIES, run_rooms
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
+from connrl.tasks.recharge import CHG_TAUGHT, make_flat_agent, make_flat_env
+
+RANGES = {"lessons": ">=0", "hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1",
+          "lam": "0..1", "t_start": ">0", "t_end": ">0", "capacity": ">=1", "lessons_per_trial": ">=0",
+          "p_threshold": "0..<1", "stuck_window": ">=1", "stuck_radius": ">=0", "stuck_boost": ">0", "trials": ">=1",
+          "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1"}
+
+
+@dataclass(frozen=True)
+class FlatParams:
+    """One Experiment 1 run: 6.6.1's values, else Ch. 5's (5.3)."""
+
+    lessons: int = CHG_TAUGHT  # taught lessons (6.6.1: 10)
+    hidden: int = 30  # (6.6.1)
+    lr: float = 0.05  # (6.6: fixed to 0.05)
+    momentum: float = 0.9  # (Ch. 5)
+    init_range: float = 0.5  # (Ch. 5)
+    gamma: float = 0.99  # (6.6.1)
+    lam: float = 0.8  # (6.6.1)
+    t_start: float = 0.05  # (6.6)
+    t_end: float = 0.02
+    capacity: int = 100  # (App. A.2, Ch. 5)
+    lessons_per_trial: int = 60  # (6.6)
+    p_threshold: float = 0.02  # P_l (Ch. 5)
+    online: bool = True  # (Ch. 5)
+    stuck_window: int = 8  # stuck detection (Ch. 5's)
+    stuck_radius: float = 12.0
+    stuck_boost: float = 5.0
+    collision_penalty: float = 0.0  # (6.6.1: none; -5 and -10 also tried)
+    trials: int = 300  # (Fig. 6.5)
+    max_steps: int = 200  # (6.6)
+    test_every: int = 10
+    tests_per_room: int = 10  # as Exps 2-3
+
+    def __post_init__(self):
+        check_types(self, RANGES)
+        if not self.collision_penalty <= 0:
+            raise ValueError(f"parameter collision_penalty must be <= 0, got {self.collision_penalty}")
+        if self.lessons > CHG_TAUGHT:
+            raise ValueError(f"parameter lessons must be at most {CHG_TAUGHT} (the shipped recharging lessons), got "
+                             f"{self.lessons}")
+
+
+def run_flat(p: FlatParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
+    result, agent = run_rooms(p, rng, make_flat_env, make_flat_agent, progress)
+    return result
+
+
+EXPERIMENTS = [
+    ExperimentSpec(
+        name="recharge-flat", title="Exp. 1: recharging without the hierarchy (monolithic QCON-T, flat input)",
+        section="6.6.1 Fig. 6.5", run="connrl.experiments.recharge_flat:run_flat",
+        params=override(FlatParams(), {}, "experiment recharge-flat"),
+        profiles={**PROFILES, "quick": {"runs": 2, "trials": 100, "tests_per_room": 5}},
+        variants=(Variant("Exp. 1: no hierarchy", {}),),
+        quantities=(*QUANTITIES, Quantity("collision_share", "share of test steps that collide, last 3 tests", "lower",
+                                          "6.6.1")),
+        x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
+        description="10 taught lessons of the scripted recharging teacher; thesis: after 300 trials generally unable "
+                    "to recharge from rooms B and C, colliding on more than 5 % of steps"),
+]
