@@ -64,18 +64,18 @@ def train_behaviour(plan: TrainingPlan, seed: int) -> Behaviour:
     return Behaviour(plan.task, run.agent.q, p.binary_low, meta)
 
 
-def pretrain_behaviours(steps: int, rng: np.random.Generator) -> tuple[dict, dict[str, int]]:
+def pretrain_behaviours(steps: int, rng: np.random.Generator) -> tuple[dict, dict[str, int], dict[str, int]]:
     """Experiment 5 (6.6.5): train each behaviour alone (Ch. 5's QCON-T and task, the thesis's taught lessons) until
-    ``steps`` primitive steps are spent; returns the learning agents and the trials each took."""
-    agents, trials = {}, {}
+    ``steps`` primitive steps are spent; returns the learning agents, the trials and the steps each took."""
+    agents, trials, spent_by = {}, {}, {}
     for task in BEHAVIOUR_TASKS:
         run = RobotRun(RobotParams(task=task, lessons=TAUGHT_COUNTS[task]), np.random.default_rng(rng.integers(2**63)))
         spent = k = 0
         while spent < steps:
             spent += run.train(k).steps
             k += 1
-        agents[task], trials[task] = run.agent, k
-    return agents, trials
+        agents[task], trials[task], spent_by[task] = run.agent, k, spent
+    return agents, trials, spent_by
 
 
 def _serve_starts(task: str, rng: np.random.Generator, layout: Layout, n: int) -> list[tuple]:

@@ -17,14 +17,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connrl.agents.behaviour_level import TARGET_MAX
 from connrl.core.rollout import run_trial
 from connrl.envs.robot.recharge import ROOMS
+from connrl.envs.robot.teachers import teach_chg
 from connrl.experiments.behaviours import pretrain_behaviours
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
 from connrl.tasks.behaviours import Behaviour, library_digest
-from connrl.tasks.recharge import BehaviourEnv, make_high_level_agent, make_recharge_env
+from connrl.tasks.recharge import TARGET_MAX, BehaviourEnv, make_high_level_agent, make_recharge_env
 from connrl.tasks.recharge_together import TrainingBehaviourEnv
 
 SHIPPED_LIBRARY = library_digest()
@@ -32,7 +32,7 @@ SHIPPED_LIBRARY = library_digest()
 RANGES = {"hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1", "lam": "0..1",
           "t_start": ">0", "t_end": ">0", "lessons_per_trial": ">=0", "capacity": ">=1", "p_oldest": "0..<1",
           "trials": ">=1", "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1", "step_scale": ">0",
-          "success_reward": ">0", "mu_low": ">=0", "mu_high": ">=0", "pretrain_steps": ">=0"}
+          "success_reward": ">0", "mu_low": ">=0", "mu_high": ">=0", "pretrain_steps": ">=0", "paths": ">=0"}
 
 
 @dataclass(frozen=True)
@@ -58,12 +58,15 @@ class RechargeParams:
     test_every: int = 10
     tests_per_room: int = 10  # fixed greedy test tasks per start room (R)
     library: str = SHIPPED_LIBRARY  # digest of the behaviour library (connrl train-behaviours): new library, new runs
-    target_max: str = "all"  # the Q target's max over "all" behaviours or the next state's "applicable" ones (R)
+    # the Q target's max over the behaviours "applicable" in the next state (R): only those can be chosen there (W > 0,
+    # Eq. 6.6). "all" reads nets never trained where their behaviour is inapplicable (docs/RECONSTRUCTION.md)
+    target_max: str = "applicable"
     step_scale: float = 1.0  # primitive actions shrunk to this fraction (Exp. 4, 6.6.4: 1/5)
     success_reward: float = 100.0  # reinforcement for docking (6.4; Exp. 4: 500); Q-nets and T scale with it
     grouping: bool = False  # state grouping in replay (Exp. 4, 6.6.4) ...
     mu_low: float = 0.5  # ... with mu ~ U(mu_low, mu_high) per group (6.6.4)
     mu_high: float = 2.5
+    paths: int = 0  # greedy solution paths recorded per start room after the last trial (Fig. 6.7)
     pretrain_steps: int = 0  # Exp. 5 (6.6.5): behaviours pre-trained this many primitive steps, then trained along
     # with the high level; 0 = the shipped library, never trained further
 
@@ -115,21 +118,49 @@ def run_rooms(p, rng: np.random.Generator, make_env, make_agent, progress=lambda
                      **{f"perf_{r}": v[0] / v[1] for r, v in by_room.items()},
                      **{f"docked_{r}": v[2] / p.tests_per_room for r, v in by_room.items()}})
 
+    spent = 0
+
     def train(k):
-        run_trial(env, agent, trial=k, learning=True)
+        nonlocal spent
+        spent += run_trial(env, agent, trial=k, learning=True).steps
         after_trial(env)
 
     train_and_test(p.trials, train, test, test_every=p.test_every, test_first=True, progress=progress, agent=agent)
     last = rows[-3:]
     metrics = {"final_performance": float(np.mean(ys[-3:])), "mean_performance": float(np.mean(ys)),
                **{f"final_docked_{r}": float(np.mean([row[f"docked_{r}"] for row in last])) for r in ROOMS},
-               "collision_share": float(np.mean([row["collisions"] for row in last]))}
-    return RunResult(xs, ys, metrics, rows), agent
+               "collision_share": float(np.mean([row["collisions"] for row in last])),
+               "teacher_performance": _teacher(world, tasks, seeds), "train_steps": float(spent)}
+    extra = {}
+    if p.paths:  # Fig. 6.7: greedy solution paths after the last trial, the first tasks of each room
+        picks = [i for r in ROOMS for i in [k for k, t in enumerate(tasks) if t[0] == r][:p.paths]]
+        extra["paths"] = [_path(test_env, agent, tasks[i], seeds[i]) for i in picks]
+    return RunResult(xs, ys, metrics, rows, extra), agent
+
+
+def _teacher(world, tasks, seeds) -> float:
+    """The scripted recharging teacher on the run's test tasks, reinforcement per step: a route a person might
+    drive, the near-optimal reference of Fig. 6.6."""
+    total = steps = 0
+    for (_, start), s in zip(tasks, seeds, strict=True):
+        lesson = teach_chg(world, start, seed=int(s))
+        total += sum(step[2] for step in lesson)
+        steps += len(lesson)
+    return total / steps
+
+
+def _path(env, agent, task, seed) -> dict:
+    room, start = task
+    chosen = []
+    stats = run_trial(env, agent, trial=0, learning=False, seed=int(seed), options={"start": start},
+                      on_step=lambda info: chosen.append(info.get("behaviour")))
+    return {"room": room, "poses": [[round(v, 1) for v in pose] for pose in env.trace], "behaviours": chosen,
+            "success": bool(stats.info.get("success"))}
 
 
 def run_recharge(p: RechargeParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
     if p.pretrain_steps:  # Exp. 5: fresh behaviours, pre-trained briefly, learning on beside the high level
-        agents, trials = pretrain_behaviours(p.pretrain_steps, rng)
+        agents, trials, spent = pretrain_behaviours(p.pretrain_steps, rng)
 
         world = {"max_steps": p.max_steps, "step_scale": p.step_scale, "success_reward": p.success_reward}
         # run_rooms makes the training world first, then the test world (the same live nets, greedy)
@@ -138,6 +169,7 @@ def run_recharge(p: RechargeParams, rng: np.random.Generator, progress=lambda do
         result, agent = run_rooms(p, rng, lambda p: next(envs), make_high_level_agent, progress,
                                   after_trial=lambda env: env.learn_behaviours())
         result.metrics.update({f"pretrain_trials_{t}": float(k) for t, k in trials.items()})
+        result.metrics["pretrain_steps"] = float(sum(spent.values()))
         return result
     result, agent = run_rooms(p, rng, make_recharge_env, make_high_level_agent, progress)
     if p.grouping:
@@ -151,7 +183,11 @@ def _q(name, text, better="higher"):
 
 QUANTITIES = (_q("final_performance", "reinforcement per primitive step, mean of the last 3 tests"),
               _q("mean_performance", "reinforcement per primitive step over all tests (area under the curve)"),
-              *(_q(f"final_docked_{r}", f"share of test tasks from room {r} docked, last 3 tests") for r in ROOMS))
+              *(_q(f"final_docked_{r}", f"share of test tasks from room {r} docked, last 3 tests") for r in ROOMS),
+              Quantity("collision_share", "share of test steps that collide, last 3 tests", "lower", "6.6.1"),
+              _q("teacher_performance", "the scripted teacher on the same test tasks (near-optimal reference)"),
+              Quantity("train_steps", "primitive steps of the learning trials (6.7's experimental steps)",
+                       section="6.7"))
 GROUPING = Quantity("mean_group_size", "primitive steps per group in replay (thesis: about 11)", section="6.6.4")
 
 PROFILES = {"tiny": {"runs": 1, "trials": 2, "test_every": 1, "tests_per_room": 1, "lessons_per_trial": 2,
@@ -162,7 +198,7 @@ EXPERIMENTS = [
     ExperimentSpec(
         name="recharge-behaviours", title="Exps 2 and 3: recharging over learned behaviours, without and with the "
         "persistence rule", section="6.6.2, 6.6.3 Fig. 6.6", run="connrl.experiments.recharge:run_recharge",
-        params=override(RechargeParams(), {}, "experiment recharge-behaviours"), profiles=PROFILES,
+        params=override(RechargeParams(), {"paths": 1}, "experiment recharge-behaviours"), profiles=PROFILES,
         variants=(Variant("Exp. 2: W = 0/1", {"persistence": False}),
                   Variant("Exp. 3: persistence rule", {"persistence": True})),
         quantities=QUANTITIES, x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
@@ -187,7 +223,8 @@ EXPERIMENTS = [
         params=override(RechargeParams(), {"pretrain_steps": 300}, "experiment recharge-together"),
         profiles=PROFILES, variants=(Variant("Exp. 5: behaviours learned alongside", {}),),
         quantities=(*QUANTITIES, *(Quantity(f"pretrain_trials_{t}", f"{t}'s trials of its 300 pre-training steps",
-                                            section="6.6.5") for t in ("DK", "DP", "WFL", "WFR"))),
+                                            section="6.6.5") for t in ("DK", "DP", "WFL", "WFR")),
+                    Quantity("pretrain_steps", "primitive steps of the four behaviours' pre-training", section="6.7")),
         x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
         description="Exp. 3's learner over fresh behaviours (10/10/5/5 taught lessons, about 300 primitive steps "
                     "each), which go on learning from their own reinforcement; thesis: little progress for 50 "

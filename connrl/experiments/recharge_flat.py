@@ -15,13 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from connrl.experiments.recharge import PROFILES, QUANTITIES, run_rooms
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
+from connrl.experiments.spec import ExperimentSpec, RunResult, Variant, check_types, override
 from connrl.tasks.recharge import CHG_TAUGHT, make_flat_agent, make_flat_env
 
 RANGES = {"lessons": ">=0", "hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1",
           "lam": "0..1", "t_start": ">0", "t_end": ">0", "capacity": ">=1", "lessons_per_trial": ">=0",
           "p_threshold": "0..<1", "stuck_window": ">=1", "stuck_radius": ">=0", "stuck_boost": ">0", "trials": ">=1",
-          "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1"}
+          "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1", "paths": ">=0"}
 
 
 @dataclass(frozen=True)
@@ -49,6 +49,7 @@ class FlatParams:
     max_steps: int = 200  # (6.6)
     test_every: int = 10
     tests_per_room: int = 10  # as Exps 2-3
+    paths: int = 0  # greedy solution paths recorded per start room after the last trial
 
     def __post_init__(self):
         check_types(self, RANGES)
@@ -68,11 +69,10 @@ EXPERIMENTS = [
     ExperimentSpec(
         name="recharge-flat", title="Exp. 1: recharging without the hierarchy (monolithic QCON-T, flat input)",
         section="6.6.1 Fig. 6.5", run="connrl.experiments.recharge_flat:run_flat",
-        params=override(FlatParams(), {}, "experiment recharge-flat"),
+        params=override(FlatParams(), {"paths": 1}, "experiment recharge-flat"),
         profiles={**PROFILES, "quick": {"runs": 2, "trials": 100, "tests_per_room": 5}},
         variants=(Variant("Exp. 1: no hierarchy", {}),),
-        quantities=(*QUANTITIES, Quantity("collision_share", "share of test steps that collide, last 3 tests", "lower",
-                                          "6.6.1")),
+        quantities=QUANTITIES,
         x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
         description="10 taught lessons of the scripted recharging teacher; thesis: after 300 trials generally unable "
                     "to recharge from rooms B and C, colliding on more than 5 % of steps"),

@@ -1,6 +1,7 @@
-"""docs/RESULTS.md section for Ch. 6 (recharging over learned behaviours): the behaviour library -- each behaviour's
-training and rate where Ch. 6 uses it, and the Q-value maps of Figs. 6.3 / 6.4 with the applicability thresholds of
-6.4.3, generated from the shipped library (``connrl train-behaviours``) -- and the stored runs of Exps 2 and 3."""
+"""docs/RESULTS.md section for Ch. 6 (recharging): the behaviour library -- each behaviour's training and rate where
+Ch. 6 uses it, and the Q-value maps of Figs. 6.3 / 6.4 with the applicability thresholds of 6.4.3, generated from the
+shipped library (``connrl train-behaviours``) -- then the claims of 6.6 / 6.7 beside the stored runs of Exps 1-5
+(``connrl.report.recharge_claims``), each experiment's table and curves, and Fig. 6.7's paths."""
 
 from __future__ import annotations
 
@@ -14,11 +15,27 @@ import numpy as np
 from connrl.envs.robot import Layout
 from connrl.envs.robot.recharge import ROOMS
 from connrl.envs.robot.render import draw_layout
-from connrl.experiments.recharge import EXPERIMENTS  # the experiments this section covers
+from connrl.experiments import recharge, recharge_flat
 from connrl.experiments.runner import make_jobs
-from connrl.report.page import figure, load_summary, note, summary_table
+from connrl.report.page import figure, load_summary, note, stored, summary_table
 from connrl.report.plots import save_figure
+from connrl.report.recharge_claims import EXP1, EXP3, accounting, claims_table, draw_paths
 from connrl.tasks.behaviours import APPLICABLE_ABOVE, LIBRARY_DIR, load_library, q_value_map
+from connrl.tasks.recharge import chg_lessons
+from connrl.tasks.robot import TAUGHT_COUNTS, taught_lessons
+
+EXPERIMENTS = [*recharge_flat.EXPERIMENTS, *recharge.EXPERIMENTS]  # the experiments this section covers: Exps 1-5
+THESIS = {
+    "recharge-flat": "Thesis (6.6.1, Fig. 6.5): after 300 trials generally unable to recharge from rooms B and C, "
+                     "colliding on more than 5 % of steps; no systematic way learned whatever the reward function.",
+    "recharge-behaviours": "Thesis (6.6.2-6.6.3): Exp. 3 connects from most places in rooms A and C within 20 trials "
+                           "and nearly optimally from everywhere within 60; Exp. 2 is poor after 150 trials, though "
+                           "from room A it succeeds within about 10.",
+    "recharge-long-delay": "Thesis (6.6.4): without grouping (lambda 0.8-0.97 tried) unable to recharge from room B; "
+                           "with grouping comparable to Exp. 3; about 11 states per group.",
+    "recharge-together": "Thesis (6.6.5): little progress in the first 50 trials, then rapid; slightly below Exp. 3, "
+                         "and docking from any room at the end.",
+}
 
 WHERE_USED = {"DK": "docks from within 24 in of subgoal 2", "DP": "passes the door from subgoals 3-6",
               "WFL": "steps earning 8-10 (clearance kept, moving forward)", "WFR": "steps earning 8-10"}
@@ -78,7 +95,7 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
     if not index_file.exists():
         return ""
     index = json.loads(index_file.read_text())["behaviours"]
-    lines = ["## Chapter 6: hierarchical learning (in progress: Exps 2 and 3 built; 1, 4, 5 not yet)", "",
+    lines = ["## Chapter 6: hierarchical learning (Exps 1-5, Figs. 6.3-6.7)", "",
              "The behaviours the high level coordinates are Ch. 5's QCON-T skills, trained by `connrl "
              "train-behaviours` and shipped in `connrl/data/behaviours/` (one seed each; docs/RECONSTRUCTION.md, "
              "\"Behaviour library\").", "",
@@ -96,16 +113,35 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
         lines += [f"Fig. {'6.3' if task == 'DP' else '6.4'} from our {task} behaviour (noise-free scans every 12 in): "
                   f"applicable on {share:.0%} of the places the robot fits.", "",
                   figure(png, doc, f"behaviour-{task.lower()}-q-map"), ""]
+    data = {}
     for spec in EXPERIMENTS:
         summary = load_summary(out_dir, spec.name)
-        if summary is None:
+        if summary is not None:
+            data[spec.name] = (spec, summary, out_dir)
+    if data:
+        taught = {"CHG": sum(len(x) for x in chg_lessons(10)),
+                  **{t: sum(len(x) for x in taught_lessons(t, n)) for t, n in TAUGHT_COUNTS.items()}}
+        lines += ["### The claims of 6.6 and 6.7 beside ours", "", *claims_table(data), "",
+                  "Steps spent (6.7; means over the stored runs):", "", *accounting(data, taught, index), ""]
+    for spec in EXPERIMENTS:
+        if spec.name not in data:
             continue
+        summary = data[spec.name][1]
         lines += [f"### {spec.name}: {spec.title} (thesis {spec.section})", "", summary_table(summary), "",
-                  "Thesis (6.6.2-6.6.3): Exp. 3 connects from most places in rooms A and C within 20 trials and nearly "
-                  "optimally from everywhere within 60; Exp. 2 is poor after 150 trials, though from room A it "
-                  "succeeds within about 10.", "", figure(out_dir / spec.name / "curve.png", doc, spec.name), ""]
+                  THESIS[spec.name], "", figure(out_dir / spec.name / "curve.png", doc, spec.name), ""]
         rooms = draw_room_curves(spec, summary, out_dir, out_dir / spec.name / "rooms.png")
         if rooms is not None:
             lines += ["By start room (mean over runs):", "", figure(rooms, doc, f"{spec.name}-rooms"), ""]
+        label = {"recharge-behaviours": EXP3, "recharge-flat": EXP1}.get(spec.name)
+        _, records = stored(spec, out_dir)
+        rec = next((r for r in sorted(records, key=lambda r: r["seed"]) if r["variant"] == label
+                    and r.get("extra", {}).get("paths")), None)
+        if rec is not None:
+            png = draw_paths(rec, out_dir / spec.name / "paths.png", f"{label}: greedy paths after "
+                             f"{rec['params']['trials']} trials (seed {rec['seed']})")
+            lines += [f"Greedy paths of the first run after its last trial, one from each room (Fig. 6.7"
+                      f"{'' if spec.name == 'recharge-behaviours' else ', for the flat learner'}):", "",
+                      figure(png, doc, f"{spec.name}-paths"), ""]
+    if data:
         lines += [note("recharge-status"), ""]
     return "\n".join(lines)

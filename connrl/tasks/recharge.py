@@ -23,7 +23,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
-from connrl.agents.behaviour_level import BehaviourQCON
+from connrl.agents.behaviour_level import TARGET_MAX, BehaviourQCON  # noqa: F401  (experiments see it through tasks)
 from connrl.agents.teaching import TeachingConfig, TeachingQCON
 from connrl.core.exploration import StuckConfig, TemperatureSchedule
 from connrl.core.lesson_files import load_lessons, save_lessons

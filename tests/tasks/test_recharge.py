@@ -112,8 +112,8 @@ def test_training_env_files_each_run_of_one_behaviour_as_its_lesson():
     from connrl.experiments.behaviours import pretrain_behaviours
     from connrl.tasks.recharge_together import TrainingBehaviourEnv
 
-    agents, trials = pretrain_behaviours(30, np.random.default_rng(0))
-    assert all(k >= 1 for k in trials.values())
+    agents, trials, spent = pretrain_behaviours(30, np.random.default_rng(0))
+    assert all(k >= 1 for k in trials.values()) and all(s >= 30 for s in spent.values())
     before = {t: len(a.book.memory) for t, a in agents.items()}
     env = TrainingBehaviourEnv(agents, max_steps=12)
     env.reset(seed=1, options={"room": "B"})
