@@ -55,7 +55,8 @@ class Behaviour:
 
     def applicable(self, obs: np.ndarray) -> bool:
         """6.4.3: the largest Q-value above the task's threshold (always, for wall following)."""
-        return bool(self.q_values(obs).max() > APPLICABLE_ABOVE[self.task])
+        threshold = APPLICABLE_ABOVE[self.task]
+        return threshold == -math.inf or bool(self.q_values(obs).max() > threshold)
 
 
 def save_behaviour(b: Behaviour, path) -> tuple[Path, Path]:

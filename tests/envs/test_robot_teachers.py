@@ -39,3 +39,16 @@ def test_recharging_teacher_docks_from_every_room(room):
     lessons = [teach_chg(env, env.sample_start(rng, room), seed=i) for i in range(5)]
     assert all(lesson[-1][4] and lesson[-1][2] == 100.0 for lesson in lessons)
     assert all(len(lesson) < {"A": 60, "B": 120, "C": 90}[room] for lesson in lessons)  # a route, not a wander
+
+
+def test_recharging_teacher_starts_pressed_into_any_corner():
+    """Starts the route grid does not reach nearby (a body touching two walls) still find their route."""
+    from connrl.envs.robot.recharge import RechargeEnv
+    from connrl.envs.robot.teachers import teach_chg
+
+    env = RechargeEnv(obs="high")
+    corners = [(x, y) for x0, y0, x1, y1 in env.layout.rooms.values() for x in (x0 + 12.5, x1 - 12.5)
+               for y in (y0 + 12.5, y1 - 12.5) if env.layout.is_free(x, y, margin=0.1)]
+    assert len(corners) >= 8
+    docked = [teach_chg(env, (x, y, 45.0), seed=i)[-1][4] for i, (x, y) in enumerate(corners)]
+    assert sum(docked) >= len(corners) - 1  # scripted, not perfect: at most one miss

@@ -183,8 +183,11 @@ def chg_policy(u):
             return MOVE_BACKWARD
         i, j = int(np.clip(round((p[1] - ys[0]) / GRID), 0, len(ys) - 1)), int(np.clip(
             round((p[0] - xs[0]) / GRID), 0, len(xs) - 1))
-        near_pts = [(a, b) for a in range(i - 2, i + 3) for b in range(j - 2, j + 3)
-                    if 0 <= a < len(ys) and 0 <= b < len(xs) and np.isfinite(dist[a, b])]
+        near_pts, r = [], 2
+        while not near_pts:  # the nearest route points (further out when the robot is pressed into a corner)
+            near_pts = [(a, b) for a in range(i - r, i + r + 1) for b in range(j - r, j + r + 1)
+                        if 0 <= a < len(ys) and 0 <= b < len(xs) and np.isfinite(dist[a, b])]
+            r += 2
         cur = min(near_pts, key=lambda ab: (math.hypot(xs[ab[1]] - p[0], ys[ab[0]] - p[1]), dist[ab]))
         target = cur
         for _ in range(4):  # walk down the distance field, keeping the farthest point in clear sight
