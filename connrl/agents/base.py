@@ -23,6 +23,7 @@ from typing import Protocol
 import numpy as np
 
 from connrl.core.exploration import StuckConfig, StuckDetector
+from connrl.core.grouping import check_mu_range
 from connrl.core.lessons import Lesson, LessonMemory, LessonRecorder
 
 
@@ -76,8 +77,12 @@ class ReplayConfig:
             raise ValueError(f"replay capacity must be >= 1 lesson, got {self.capacity}")
         if self.taught_order not in TAUGHT_ORDERS:
             raise ValueError(f"taught_order must be one of {', '.join(TAUGHT_ORDERS)}, got {self.taught_order!r}")
-        if self.grouping is not None and not (len(self.grouping) == 2 and 0 <= self.grouping[0] <= self.grouping[1]):
-            raise ValueError(f"grouping must be None or (mu_low, mu_high) with 0 <= low <= high, got {self.grouping}")
+        if self.grouping is not None:
+            try:
+                check_mu_range(self.grouping)
+            except ValueError:
+                raise ValueError(f"grouping must be None or (mu_low, mu_high) with 0 <= low <= high, got "
+                                 f"{self.grouping!r}") from None
         for name in ("p_threshold", "taught_p_threshold"):
             v = getattr(self, name)
             if not 0 <= v < 1:

@@ -74,9 +74,12 @@ class BehaviourQCON(QCON):
             super().observe(action, reward, next_obs, terminated, truncated, info)
         else:  # QCON.observe with the max over the next state's applicable behaviours (Fig. 3.4 step 4)
             x, y = self._x, self.encode(next_obs)
+            if info is None or "applicable" not in info:
+                raise ValueError("target_max='applicable' needs info['applicable'] of the next state from a "
+                                 "behaviour-level environment (connrl.tasks.recharge.BehaviourEnv)")
             if self.config.online:
-                v = self.q.values(y)
-                u = 0.0 if terminated else float(v[_applicable(info)].max())
+                v, ok = self.q.values(y), _applicable(info)
+                u = 0.0 if terminated else float(v[ok].max() if ok.any() else v.max())  # as replay's rule
                 self.q.update(x, action, reward + self.config.gamma * u)
             self.book.recorder.add(x, action, reward, y)
             self.book.ended = (bool(terminated), bool(truncated))
@@ -101,6 +104,10 @@ class BehaviourQCON(QCON):
                             temperature=self.explore.base * self.merit_scale, p_threshold=p_threshold, batch=r.batch)
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
+        """Replay with the W each step was chosen under and (``target_max="applicable"``) each state's applicable
+        behaviours, both kept with the lesson; ``weights`` and ``allowed`` come from the lesson, never the caller."""
+        if weights is not None or allowed is not None:
+            raise ValueError("BehaviourQCON replays the weights and applicability kept with each lesson")
         allowed = lesson.meta.get("applicable") if self.target_max == "applicable" else None
         super().replay_lesson(lesson, p_threshold, lesson.meta.get("weights"), allowed)
 

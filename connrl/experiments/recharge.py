@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from connrl.core.rollout import run_trial
-from connrl.envs.robot.recharge import ROOMS
+from connrl.envs.robot import Layout
+from connrl.envs.robot.recharge import ROOMS, sample_in_room
 from connrl.envs.robot.teachers import teach_chg
 from connrl.experiments.behaviours import pretrain_behaviours
 from connrl.experiments.protocol import train_and_test
@@ -28,6 +29,7 @@ from connrl.tasks.recharge import TARGET_MAX, BehaviourEnv, make_high_level_agen
 from connrl.tasks.recharge_together import TrainingBehaviourEnv
 
 SHIPPED_LIBRARY = library_digest()
+LAYOUT = Layout.load("default")  # where the test tasks are drawn
 
 RANGES = {"hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1", "lam": "0..1",
           "t_start": ">0", "t_end": ">0", "lessons_per_trial": ">=0", "capacity": ">=1", "p_oldest": "0..<1",
@@ -99,11 +101,11 @@ def run_rooms(p, rng: np.random.Generator, make_env, make_agent, progress=lambda
     """The Ch. 6 protocol (module docstring) for any world and agent: fixed greedy test tasks per start room, tested
     before the first trial and every ``p.test_every``; ``after_trial(env)`` follows each training trial. Returns
     (RunResult, agent)."""
+    task_rng = np.random.default_rng(rng.integers(2**63))  # first, so every experiment of a seed tests alike
+    tasks = [(r, sample_in_room(task_rng, LAYOUT, r)) for r in ROOMS for _ in range(p.tests_per_room)]
+    seeds = task_rng.integers(2**31, size=len(tasks))
     env, test_env = make_env(p), make_env(p)
     world = getattr(test_env, "world", test_env)
-    task_rng = np.random.default_rng(rng.integers(2**63))
-    tasks = [(r, world.sample_start(task_rng, r)) for r in ROOMS for _ in range(p.tests_per_room)]
-    seeds = task_rng.integers(2**31, size=len(tasks))
     agent = make_agent(p, rng)
     env.reset(seed=int(rng.integers(2**31)))
     xs, ys, rows = [], [], []
@@ -160,16 +162,19 @@ def _path(env, agent, task, seed) -> dict:
 
 def run_recharge(p: RechargeParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
     if p.pretrain_steps:  # Exp. 5: fresh behaviours, pre-trained briefly, learning on beside the high level
-        agents, trials, spent = pretrain_behaviours(p.pretrain_steps, rng)
-
         world = {"max_steps": p.max_steps, "step_scale": p.step_scale, "success_reward": p.success_reward}
-        # run_rooms makes the training world first, then the test world (the same live nets, greedy)
-        envs = iter([TrainingBehaviourEnv(agents, **world),
-                     BehaviourEnv({t: Behaviour(t, a.q) for t, a in agents.items()}, **world)])
-        result, agent = run_rooms(p, rng, lambda p: next(envs), make_high_level_agent, progress,
+        made = {}
+
+        def make_env(p):  # run_rooms makes the training world first (pre-training the behaviours), then the test one
+            if not made:
+                made["agents"], made["trials"], made["spent"] = pretrain_behaviours(p.pretrain_steps, rng)
+                return TrainingBehaviourEnv(made["agents"], start_trials=made["trials"], **world)
+            return BehaviourEnv({t: Behaviour(t, a.q) for t, a in made["agents"].items()}, **world)
+
+        result, agent = run_rooms(p, rng, make_env, make_high_level_agent, progress,
                                   after_trial=lambda env: env.learn_behaviours())
-        result.metrics.update({f"pretrain_trials_{t}": float(k) for t, k in trials.items()})
-        result.metrics["pretrain_steps"] = float(sum(spent.values()))
+        result.metrics.update({f"pretrain_trials_{t}": float(k) for t, k in made["trials"].items()})
+        result.metrics["pretrain_steps"] = float(sum(made["spent"].values()))
         return result
     result, agent = run_rooms(p, rng, make_recharge_env, make_high_level_agent, progress)
     if p.grouping:
@@ -211,9 +216,9 @@ EXPERIMENTS = [
                                            "gamma": 0.998}, "experiment recharge-long-delay"),
         profiles={**PROFILES, "tiny": {**PROFILES["tiny"], "max_steps": 40}},
         variants=(Variant("Exp. 4, no grouping, lambda 0.9", {"lam": 0.9}),
-                  # mu scaled by 0.35 to the thesis's mean group size of 11 (scripts/ch6/group_size.py; R)
-                  Variant("Exp. 4, state grouping, lambda 0.8", {"lam": 0.8, "grouping": True, "mu_low": 0.175,
-                                                                 "mu_high": 0.875})),
+                  # mu scaled by 0.5 to the thesis's mean group size of 11 (scripts/ch6/group_size.py; R)
+                  Variant("Exp. 4, state grouping, lambda 0.8", {"lam": 0.8, "grouping": True, "mu_low": 0.25,
+                                                                 "mu_high": 1.25})),
         quantities=(*QUANTITIES, GROUPING), x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
         description="the persistence rule of Exp. 3 with 5x the reward delay: timeout 1000, reward 500, gamma 0.998; "
                     "thesis: without grouping it fails from room B, with grouping it is comparable to Exp. 3"),

@@ -21,8 +21,9 @@ from connrl.report.plots import save_figure
 EXP2, EXP3 = "Exp. 2: W = 0/1", "Exp. 3: persistence rule"
 EXP4 = ("Exp. 4, no grouping, lambda 0.9", "Exp. 4, state grouping, lambda 0.8")
 EXP1, EXP5 = "Exp. 1: no hierarchy", "Exp. 5: behaviours learned alongside"
-NEAR_DOCKED = 0.9  # "near-optimal" read as: docks from at least 90 % of a room's test tasks ...
-NEAR_TEACHER = 0.8  # ... with at least 80 % of the scripted teacher's reinforcement per step
+NEAR_DOCKED = 0.9  # "near-optimal" read as: docks from at least 90 % of every room's test tasks, as a hand-written
+# policy over the same behaviours does (scripts/ch6/behaviour_bound.py); it needs 1.6-2x the teacher's steps, so
+# the share of the teacher's reinforcement per step is shown, not required
 COLOURS = {"DK": "C3", "DP": "C1", "WFL": "C0", "WFR": "C2", None: "0.3"}
 
 
@@ -46,8 +47,8 @@ def at_trial(runs: list[list[dict]], key: str, trial: float) -> float | None:
 
 
 def at_end(runs: list[list[dict]], key: str) -> float | None:
-    """Mean over runs of ``key`` at each run's last test."""
-    return float(np.mean([run[-1][key] for run in runs])) if runs else None
+    """Mean over runs of ``key`` over each run's last 3 tests (the summaries' "final" quantities)."""
+    return float(np.mean([np.mean([row[key] for row in run[-3:]]) for run in runs])) if runs else None
 
 
 def quantity(summary: dict | None, label: str, name: str) -> float | None:
@@ -62,7 +63,7 @@ def _f(v, digits=2) -> str:
 
 
 def _rooms(runs, trial=None) -> str:
-    """Share docked from A / B / C at ``trial`` (None: each run's last test)."""
+    """Share docked from A / B / C at ``trial`` (None: over each run's last 3 tests)."""
     return " / ".join(_f(at_end(runs, f"docked_{r}") if trial is None else at_trial(runs, f"docked_{r}", trial))
                       for r in ROOMS)
 
@@ -91,8 +92,7 @@ def claims_table(data: dict) -> list[str]:
         perf = at_trial(runs, "performance", trial)
         if None in docked or perf is None or not teacher:
             return "—"
-        ok = min(docked) >= NEAR_DOCKED and perf >= NEAR_TEACHER * teacher
-        return f"{'yes' if ok else 'no'} ({perf / teacher:.0%} of the teacher)"
+        return f"{'yes' if min(docked) >= NEAR_DOCKED else 'no'} ({perf / teacher:.0%} of the teacher)"
 
     def final(s, label):
         return quantity(s, label, "final_performance")
@@ -108,18 +108,22 @@ def claims_table(data: dict) -> list[str]:
     out.append(f"| Exp. 2 clearly worse than Exp. 3 after 150 trials (6.6.2) | final perf. Exp. 2 {_f(f2)}, Exp. 3 "
                f"{_f(f3)}; Exp. 2 rooms {_rooms(e2)} | {_cmp(f2, f3, 0.75)} |")
     f1 = final(flat, EXP1)
+    unable = None if not e1 else 1 - max(at_end(e1, "docked_B"), at_end(e1, "docked_C"))
+    held = _cmp(f1, f3, 0.5)
     out.append(f"| Exp. 1 (no hierarchy) far below Exp. 3; unable from B and C after 300 trials (6.6.1) | final "
-               f"perf. {_f(f1)} vs Exp. 3 {_f(f3)}; rooms {_rooms(e1)} | {_cmp(f1, f3, 0.5)} |")
+               f"perf. {_f(f1)} vs Exp. 3 {_f(f3)}; rooms {_rooms(e1)} | "
+               f"{held if held == '—' or held == 'no' else _yes(unable, None, 0.5)} |")
     c1 = quantity(flat, EXP1, "collision_share")
     out.append(f"| Exp. 1 collides on more than 5 % of its steps (6.6.1) | {_f(c1, 3)} of test steps | "
                f"{'—' if c1 is None else 'yes' if c1 > 0.05 else 'no'} |")
     out += _later_rows(e4n, e4g, e5, long_, tog, f3)
     return out + ["", "Values are means over the stored runs (rows of each run's CSV at the first test at or after "
-                  "the trial named, else at each run's last test). *Holds?* criteria: \"most places\" and \"fails\" "
-                  f"read as a share docked above / below 0.5; \"nearly optimal\" as at least {NEAR_DOCKED:.0%} docked "
-                  f"from every room with at least {NEAR_TEACHER:.0%} of the scripted teacher's reinforcement per step "
-                  "on the same tasks; \"clearly worse\" / \"far below\" as a final performance under 75 % / 50 % of "
-                  "Exp. 3's; \"comparable\" as at least 75 % of it."]
+                  "the trial named, else over each run's last 3 tests). *Holds?* criteria: \"most places\" and "
+                  "\"fails\" read as a share docked above / below 0.5; \"nearly optimal\" as at least "
+                  f"{NEAR_DOCKED:.0%} docked from every room (the reinforcement per step beside it is a share of the "
+                  "scripted teacher's on the same tasks; a policy over the behaviours cannot match the teacher's "
+                  "routes); \"clearly worse\" / \"far below\" as a final performance under 75 % / 50 % of Exp. 3's; "
+                  "\"comparable\" as at least 75 % of it, \"slightly below\" as 75-100 %."]
 
 
 def _later_rows(e4n, e4g, e5, long_, tog, f3) -> list[str]:
@@ -137,8 +141,10 @@ def _later_rows(e4n, e4g, e5, long_, tog, f3) -> list[str]:
     out.append(f"| every 11 states grouped, on average (6.6.4) | {_f(g, 1)} (mu calibrated to it) | — |")
     f5 = final(tog, EXP5)
     worst5 = min(at_end(e5, f"docked_{r}") for r in ROOMS) if e5 else None
+    slightly = _cmp(f5, f3, 0.75, lower=False) if f5 is None or f3 is None or f5 <= f3 else "no"
     out.append(f"| Exp. 5 slightly below Exp. 3, docking from every room by its end (6.6.5) | final perf. {_f(f5)} "
-               f"vs Exp. 3 {_f(f3)}; rooms {_rooms(e5)} | {_yes(worst5, None, 0.5)} |")
+               f"vs Exp. 3 {_f(f3)}; rooms {_rooms(e5)} | "
+               f"{slightly if slightly != 'yes' else _yes(worst5, None, 0.5)} |")
     return out
 
 

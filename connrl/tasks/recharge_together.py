@@ -33,12 +33,14 @@ class TrainingBehaviourEnv(BehaviourEnv):
     """``BehaviourEnv`` whose chosen behaviour explores and learns (module docstring); ``learn_behaviours()`` after
     each high-level trial replays every behaviour's lessons."""
 
-    def __init__(self, agents: dict[str, TeachingQCON], **world):
+    def __init__(self, agents: dict[str, TeachingQCON], start_trials: dict[str, int] | None = None, **world):
         super().__init__({t: Behaviour(t, a.q) for t, a in agents.items()}, **world)
         self.agents = agents
         self._segment: str | None = None
         self._seg_steps = 0
-        self._lessons = dict.fromkeys(agents, 0)  # each behaviour's lessons so far: its trial count
+        # each behaviour's trial count, which its Ch. 5 schedules (T, lessons per trial) follow: its pre-training
+        # trials, then one per lesson
+        self._lessons = {t: int((start_trials or {}).get(t, 0)) for t in agents}
 
     def _close(self) -> None:
         if self._segment is not None:

@@ -35,8 +35,8 @@ def main() -> None:
         run_trial(env, agent, trial=k, learning=True)
         lessons.append(agent.book.memory.lessons[-1])
     steps = sum(len(lesson) for lesson in lessons)
-    for c in (1.0, 0.5, 0.4, 0.35, 0.3, 0.2, 0.1):
-        g = sum(len(group_states(lesson.inputs[:-1], (0.5 * c, 2.5 * c), rng)) for lesson in lessons)
+    for c in (1.0, 0.7, 0.6, 0.5, 0.45, 0.4, 0.35, 0.3):
+        g = sum(len(group_states(lesson.inputs[:-1], (0.5 * c, 2.5 * c), rng, lesson.actions)) for lesson in lessons)
         print(f"mu ~ U({0.5 * c:.3f}, {2.5 * c:.3f}): mean group size {steps / g:.1f} ({steps} steps)")
 
 

@@ -88,9 +88,9 @@ def test_grouping_replays_fewer_steps_and_tallies_group_sizes():
     a = agent(grouping=(0.5, 2.5))
     x = np.zeros(3)
     a.begin_trial(x, info([True] * 4), trial=0, learning=True)
-    for k in range(30):  # 30 steps in three runs of identical inputs: groups never span a jump of 10
-        a.observe(a.act(x, info([True] * 4)), 0.0, np.full(3, 10.0 * ((k + 1) // 10)), False, k == 29,
-                  info([True] * 4))
+    for k in range(30):  # 30 steps of behaviour 2 in three runs of identical inputs: no group spans a jump of 10
+        a.act(x, info([True] * 4))
+        a.observe(2, 0.0, np.full(3, 10.0 * ((k + 1) // 10)), False, k == 29, info([True] * 4))
     a.end_trial()
     a.replay_lesson(a.book.memory.lessons[-1], 0.0)
     assert a.grouped_steps == 30 and a.groups == 3  # inputs 0 (states 0-9), 10 (10-19), 20 (20-29); 30 is final

@@ -271,10 +271,11 @@ def test_the_oaon_kernel_is_the_registered_fast_path():
 
 @pytest.mark.parametrize("repair", REPAIRS)
 def test_replay_q_on_an_oaon_uses_the_registered_fast_path(monkeypatch, repair):
-    calls = []
+    calls, options = [], []
 
     def spy(q, lesson, params, repair_index, weights, allowed, discounts):
         calls.append((q, lesson, params, repair_index))
+        options.append((weights, allowed, discounts))
         return 123
 
     monkeypatch.setitem(replay_module.FAST_PATHS, OAON, spy)
@@ -284,6 +285,10 @@ def test_replay_q_on_an_oaon_uses_the_registered_fast_path(monkeypatch, repair):
     params = ReplayParams(gamma=0.9, lam=0.7)
     assert replay_q(net, lesson, params, repair) == 123
     assert calls == [(net, lesson, params, REPAIRS.index(repair))]
+    w, m, d = np.ones((len(lesson), 4)), np.ones((len(lesson) + 1, 4), bool), np.full(len(lesson), 0.5)
+    assert replay_q(net, lesson, params, repair, weights=w, allowed=m, discounts=d) == 123
+    assert options[0] == (None, None, None) and all(a is b for a, b in zip(options[1], (w, m, d), strict=True))
+    calls.pop()
     with pytest.raises(ValueError, match="repair must be one of"):
         replay_q(net, lesson, params, "sideways")
     assert len(calls) == 1
@@ -344,9 +349,10 @@ def test_weighted_replay_drops_the_steps_whose_choice_was_ruled_out():
     assert replay_q_reference(c, lesson, params, weights=w) == used_plain - 2
 
 
+@pytest.mark.parametrize("temperature", [5.0, 0.0])
 @pytest.mark.parametrize("hidden", [5, 0])
 @pytest.mark.parametrize("options", ["weights", "allowed", "discounts", "all"])
-def test_kernel_per_step_options_equal_reference(hidden, options):
+def test_kernel_per_step_options_equal_reference(hidden, options, temperature):
     """Ch. 6's per-step options (Eq. 6.6 weights, a max over allowed choices, per-step discounts) in the kernel
     match the plain loop."""
     rng = np.random.default_rng(7)
@@ -356,7 +362,7 @@ def test_kernel_per_step_options_equal_reference(hidden, options):
     kw = {"weights": w, "allowed": rng.random((21, 4)) < 0.5, "discounts": 0.99 ** rng.integers(1, 12, 20)}
     kw = kw if options == "all" else {options: kw[options]}
     fast, ref = _pair(hidden)
-    params = ReplayParams(gamma=0.99, lam=0.8, temperature=5.0, p_threshold=0.02)
+    params = ReplayParams(gamma=0.99, lam=0.8, temperature=temperature, p_threshold=0.02)
     assert replay_oaon(fast, lesson, params, 0, **kw) == replay_q_reference(ref, lesson, params, **kw)
     _assert_same_nets(fast, ref)
     plain, _ = _pair(hidden)

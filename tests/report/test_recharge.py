@@ -18,7 +18,7 @@ def test_rows_at_a_trial_and_at_the_end_are_means_over_runs():
     assert rc.at_trial(runs, "docked_A", 10) == 0.4
     assert rc.at_trial(runs, "docked_A", 15) == np.mean([1.0, 0.6])  # the first test at or after trial 15
     assert rc.at_trial(runs, "docked_A", 25) is None
-    assert rc.at_end(runs, "docked_B") == 0.1
+    assert rc.at_end(runs, "docked_B") == np.mean([0.0, 0.2 / 3])  # over the last 3 tests of each run
     assert rc._rooms(runs, 20) == "0.80 / 0.10 / 0.30"
 
 

@@ -138,6 +138,9 @@ def _route_field(layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     xs, ys = np.arange(GRID / 2, w, GRID), np.arange(GRID / 2, h, GRID)
     free = np.array([[layout.room_at(x, y) is not None and layout.clearance(x, y) >= ROUTE_CLEARANCE for x in xs]
                      for y in ys])
+    if not free.any():
+        raise ValueError(f"layout {layout.name!r} has no place {ROUTE_CLEARANCE:g} in from every surface: the "
+                         "recharging teacher has no route")
     goal = np.asarray(layout.light) + 60.0 * np.asarray(layout.charger_approach)
     dist = np.full(free.shape, np.inf)
     gi = min(zip(*np.nonzero(free), strict=True), key=lambda ij: math.hypot(xs[ij[1]] - goal[0], ys[ij[0]] - goal[1]))
