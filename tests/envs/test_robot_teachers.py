@@ -52,3 +52,15 @@ def test_recharging_teacher_starts_pressed_into_any_corner():
     assert len(corners) >= 8
     docked = [teach_chg(env, (x, y, 45.0), seed=i)[-1][4] for i, (x, y) in enumerate(corners)]
     assert sum(docked) >= len(corners) - 1  # scripted, not perfect: at most one miss
+
+
+def test_recharging_teacher_docks_with_fifth_size_steps():
+    """Exp. 4's world (6.6.4: every primitive action a fifth): the teacher, Exp. 4's reference, still docks."""
+    from connrl.envs.robot.recharge import RechargeEnv
+    from connrl.envs.robot.teachers import teach_chg
+
+    env = RechargeEnv(obs="high", step_scale=0.2, max_steps=1000, success_reward=500.0)
+    rng = np.random.default_rng(11)
+    for i, room in enumerate("ABC"):
+        lesson = teach_chg(env, env.sample_start(rng, room), seed=i)
+        assert lesson[-1][4] and lesson[-1][2] == 500.0 and len(lesson) > 50  # five times the steps of a route
