@@ -130,11 +130,11 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
                     if i != a and q[i] > qa:
                         _update_any(w1, w2, d1, d2, i, inputs[t], h, qa, scale, lr, momentum, linear)
             else:
-                best = -np.inf
+                found, best = False, 0.0  # no infinities: fastmath assumes there are none
                 for i in range(q.shape[0]):
-                    if i != a and q[i] > best:
-                        best = q[i]
-                if best > qa:
+                    if i != a and (not found or q[i] > best):
+                        found, best = True, q[i]
+                if found and best > qa:
                     _update_any(w1, w2, d1, d2, a, inputs[t], h, best, scale, lr, momentum, linear)
         e_next = e
     return used
