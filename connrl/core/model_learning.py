@@ -1,0 +1,137 @@
+"""Learning a complete model of a deterministic world by exploration, counting action executions (thesis 6.2.1).
+
+6.2's complexity analysis counts the action executions an agent needs before it knows every transition it must
+know; the optimal policy then follows by planning on the model, which costs no executions. The exploration rule
+here is greedy mapping, a Koenig-style rule (6.2.1 cites Koenig's real-time search): go by the shortest known
+route to the nearest state with an untried action, try it, repeat. Its worst case is O(b n) executions for b
+state-action pairs and n states; on grids it is far below that.
+
+The world is a table: ``succ[s, a]`` the next state (-1: no such action), ``cost[s, a]`` the executions one use of
+the action takes (1 for base actions; a path length for abstract actions, 6.2.2). With ``episode`` > 0 the agent
+works in episodes of at most that many executions, each from a reset state (6.2.2's reset operator), ending early at
+``stop_at`` ("until the abstract state is reached or else after l steps"). Learning ends when every action of every
+``target`` state has been tried. Pure given ``seed`` (compiled with Numba; ``learn_model`` checks its inputs).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def _nearest_untried(known, tried, target, pos, budget, cost, dist, parent, queue):
+    """BFS over known transitions from ``pos``: the nearest target state with an untried action whose route plus
+    the action fits ``budget`` (< 0: no limit). Returns the state, or -1; ``dist`` holds route costs, ``parent``
+    the route."""
+    n, n_actions = known.shape
+    for s in range(n):
+        dist[s] = -1
+    dist[pos] = 0
+    parent[pos] = -1
+    head, tail = 0, 1
+    queue[0] = pos
+    while head < tail:
+        s = queue[head]
+        head += 1
+        if target[s]:
+            for a in range(n_actions):
+                if not tried[s, a] and (budget < 0 or dist[s] + cost[s, a] <= budget):
+                    return s
+        for a in range(n_actions):
+            t = known[s, a]
+            if t >= 0 and dist[t] < 0 and (budget < 0 or dist[s] + cost[s, a] <= budget):
+                dist[t] = dist[s] + cost[s, a]
+                parent[t] = s
+                queue[tail] = t
+                tail += 1
+    return -1
+
+
+@numba.njit(cache=True)
+def _learn(succ, cost, target, starts, episode, stop_at, seed, max_executions, rule):
+    np.random.seed(seed)
+    n, n_actions = succ.shape
+    known = np.full((n, n_actions), -1, dtype=np.int64)
+    tried = succ < 0  # absent actions count as tried
+    remaining = 0
+    for s in range(n):
+        if target[s]:
+            for a in range(n_actions):
+                if not tried[s, a]:
+                    remaining += 1
+    dist = np.empty(n, dtype=np.int64)
+    parent = np.empty(n, dtype=np.int64)
+    queue = np.empty(n, dtype=np.int64)
+    total = 0
+    pos = starts[np.random.randint(starts.size)]
+    while remaining > 0 and total < max_executions:
+        if episode > 0:
+            pos = starts[np.random.randint(starts.size)]  # the reset operator
+        spent = 0
+        while remaining > 0 and total < max_executions:
+            if episode > 0 and (spent >= episode or (pos == stop_at and spent > 0)):
+                break
+            if rule == 1:  # random walk: a random action where the agent stands
+                u = pos
+                a = np.random.randint(n_actions)
+                if succ[u, a] < 0 or (episode > 0 and spent + cost[u, a] > episode):
+                    if episode > 0:
+                        break
+                    continue
+                if target[u] and not tried[u, a]:
+                    remaining -= 1
+                tried[u, a] = True
+                known[u, a] = succ[u, a]
+                spent += cost[u, a]
+                total += cost[u, a]
+                pos = succ[u, a]
+                continue
+            u = _nearest_untried(known, tried, target, pos, episode - spent if episode > 0 else -1, cost, dist,
+                                 parent, queue)
+            if u < 0:
+                break
+            spent += dist[u]
+            total += dist[u]
+            a = 0
+            while tried[u, a]:
+                a += 1
+            tried[u, a] = True
+            known[u, a] = succ[u, a]
+            remaining -= 1
+            spent += cost[u, a]
+            total += cost[u, a]
+            pos = succ[u, a]
+        if episode <= 0:
+            break
+    return total, remaining
+
+
+RULES = ("greedy", "random")
+
+
+def learn_model(succ: np.ndarray, cost: np.ndarray | None = None, target: np.ndarray | None = None,
+                starts: np.ndarray | None = None, episode: int = 0, stop_at: int = -1, seed: int = 0,
+                max_executions: int = 10**12, rule: str = "greedy") -> int:
+    """Action executions until every action of every ``target`` state (default: all) has been tried, starting from
+    a random state of ``starts`` (default: all), in episodes of ``episode`` executions from reset states when
+    ``episode`` > 0. ``rule``: "greedy" mapping (module docstring) or a "random" walk (each step a uniformly random
+    action, an uninformed explorer for comparison)."""
+    if rule not in RULES:
+        raise ValueError(f"rule must be one of {RULES}, got {rule!r}")
+    succ = np.ascontiguousarray(succ, dtype=np.int64)
+    if succ.ndim != 2 or succ.shape[0] < 1 or (succ >= succ.shape[0]).any():
+        raise ValueError(f"succ must be an (n, actions) table of next states in -1..n-1, got shape {succ.shape}")
+    n = succ.shape[0]
+    cost = np.ones_like(succ) if cost is None else np.ascontiguousarray(cost, dtype=np.int64)
+    if cost.shape != succ.shape or (cost[succ >= 0] < 1).any():
+        raise ValueError("cost must have succ's shape and be >= 1 wherever an action exists")
+    target = np.ones(n, dtype=np.bool_) if target is None else np.ascontiguousarray(target, dtype=np.bool_)
+    starts = np.arange(n) if starts is None else np.ascontiguousarray(starts, dtype=np.int64)
+    if target.shape != (n,) or starts.size == 0 or not ((starts >= 0) & (starts < n)).all():
+        raise ValueError("target must be one bool per state and starts a non-empty list of states")
+    total, remaining = _learn(succ, cost, target, starts, int(episode), int(stop_at), int(seed), int(max_executions),
+                              RULES.index(rule))
+    if remaining:
+        raise RuntimeError(f"{remaining} target actions still untried after {total} executions")
+    return int(total)

@@ -1,0 +1,56 @@
+"""Greedy-mapping model learning (6.2.1): executions counted by hand on tiny grids, episodes with resets (6.2.2)."""
+
+import numpy as np
+import pytest
+
+from connrl.core.model_learning import learn_model
+from connrl.envs.grid import GridWorld
+
+
+def test_a_line_of_three_from_its_end_by_hand():
+    g = GridWorld(3, 1)  # actions: 0 = +1, 1 = -1; a step off the line stays
+    # from 0: +1 (->1), +1 (->2), +1 (stays), -1 (->1), -1 (->0), -1 (stays): every try is where the agent stands
+    assert learn_model(g.next_state, starts=np.array([0])) == 6
+    # from 2: +1 (stays), -1 (->1), +1 (->2), walk 1 back, -1 (->0), +1 (->1), walk 1 back, -1 (stays)
+    assert learn_model(g.next_state, starts=np.array([2])) == 8
+
+
+def test_every_state_action_is_tried_once_and_walks_are_few_on_a_grid():
+    g = GridWorld(10, 2)
+    n_tries = g.n * g.n_actions
+    total = learn_model(g.next_state, seed=3)
+    assert n_tries <= total < 2 * n_tries  # O(b n) is the worst case; on a grid the walks stay short
+
+
+def test_episodes_from_resets_try_only_the_target_and_stop_after_their_budget():
+    g = GridWorld(5, 1)
+    target = np.zeros(5, bool)
+    target[2] = True
+    # one execution per episode from state 2: +1 then (a new episode, reset to 2) -1
+    assert learn_model(g.next_state, target=target, starts=np.array([2]), episode=1) == 2
+    # the abstract action's vicinity: states 1..3 from resets within 1 of state 2, episodes of 1 step
+    target[[1, 3]] = True
+    assert learn_model(g.next_state, target=target, starts=np.array([1, 2, 3]), episode=1, seed=0) == 6
+
+
+def test_weighted_actions_count_their_cost():
+    succ = np.array([[1], [0]])  # two states, one action each way
+    assert learn_model(succ, cost=np.array([[4], [4]]), starts=np.array([0])) == 8
+
+
+def test_deterministic_given_the_seed_and_bad_tables_refused():
+    g = GridWorld(8, 2)
+    assert learn_model(g.next_state, seed=5) == learn_model(g.next_state, seed=5)
+    with pytest.raises(ValueError, match="succ must be"):
+        learn_model(np.array([[5]]))
+    with pytest.raises(ValueError, match="cost must"):
+        learn_model(np.array([[0]]), cost=np.array([[0]]))
+
+
+def test_a_random_walk_needs_far_more_executions_than_greedy_mapping():
+    g = GridWorld(30, 1)
+    greedy = learn_model(g.next_state, seed=1)
+    walks = [learn_model(g.next_state, seed=s, rule="random") for s in range(5)]
+    assert greedy < 2 * g.n * g.n_actions and min(walks) > greedy  # a walk's cover time on a line grows as n^2
+    with pytest.raises(ValueError, match="rule must be one of"):
+        learn_model(g.next_state, rule="smart")
