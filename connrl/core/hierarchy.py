@@ -106,3 +106,39 @@ def overhead(succ: np.ndarray, centres: np.ndarray, l: int, goal: int, exact: np
         best[states] = np.minimum(best[states], dist + far[i])
     away = exact > 0
     return float(np.mean(best[away] / exact[away]))
+
+
+def multi_level(succ: np.ndarray, levels: list[np.ndarray], spacing: list[int], seed: int = 0,
+                rule: str = "greedy") -> list[int]:
+    """6.2.3: executions to learn every abstract action of every level; returns one count per level.
+
+    ``levels[i]`` are the base states of level i's abstract space (``levels[0]``: every base state; each level a
+    subset of the one below; the last holds only the goal), ``spacing[i]`` the base distance between neighbouring
+    level-i states (``spacing[0]`` = 1). Level i's action to c is learnt on level i-1's graph (its abstract actions,
+    each costing its path length) from resets to level-(i-1) states within ``spacing[i]`` of c, in episodes of at
+    most ``spacing[i]`` executions; the last level's, to the goal, explores level h-1's whole space without resets
+    (6.2.2's abstract level)."""
+    rng = np.random.default_rng(seed)
+    counts = []
+    for i in range(1, len(levels)):
+        if i == 1:
+            g_succ, g_cost, index = succ, np.ones_like(succ), np.arange(succ.shape[0])
+        else:
+            g_succ, g_cost = abstract_graph(succ, levels[i - 1], spacing[i - 1])
+            index = np.full(succ.shape[0], -1)
+            index[levels[i - 1]] = np.arange(len(levels[i - 1]))
+        top = i == len(levels) - 1
+        count = 0
+        for c in levels[i]:
+            if top:
+                count += learn_model(g_succ, cost=g_cost, seed=int(rng.integers(2**31)), rule=rule)
+                continue
+            states, _ = ball(succ, int(c), int(spacing[i]))
+            mine = index[states]
+            mine = mine[mine >= 0]
+            target = np.zeros(g_succ.shape[0], dtype=bool)
+            target[mine] = True
+            count += learn_model(g_succ, cost=g_cost, target=target, starts=mine, episode=int(spacing[i]),
+                                 stop_at=int(index[c]), seed=int(rng.integers(2**31)), rule=rule)
+        counts.append(count)
+    return counts

@@ -69,3 +69,17 @@ class GridWorld:
             hi = np.minimum(lo + block, self.side) - 1
             centres[r] = self.index((lo + hi) // 2)
         return region, centres
+
+    def nested_centres(self, factor: int, levels: int) -> list[np.ndarray]:
+        """6.2.3's abstraction hierarchy on a grid whose side is ``factor ** levels`` (``factor`` odd): level i's
+        states are the centres of cubes ``factor ** i`` a side, so each level's are a subset of the one below; the
+        last level is the single centre of the whole grid (the goal). ``[all states, level 1, ..., level h]``."""
+        if factor < 3 or factor % 2 == 0 or self.side != factor ** levels:
+            raise ValueError(f"nested_centres needs an odd factor >= 3 and side = factor ** levels, got factor "
+                             f"{factor}, levels {levels}, side {self.side}")
+        out = [np.arange(self.n)]
+        for i in range(1, levels + 1):
+            b = factor ** i
+            on = np.all(self.coords % b == (b - 1) // 2, axis=1)
+            out.append(np.flatnonzero(on))
+        return out

@@ -14,6 +14,7 @@ SPEC_MODULES = (
     "connrl.experiments.robot_bounds",
     "connrl.experiments.recharge",
     "connrl.experiments.recharge_flat",
+    "connrl.experiments.complexity",
 )
 
 
