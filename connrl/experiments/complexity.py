@@ -1,14 +1,15 @@
 """Thesis 6.2 measured: action executions to learn a deterministic grid world, flat and hierarchical (Table 6.1).
 
-Each run (one seed) takes the grids of n = 3^j states for j in ``j_min..j_max`` that are d-dimensional cubes (side
-3^(j/d); every j in 1-D, even j in 2-D) and counts the action executions each learner needs before its policy is
+Each run (one seed) takes d-dimensional grids of about n = 3^j states for j in ``j_min..j_max`` (side the nearest
+integer to 3^(j/d)) and counts the action executions each learner needs before its policy is
 optimal (flat) or its hierarchy is complete:
 - flat (6.2.1): a complete model by exploration (``connrl.core.model_learning``); the policy then follows by
   planning, which costs no executions;
 - single level (6.2.2): cubes of ``block`` states a side, their centres as subgoals, abstract actions learnt from
   resets within l = block steps, then the abstract level (``connrl.core.hierarchy.single_level``); every odd block
   up to ``block_max`` is tried and the cheapest kept, beside the block of the thesis's optimal k;
-- multi level (6.2.3): the nested hierarchy of 3 x 3 (x 3) regions up to one centre (``multi_level``);
+- multi level (6.2.3): the nested hierarchy of 3 x 3 (x 3) regions up to one centre (``multi_level``), on the
+  sides that are powers of 3;
 - an additional task (6.2.2, end): a new goal inside the abstract space (the abstract level learnt again) and
   outside it (a new abstract action for it, then the abstract level with it added).
 The exploration ``rule`` is greedy mapping (a Koenig-style rule) or a random walk. The single level's policy is
@@ -45,8 +46,7 @@ class ComplexityParams:
         if self.j_max < self.j_min or self.j_max > 12:
             raise ValueError(f"parameters j_min..j_max must satisfy j_min <= j_max <= 12 (n = 3^j states), got "
                              f"{self.j_min}..{self.j_max}")
-        if not any(j % self.dim == 0 for j in range(self.j_min, self.j_max + 1)):
-            raise ValueError(f"no j in {self.j_min}..{self.j_max} makes a {self.dim}-D cube of 3^j states")
+
 
 
 def thesis_block(n: int, dim: int) -> int:
@@ -81,9 +81,10 @@ def _slope(ns, ys) -> tuple[float, float]:
 
 def run_complexity(p: ComplexityParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
     rows = []
-    sizes = [j // p.dim for j in range(p.j_min, p.j_max + 1) if j % p.dim == 0 and 3 ** j <= p.max_states]
-    for done, h in enumerate(sizes):
-        g = GridWorld(3 ** h, p.dim)
+    sides = sorted({max(2, round(3 ** (j / p.dim))) for j in range(p.j_min, p.j_max + 1) if 3 ** j <= p.max_states})
+    for done, side in enumerate(sides):
+        g = GridWorld(side, p.dim)
+        h = round(np.log(side) / np.log(3))  # the multi-level regions nest only on sides 3^h
         flat = learn_model(g.next_state, seed=int(rng.integers(2**31)), rule=p.rule)
         singles = {}
         for b in sorted({*range(3, min(p.block_max, g.side - 1) + 1, 2), thesis_block(g.n, p.dim)}):
@@ -91,8 +92,10 @@ def run_complexity(p: ComplexityParams, rng: np.random.Generator, progress=lambd
                 singles[b] = single_level(g.next_state, g.regions(b)[1], b, seed=int(rng.integers(2**31)),
                                           rule=p.rule)["total"]
         best = min(singles, key=singles.get)
-        multi = sum(multi_level(g.next_state, g.nested_centres(3, h), [3 ** i for i in range(h + 1)],
-                                seed=int(rng.integers(2**31)), rule=p.rule))
+        multi = None
+        if side == 3 ** h:
+            multi = sum(multi_level(g.next_state, g.nested_centres(3, h), [3 ** i for i in range(h + 1)],
+                                    seed=int(rng.integers(2**31)), rule=p.rule))
         centres = g.regions(best)[1]
         inside, outside = additional_task(g, centres, best, rng, p.rule)
         goal = int(centres[0])  # the path cost of passing through subgoals (6.2.2), against exact BFS distances
@@ -102,11 +105,11 @@ def run_complexity(p: ComplexityParams, rng: np.random.Generator, progress=lambd
                      "best_k": len(centres),
                      "thesis_block": thesis_block(g.n, p.dim), "single_at_thesis_k": singles.get(
                          thesis_block(g.n, p.dim))})
-        progress(done + 1, len(sizes))
+        progress(done + 1, len(sides))
     ns = [r["n"] for r in rows]
     metrics = {}
     for name in LEARNERS:
-        pts = [(n, r[name]) for n, r in zip(ns, rows, strict=True) if r[name] > 0]
+        pts = [(n, r[name]) for n, r in zip(ns, rows, strict=True) if r[name] is not None and r[name] > 0]
         e, c = _slope(*zip(*pts, strict=True)) if len(pts) > 1 else (None, None)
         metrics[f"exponent_{name}"], metrics[f"constant_{name}"] = e, c
     metrics["best_k_largest"] = float(rows[-1]["best_k"])

@@ -30,8 +30,9 @@ def draw(rows: dict[str, list[list[dict]]], dims: dict[str, int], file: Path) ->
     for ax, (label, runs) in zip(axes[0], rows.items(), strict=True):
         ns = np.array([row["n"] for row in runs[0]], dtype=float)
         for name in LEARNERS:
-            ys = np.mean([[row[name] for row in run] for run in runs], axis=0)
-            ax.loglog(ns[ys > 0], ys[ys > 0], "o-", color=STYLE[name], ms=3, label=name.replace("_", " "))
+            ys = np.mean([[row.get(name, np.nan) for row in run] for run in runs], axis=0)
+            ok = np.isfinite(ys) & (ys > 0)
+            ax.loglog(ns[ok], ys[ok], "o-", color=STYLE[name], ms=3, label=name.replace("_", " "))
         dim = dims[label]
         for name, f in FORMULAS.get(dim, {}).items():
             ax.loglog(ns, f(ns), "--", color=STYLE[name], lw=0.8)
@@ -46,6 +47,12 @@ def draw(rows: dict[str, list[list[dict]]], dims: dict[str, int], file: Path) ->
     return file
 
 
+def _constant(records, label, name) -> str:
+    cs = [r["metrics"].get(f"constant_{name}") for r in records if r["variant"] == label]
+    cs = [c for c in cs if c is not None]
+    return f"{np.mean(cs):.3g}" if cs else "—"
+
+
 def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     out_dir = Path(out_dir)
     spec = EXPERIMENTS[0]
@@ -58,15 +65,15 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
              f"{summary['base_seed']}`: {summary['runs_per_variant']} runs per variant (seeds from "
              f"{summary['base_seed']}), wall time {fixed(t, 0)} s. The thesis derived these orders and measured none "
              "of them.", "",
-             "Fitted exponents e of executions ~ c n^e (mean over runs) beside Table 6.1's orders:", "",
+             "Fitted exponents e and constants c of executions ~ c n^e (means over runs), beside Table 6.1:", "",
              "| variant | " + " | ".join(n.replace("_", " ") for n in LEARNERS) + " |",
              "|---|" + "---|" * len(LEARNERS)]
     dims = {r["variant"]: int(r["params"]["dim"]) for r in records}
     rows = {label: run_rows(spec, summary, out_dir, label) for label in summary["variants"]}
     rows = {k: v for k, v in rows.items() if v}
     for label, v in summary["variants"].items():
-        cells = [f"{fixed(v['quantities'][f'exponent_{n}']['mean'])} (thesis {THESIS[dims[label]][n]})"
-                 for n in LEARNERS]
+        cells = [f"{fixed(v['quantities'][f'exponent_{n}']['mean'])}, c = {_constant(records, label, n)} (thesis "
+                 f"{THESIS[dims[label]][n]})" for n in LEARNERS]
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     lines += ["", "Regions that were cheapest at each size, beside the thesis's optimal k (its formula; first run), "
               "and the single level's paths through subgoals against the shortest (BFS):", "",

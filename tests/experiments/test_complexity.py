@@ -17,7 +17,6 @@ def test_thesis_block_by_hand():
 
 @pytest.mark.parametrize("kw, message", [({"j_min": 5, "j_max": 4}, "j_min <= j_max"),
                                           ({"j_max": 13}, "j_min <= j_max <= 12"),
-                                          ({"dim": 2, "j_min": 5, "j_max": 5}, "no j in 5..5"),
                                           ({"rule": "smart"}, "rule must be one of")])
 def test_bad_parameters_are_refused(kw, message):
     with pytest.raises(ValueError, match=message):
@@ -27,6 +26,8 @@ def test_bad_parameters_are_refused(kw, message):
 def test_a_run_counts_every_learner_at_every_size():
     r = run_complexity(ComplexityParams(dim=1, rule="greedy", j_min=3, j_max=5), np.random.default_rng(0))
     assert [row["n"] for row in r.rows] == [27, 81, 243]
+    r2 = run_complexity(ComplexityParams(dim=2, rule="greedy", j_min=4, j_max=5), np.random.default_rng(0))
+    assert [(row["n"], row["multi"] is None) for row in r2.rows] == [(81, False), (256, True)]  # side 16: no nesting
     for row in r.rows:
         # every learner tries each of the 2n state-actions it must know at least once
         assert row["flat"] >= 2 * row["n"] and row["multi"] >= 2 * row["n"] and row["single"] >= 2 * row["n"]
