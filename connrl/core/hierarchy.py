@@ -84,9 +84,10 @@ def single_level(succ: np.ndarray, centres: np.ndarray, l: int, seed: int = 0, r
 
 
 def overhead(succ: np.ndarray, centres: np.ndarray, l: int, goal: int, exact: np.ndarray) -> float:
-    """Mean over states of (hierarchical path length) / (shortest path length): the agent walks to a centre within
-    ``l`` steps, then along the abstract level's shortest route to ``goal`` (a centre). ``exact``: true distances
-    to ``goal``."""
+    """Mean over states of (hierarchical path length) / (shortest path length): the agent takes the applicable
+    abstract action that reaches a subgoal at the least cost (6.2.2), i.e. walks to its nearest centre (ties: the
+    one with the shorter route on), then along the abstract level's shortest route to ``goal`` (a centre).
+    ``exact``: true distances to ``goal``."""
     a_succ, a_cost = abstract_graph(succ, centres, l)
     g = int(np.flatnonzero(centres == goal)[0])
     far = np.full(len(centres), np.inf)  # abstract distance of each centre to the goal (Dijkstra; edges symmetric)
@@ -100,12 +101,15 @@ def overhead(succ: np.ndarray, centres: np.ndarray, l: int, goal: int, exact: np
             if j >= 0 and d + w < far[j]:
                 far[j] = d + w
                 heapq.heappush(heap, (d + w, int(j)))
-    best = np.full(succ.shape[0], np.inf)
+    near = np.full(succ.shape[0], np.inf)  # distance to the nearest centre, and that centre's route on
+    route = np.full(succ.shape[0], np.inf)
     for i, c in enumerate(centres):
         states, dist = ball(succ, int(c), int(l))
-        best[states] = np.minimum(best[states], dist + far[i])
+        nearer = (dist < near[states]) | ((dist == near[states]) & (dist + far[i] < route[states]))
+        near[states[nearer]] = dist[nearer]
+        route[states[nearer]] = dist[nearer] + far[i]
     away = exact > 0
-    return float(np.mean(best[away] / exact[away]))
+    return float(np.mean(route[away] / exact[away]))
 
 
 def multi_level(succ: np.ndarray, levels: list[np.ndarray], spacing: list[int], seed: int = 0,

@@ -75,10 +75,10 @@ def _learn(succ, cost, target, starts, episode, stop_at, seed, max_executions, r
             if rule == 1:  # random walk: a random action where the agent stands
                 u = pos
                 a = np.random.randint(n_actions)
-                if succ[u, a] < 0 or (episode > 0 and spent + cost[u, a] > episode):
-                    if episode > 0:
-                        break
-                    continue
+                if succ[u, a] < 0:
+                    continue  # no such action here (an abstract level's padding): draw again
+                if episode > 0 and spent + cost[u, a] > episode:
+                    break
                 if target[u] and not tried[u, a]:
                     remaining -= 1
                 tried[u, a] = True

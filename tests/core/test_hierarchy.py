@@ -3,7 +3,7 @@ line by hand, the path overhead of going through subgoals."""
 
 import numpy as np
 
-from connrl.core.hierarchy import abstract_graph, ball, overhead, single_level
+from connrl.core.hierarchy import abstract_graph, ball, multi_level, overhead, single_level
 from connrl.core.model_learning import learn_model
 from connrl.envs.grid import GridWorld
 
@@ -40,10 +40,23 @@ def test_hierarchy_pays_off_for_a_random_walker_on_a_long_line():
 
 def test_overhead_of_paths_through_subgoals():
     g = GridWorld(9, 1)
-    _, centres = g.regions(3)
-    goal = int(centres[0])  # state 1
+    _, centres = g.regions(3)  # 1, 4, 7
+    goal = 1
     exact = g.distances_to(goal)
-    # on a line the route through centres never detours: states beyond a centre pass it anyway... except state 0
-    # and those between centres whose nearest applicable centre lies behind them; the mean ratio is >= 1
-    assert overhead(g.next_state, centres, 3, goal, exact) >= 1.0
+    # nearest centre first: states 2 and 3 walk to 1 and 4 (3 goes away from the goal: 1 + 3 = 4 steps, not 2);
+    # 5-8 walk to 4 or 7 then back along the centres; 0 walks to 1
+    routes = {0: 1, 2: 1, 3: 1 + 3, 4: 3, 5: 1 + 3, 6: 1 + 6, 7: 6, 8: 1 + 6}
+    want = np.mean([routes[s] / exact[s] for s in routes])
+    assert np.isclose(overhead(g.next_state, centres, 3, goal, exact), want)
     assert np.isclose(overhead(g.next_state, np.arange(9), 1, goal, exact), 1.0)  # every state a subgoal: none
+
+
+def test_two_level_multi_level_is_the_single_level():
+    """With one abstract level under the goal, Eq. 6.1's sum is 6.2.2's single level (same draws, same counts)."""
+    g = GridWorld(9, 1)
+    levels = g.nested_centres(3, 2)  # every state; 1, 4, 7; 4
+    assert [lv.tolist() for lv in levels[1:]] == [[1, 4, 7], [4]]
+    for rule in ("greedy", "random"):
+        counts = multi_level(g.next_state, levels, [1, 3, 9], seed=2, rule=rule)
+        single = single_level(g.next_state, levels[1], 3, seed=2, rule=rule)
+        assert counts == [single["abstract_actions"], single["abstract_level"]]
