@@ -70,23 +70,22 @@ class BehaviourQCON(QCON):
         return b
 
     def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
-        if self.target_max == "all":
-            super().observe(action, reward, next_obs, terminated, truncated, info)
-        else:  # QCON.observe with the max over the next state's applicable behaviours (Fig. 3.4 step 4)
-            x, y = self._x, self.encode(next_obs)
-            if info is None or "applicable" not in info:
-                raise ValueError("target_max='applicable' needs info['applicable'] of the next state from a "
-                                 "behaviour-level environment (connrl.tasks.recharge.BehaviourEnv)")
-            if self.config.online:
-                v, ok = self.q.values(y), _applicable(info)
-                u = 0.0 if terminated else float(v[ok].max() if ok.any() else v.max())  # as replay's rule
-                self.q.update(x, action, reward + self.config.gamma * u)
-            self.book.recorder.add(x, action, reward, y)
-            self.book.ended = (bool(terminated), bool(truncated))
-            self._x = y
+        if self.target_max == "applicable" and (info is None or "applicable" not in info):
+            raise ValueError("target_max='applicable' needs info['applicable'] of the next state from a "
+                             "behaviour-level environment (connrl.tasks.recharge.BehaviourEnv)")
+        super().observe(action, reward, next_obs, terminated, truncated, info)
         self._trial_weights.append(self._w)
         if info is not None and "applicable" in info:
             self._trial_applicable.append(_applicable(info))
+
+    def next_value(self, y: np.ndarray, info: dict | None) -> float:
+        """With ``target_max="applicable"``: the max over the next state's applicable behaviours (all of them when
+        none is), the rule replay's ``allowed`` mask applies too."""
+        v = self.q.values(y)
+        if self.target_max == "all":
+            return float(v.max())
+        ok = _applicable(info)
+        return float(v[ok].max() if ok.any() else v.max())
 
     def end_trial(self) -> None:
         if not self.learning:

@@ -81,7 +81,7 @@ class QCON(LessonAgent):
     def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
         x, y = self._x, self.encode(next_obs)
         if self.config.online:
-            u = 0.0 if terminated else float(self.q.values(y).max())
+            u = 0.0 if terminated else self.next_value(y, info)
             target = reward + self.config.gamma * u  # Fig. 3.4 step 4
             if self.config.target_clip is not None:
                 target = min(target, self.config.target_clip)
@@ -91,6 +91,10 @@ class QCON(LessonAgent):
         self.book.recorder.add(x, action, reward, y)
         self.book.ended = (bool(terminated), bool(truncated))
         self._x = y
+
+    def next_value(self, y: np.ndarray, info: dict | None) -> float:
+        """The on-line target's max_a Q(y, a) (Fig. 3.4 step 4); a subclass may restrict the actions it ranges over."""
+        return float(self.q.values(y).max())
 
     def replay_params(self, p_threshold: float) -> ReplayParams:
         r = self.config.replay

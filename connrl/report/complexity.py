@@ -10,9 +10,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from connrl.experiments.complexity import EXPERIMENTS, LEARNERS
-from connrl.report.page import figure, fixed, note, stored
+from connrl.report.page import figure, fixed, note, run_rows, stored
 from connrl.report.plots import save_figure
-from connrl.report.recharge_claims import run_rows
 
 THESIS = {  # Table 6.1 and 6.2.2-6.2.3: the order in n, per dimension
     1: {"flat": "2", "single": "1.5", "multi": "n log n", "additional_inside": "1.5", "additional_outside": "1.5"},

@@ -9,6 +9,7 @@ in ``doc``'s folder. Hand-written paragraphs live in ``docs/notes/*.md`` and are
 
 from __future__ import annotations
 
+import csv
 import importlib
 import math
 import shutil
@@ -18,7 +19,7 @@ from pathlib import Path
 
 from connrl.experiments import store
 from connrl.experiments.registry import all_experiments
-from connrl.experiments.runner import missing_runs, stored_runs
+from connrl.experiments.runner import make_jobs, missing_runs, stored_runs
 from connrl.experiments.store import DamagedFile
 from connrl.storage import atomic_write_text
 
@@ -118,6 +119,19 @@ def load_summary(out: Path, name: str) -> dict | None:
     except DamagedFile as exc:
         warn(f"{exc}; left out of the page")
         return None
+
+
+def run_rows(spec, summary: dict, out_dir: Path, label: str) -> list[list[dict]]:
+    """Each stored run's CSV rows (one per test: trials, performance, ...) of one variant, as floats; runs not
+    stored yet are left out."""
+    jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], out_dir)
+    out = []
+    for j in jobs:
+        f = Path(f"{j.path}.csv")
+        if j.variant == label and f.exists():
+            out.append([{k: float(v) for k, v in row.items() if v not in ("", None)} for row in csv.DictReader(
+                f.open())])
+    return [r for r in out if r]
 
 
 def stored(spec, out: Path) -> tuple[dict | None, list[dict]]:

@@ -5,7 +5,6 @@ shipped library (``connrl train-behaviours``) -- then the claims of 6.6 / 6.7 be
 
 from __future__ import annotations
 
-import csv
 import json
 from pathlib import Path
 
@@ -16,8 +15,7 @@ from connrl.envs.robot import Layout
 from connrl.envs.robot.recharge import ROOMS
 from connrl.envs.robot.render import draw_layout
 from connrl.experiments import recharge, recharge_flat
-from connrl.experiments.runner import make_jobs
-from connrl.report.page import figure, load_summary, note, stored, summary_table
+from connrl.report.page import figure, load_summary, note, run_rows, stored, summary_table
 from connrl.report.plots import save_figure
 from connrl.report.recharge_claims import EXP1, EXP3, accounting, claims_table, draw_paths
 from connrl.tasks.behaviours import APPLICABLE_ABOVE, LIBRARY_DIR, load_library, q_value_map
@@ -62,19 +60,17 @@ def draw_q_map(task: str, xs, ys, grid, layout: Layout, file: Path) -> Path:
 def draw_room_curves(spec, summary: dict, out_dir: Path, file: Path) -> Path | None:
     """Per start room, the mean over runs of the share of test tasks docked, one panel per variant (Fig. 6.6 split
     by room), from the runs' CSV rows."""
-    jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], out_dir)
     fig, axes = plt.subplots(1, len(spec.variants), figsize=(4.5 * len(spec.variants), 3.4), dpi=110, sharey=True,
                              squeeze=False)
     drawn = False
     for ax, v in zip(axes[0], spec.variants, strict=True):
-        files = [Path(f"{j.path}.csv") for j in jobs if j.variant == v.label]
-        rows = [list(csv.DictReader(f.open())) for f in files if f.exists()]
-        rows = [r for r in rows if r and len(r) == len(rows[0])]
+        rows = run_rows(spec, summary, out_dir, v.label)
+        rows = [r for r in rows if len(r) == len(rows[0])]
         if not rows:
             continue
-        xs = [float(r["trials"]) for r in rows[0]]
+        xs = [r["trials"] for r in rows[0]]
         for i, room in enumerate(ROOMS):
-            ax.plot(xs, np.mean([[float(r[f"docked_{room}"]) for r in run] for run in rows], axis=0), color=f"C{i}",
+            ax.plot(xs, np.mean([[r[f"docked_{room}"] for r in run] for run in rows], axis=0), color=f"C{i}",
                     label=f"from room {room}")
         ax.set_title(f"{v.label} ({len(rows)} runs)", fontsize=9)
         ax.set_xlabel("trials")

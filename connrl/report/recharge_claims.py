@@ -6,7 +6,6 @@ and the quantities of its summary. The criteria that turn a thesis's words into 
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -15,7 +14,7 @@ import numpy as np
 from connrl.envs.robot import Layout
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS
 from connrl.envs.robot.render import draw_layout
-from connrl.experiments.runner import make_jobs
+from connrl.report.page import run_rows
 from connrl.report.plots import save_figure
 
 EXP2, EXP3 = "Exp. 2: W = 0/1", "Exp. 3: persistence rule"
@@ -25,18 +24,6 @@ NEAR_DOCKED = 0.9  # "near-optimal" read as: docks from at least 90 % of every r
 # policy over the same behaviours does (scripts/ch6/behaviour_bound.py); it needs 1.6-2x the teacher's steps, so
 # the share of the teacher's reinforcement per step is shown, not required
 COLOURS = {"DK": "C3", "DP": "C1", "WFL": "C0", "WFR": "C2", None: "0.3"}
-
-
-def run_rows(spec, summary: dict, out_dir: Path, label: str) -> list[list[dict]]:
-    """Each stored run's per-test rows (trials, performance, docked_A, ...) of one variant, as floats."""
-    jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], out_dir)
-    out = []
-    for j in jobs:
-        f = Path(f"{j.path}.csv")
-        if j.variant == label and f.exists():
-            out.append([{k: float(v) for k, v in row.items() if v not in ("", None)} for row in csv.DictReader(
-                f.open())])
-    return [r for r in out if r]
 
 
 def at_trial(runs: list[list[dict]], key: str, trial: float) -> float | None:

@@ -74,14 +74,23 @@ class BehaviourEnv(gym.Env):
         if b != action or not 0 <= b < len(BEHAVIOUR_TASKS):
             raise ValueError(f"action must be a behaviour 0..3 {BEHAVIOUR_TASKS}, got {action!r}")
         task = BEHAVIOUR_TASKS[b]
-        primitive = self.library[task].act(self._task_obs[task])
+        primitive = self._primitive(task)
         room = self.world.sim.room
         obs, r, terminated, truncated, info = self.world.step(primitive)
-        # the behaviour's own goal (its reinforcement of 100 in Ch. 5): docked (DK), into another room (DP)
-        goal = bool(info["success"]) if task == "DK" else (  # as Ch. 5's DP success: into another room, no collision
+        # the behaviour's own goal (its reinforcement of 100 in Ch. 5): docked (DK), into another room without a
+        # collision (DP, as Ch. 5's success)
+        goal = bool(info["success"]) if task == "DK" else (
             task == "DP" and not info["collision"] and info["room"] != room)
+        self._after(task, primitive, room, info, goal, terminated or truncated)
         info["primitive"], info["behaviour"], info["behaviour_goal"] = primitive, task, goal
         return obs, r, terminated, truncated, self._with_applicability(info)
+
+    def _primitive(self, task: str) -> int:
+        """The primitive action the behaviour takes now: its greedy one."""
+        return self.library[task].act(self._task_obs[task])
+
+    def _after(self, task: str, primitive: int, room, info: dict, goal: bool, ended: bool) -> None:
+        """Hook after each primitive step (``room``: the room before it); behaviours that learn use it."""
 
     @property
     def trace(self):

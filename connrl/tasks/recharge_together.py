@@ -11,7 +11,6 @@ every high-level trial. Greedy tests use the same (live) Q-nets through a plain 
 from __future__ import annotations
 
 from connrl.agents.teaching import TeachingQCON
-from connrl.envs.robot.recharge import BEHAVIOUR_TASKS
 from connrl.envs.robot.tasks import R_COLLISION, R_SUCCESS, wall_following_reward
 from connrl.tasks.behaviours import Behaviour
 from connrl.tasks.recharge import BehaviourEnv
@@ -52,34 +51,24 @@ class TrainingBehaviourEnv(BehaviourEnv):
         self._close()
         return super().reset(seed=seed, options=options)
 
-    def step(self, action):
-        if self._task_obs is None:
-            raise RuntimeError("call reset() before step()")
-        b = int(action)
-        if b != action or not 0 <= b < len(BEHAVIOUR_TASKS):
-            raise ValueError(f"action must be a behaviour 0..3 {BEHAVIOUR_TASKS}, got {action!r}")
-        task = BEHAVIOUR_TASKS[b]
+    def _primitive(self, task: str) -> int:
         agent, before = self.agents[task], self._task_obs[task]
         if self._segment != task:
             self._close()
             self._segment = task
             agent.begin_trial(before, {"pose": self.world.sim.pose}, trial=self._lessons[task], learning=True)
-        primitive = agent.act(before, {"pose": self.world.sim.pose})
-        room = self.world.sim.room
-        obs, r, terminated, truncated, info = self.world.step(primitive)
+        return agent.act(before, {"pose": self.world.sim.pose})
+
+    def _after(self, task: str, primitive: int, room, info: dict, goal: bool, ended: bool) -> None:
         collided = bool(info["collision"])
-        docked = bool(info["success"])
         passed = not collided and info["room"] != room
-        goal = docked if task == "DK" else (task == "DP" and passed)
-        mine = own_reward(task, primitive, collided, docked, passed,
+        mine = own_reward(task, primitive, collided, bool(info["success"]), passed,
                           self.world.sim.true_ranges() if task in ("WFL", "WFR") else None)
         self._seg_steps += 1
-        cut = not goal and (self._seg_steps >= SEGMENT or terminated or truncated)
-        agent.observe(primitive, mine, info["task_obs"][task], goal, cut, info)
+        cut = not goal and (self._seg_steps >= SEGMENT or ended)
+        self.agents[task].observe(primitive, mine, info["task_obs"][task], goal, cut, info)
         if goal or cut:
             self._close()
-        info["primitive"], info["behaviour"], info["behaviour_goal"] = primitive, task, goal
-        return obs, r, terminated, truncated, self._with_applicability(info)
 
     def learn_behaviours(self) -> None:
         self._close()
