@@ -140,11 +140,14 @@ class WindowQ(QCON):
 
 # ----------------------------------------------------------------------------------------- recurrent-Q
 
-def replay_recurrent_q(net: RecurrentOAON, lesson: Lesson, params: ReplayParams) -> int:
-    """Replay one lesson into a recurrent Q-net: one batch BPTT step; returns the experiences used."""
+def replay_recurrent_q(net: RecurrentOAON, lesson: Lesson, params: ReplayParams, weights: np.ndarray | None = None,
+                       allowed: np.ndarray | None = None) -> int:
+    """Replay one lesson into a recurrent Q-net: one batch BPTT step; returns the experiences used. ``weights`` and
+    ``allowed`` as ``batch_targets``'s (Ch. 8's choice over behaviours)."""
     acts_ext = np.append(lesson.actions, 0)  # the action at x_n does not affect the outputs at x_n
     ys, _ = net.forward_sequence(lesson.inputs, acts_ext)
-    targets, policy = batch_targets(ys[:, :, 0], lesson.actions, lesson.rewards, lesson.terminated, params)
+    targets, policy = batch_targets(ys[:, :, 0], lesson.actions, lesson.rewards, lesson.terminated, params,
+                                    weights, allowed)
     if policy.any():  # weight 0: a non-policy action is not replayed
         net.train_sequence(lesson.inputs[:-1], lesson.actions, targets, policy.astype(np.float64))
     return int(policy.sum())

@@ -57,6 +57,28 @@ def is_policy_action(merits: np.ndarray, a: int, params: ReplayParams, weights: 
     return bool(p[a] >= params.p_threshold)
 
 
+def policy_mask(values: np.ndarray, actions: np.ndarray, params: ReplayParams,
+                weights: np.ndarray | None = None) -> np.ndarray:
+    """``is_policy_action`` at every step of a lesson at once: values (n, A) before each action, weights (n, A) or
+    None; (n,) bool. Vectorised for batch replay's long lessons (Ch. 8); the same arithmetic as the per-step test."""
+    n = len(actions)
+    if params.temperature < 0:
+        raise ValueError(f"temperature must be >= 0, got {params.temperature}")
+    if params.p_threshold <= 0:
+        return np.ones(n, dtype=bool)
+    if params.temperature == 0:  # greedy: ties share the mass; the per-step rule handles it
+        return np.array([is_policy_action(values[t], int(actions[t]), params, None if weights is None else weights[t])
+                         for t in range(n)], dtype=bool)
+    m = np.asarray(values, dtype=np.float64)
+    w = np.ones_like(m) if weights is None else np.asarray(weights, dtype=np.float64)
+    if w.shape != m.shape or np.any(w < 0) or not np.all((w > 0).any(axis=1)):
+        raise ValueError(f"weights must be (n, actions) = {m.shape}, >= 0, not all 0 in a row")
+    top = np.where(w > 0, m, -np.inf).max(axis=1, keepdims=True)
+    e = np.where(w > 0, w * np.exp((m - top) / params.temperature), 0.0)
+    p = e[np.arange(n), np.asarray(actions, dtype=int)] / e.sum(axis=1)
+    return p >= params.p_threshold
+
+
 def repair_step(q: QFunction, x: np.ndarray, a: int, mode: str) -> int:
     """One 5.4.3 repair of the taught action ``a`` at input ``x`` (Eq. 5.6); returns the nets changed.
 
@@ -84,19 +106,27 @@ def repair_step(q: QFunction, x: np.ndarray, a: int, mode: str) -> int:
 
 
 def batch_targets(values: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool,
-                  params: ReplayParams) -> tuple[np.ndarray, np.ndarray]:
+                  params: ReplayParams, weights: np.ndarray | None = None,
+                  allowed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Fig. 5.1(a) in batch mode: every target of a lesson from fixed predictions (5.1.2, 7.5).
 
     ``values`` (n+1, A) are the Q-values along the lesson before any update. Returns ``(targets (n,),
     policy (n,) bool)``: a non-policy action is not replayed and cuts lambda for the step before it
-    (lambda is also 0 at the last step). Pure.
+    (lambda is also 0 at the last step). ``weights`` and ``allowed`` as ``replay_q_reference``'s (Ch. 6's W of
+    Eq. 6.6 in the non-policy test; the actions each state's max ranges over). Pure.
     """
     values = np.asarray(values, dtype=np.float64)
     n = len(actions)
     if values.shape[0] != n + 1:
         raise ValueError(f"values must have n+1={n + 1} rows for a lesson of {n} steps, got {values.shape}")
-    policy = np.array([is_policy_action(values[t], int(actions[t]), params) for t in range(n)], dtype=bool)
-    u = values[1:].max(axis=1)
+    if allowed is not None and np.shape(allowed) != values.shape:
+        raise ValueError(f"allowed must be (n+1, actions) = {values.shape}, got {np.shape(allowed)}")
+    policy = policy_mask(values[:n], actions, params, weights)
+    nxt = values[1:]
+    if allowed is not None:
+        ok = np.asarray(allowed, dtype=bool)[1:]
+        nxt = np.where(ok | ~ok.any(axis=1, keepdims=True), nxt, -np.inf)  # all actions where none is allowed
+    u = nxt.max(axis=1)
     if terminated:
         u[-1] = 0.0
     lams = np.where(np.append(policy[1:], False), params.lam, 0.0)
@@ -118,10 +148,10 @@ def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repai
     n = len(lesson)
     _check_step_arrays(lesson, weights, allowed, discounts)
     if params.batch:
-        if repair != "none" or weights is not None or allowed is not None or discounts is not None:
-            raise ValueError("the 5.4.3 repairs and the per-step options are defined for incremental replay only")
+        if repair != "none" or discounts is not None:
+            raise ValueError("the 5.4.3 repairs and state grouping's discounts are defined for incremental replay only")
         targets, policy = batch_targets(np.array([q.values(x[t]) for t in range(n + 1)]), acts, rews,
-                                        lesson.terminated, params)
+                                        lesson.terminated, params, weights, allowed)
         for t in range(n - 1, -1, -1):
             if policy[t]:
                 q.update(x[t], int(acts[t]), targets[t])

@@ -14,8 +14,10 @@ _ENVS = {
     "connrl/Robot-WFR-v0": ("connrl.envs.robot:RobotTaskEnv", {"task": "WFR"}),
     "connrl/Robot-CHG-v0": ("connrl.envs.robot.recharge:RechargeEnv", {"obs": "high"}),
     "connrl/Robot-CHG-Flat-v0": ("connrl.envs.robot.recharge:RechargeEnv", {"obs": "flat"}),
+    "connrl/Robot-CHG-NoXY-v0": ("connrl.envs.robot.recharge:RechargeEnv", {"obs": "high", "xy": False}),  # Ch. 8
     # actions = the shipped learned behaviours; built by connrl.tasks (the world itself knows no learner)
     "connrl/Robot-CHG-Behaviours-v0": ("connrl.tasks.recharge:BehaviourEnv", {}),
+    "connrl/Robot-CHG-Behaviours-NoXY-v0": ("connrl.tasks.recharge:BehaviourEnv", {"xy": False}),  # Ch. 8
 }
 
 for _id, (_entry, _kwargs) in _ENVS.items():

@@ -109,18 +109,17 @@ def run_rooms(p, rng: np.random.Generator, make_env, make_agent, progress=lambda
     agent = make_agent(p, rng)
     env.reset(seed=int(rng.integers(2**31)))
     xs, ys, rows = [], [], []
+    spent = 0  # primitive steps of the learning trials so far
 
     def test(n):
         by_room = _test(test_env, agent, tasks, seeds)
         total, steps = sum(v[0] for v in by_room.values()), sum(v[1] for v in by_room.values())
         xs.append(n)
         ys.append(total / steps)
-        rows.append({"trials": n, "performance": total / steps,
+        rows.append({"trials": n, "performance": total / steps, "train_steps": spent,
                      "collisions": sum(v[3] for v in by_room.values()) / steps,
                      **{f"perf_{r}": v[0] / v[1] for r, v in by_room.items()},
                      **{f"docked_{r}": v[2] / p.tests_per_room for r, v in by_room.items()}})
-
-    spent = 0
 
     def train(k):
         nonlocal spent

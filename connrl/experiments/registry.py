@@ -15,6 +15,8 @@ SPEC_MODULES = (
     "connrl.experiments.recharge",
     "connrl.experiments.recharge_flat",
     "connrl.experiments.complexity",
+    "connrl.experiments.integration",
+    "connrl.experiments.steps",
 )
 
 

@@ -151,19 +151,28 @@ class RobotRun:
 
 
 def run_robot(p: RobotParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
+    return robot_run(p, rng, progress)[0]
+
+
+def robot_run(p: RobotParams, rng: np.random.Generator,
+              progress=lambda done, total: None) -> tuple[RunResult, RobotRun]:
+    """``run_robot``'s result and the run itself (its test tasks and agent), for experiments that measure more."""
     run = RobotRun(p, rng)
     xs, ys, rows = [], [], []
-    successes = 0
+    successes = spent = 0
 
     def train(k):
-        nonlocal successes
-        successes += bool(run.train(k).info.get("success"))
+        nonlocal successes, spent
+        stats = run.train(k)
+        successes += bool(stats.info.get("success"))
+        spent += stats.steps
 
     def test(n):
         perf = run.test()
         xs.append(n)
         ys.append(perf)
-        rows.append({"trials": n, "performance": perf} | ({"train_successes": successes} if n else {}))
+        rows.append({"trials": n, "performance": perf, "train_steps": spent}
+                    | ({"train_successes": successes} if n else {}))
 
     train_and_test(p.trials, train, test, test_every=p.test_every, test_first=True, progress=progress,
                    agent=run.agent)
@@ -176,7 +185,7 @@ def run_robot(p: RobotParams, rng: np.random.Generator, progress=lambda done, to
     metrics = {quantity_name(level): first_reaching(xs, ys, level) for level in THRESHOLDS}
     metrics["final_performance"] = float(np.mean(ys[-3:]))
     metrics["mean_performance"] = float(np.mean(ys))
-    return RunResult(xs, ys, metrics, rows, extra)
+    return RunResult(xs, ys, metrics, rows, extra), run
 
 
 def _q_reach(level: float, section: str = "5.6") -> Quantity:

@@ -168,18 +168,19 @@ def accounting(data: dict, taught_steps: dict[str, int], library: dict) -> list[
     ]
 
 
-def draw_paths(record: dict, file: Path, title: str) -> Path:
-    """Fig. 6.7: the greedy paths of one run after its last trial, each step coloured by the behaviour chosen."""
+def draw_paths(record: dict, file: Path, title: str, key: str = "paths", layout: str = "default") -> Path:
+    """Fig. 6.7: the greedy paths of one run after its last trial (``record["extra"][key]``, in ``layout``), each step
+    coloured by the behaviour chosen."""
     fig, ax = plt.subplots(figsize=(5.2, 6), dpi=110)
-    draw_layout(ax, Layout.load("default"), labels=True)
-    for path in record["extra"]["paths"]:
+    draw_layout(ax, Layout.load(layout), labels=True)
+    for path in record["extra"][key]:
         poses = np.asarray(path["poses"])
         for k, b in enumerate(path["behaviours"]):
             ax.plot(poses[k:k + 2, 0], poses[k:k + 2, 1], color=COLOURS.get(b, "0.3"), lw=1.6, zorder=5)
         ax.plot(*poses[0, :2], "o", color="k", ms=4, zorder=6)
         ax.annotate(f"{path['room']}: {'docked' if path['success'] else 'not docked'}, {len(path['behaviours'])} "
                     f"steps", poses[0, :2], fontsize=7, xytext=(4, 4), textcoords="offset points", zorder=7)
-    if any(p["behaviours"] and p["behaviours"][0] for p in record["extra"]["paths"]):
+    if any(p["behaviours"] and p["behaviours"][0] for p in record["extra"][key]):
         for b in BEHAVIOUR_TASKS:
             ax.plot([], [], color=COLOURS[b], label=b)
         ax.legend(fontsize=7, loc="upper right")

@@ -1,6 +1,7 @@
 """Ch. 6 wiring: the recharging task whose actions are the learned behaviours (6.5), and Experiment 1's flat learner.
 
-``BehaviourEnv`` wraps the world ``connrl.envs.robot.recharge.RechargeEnv`` (16 high-level inputs) and a behaviour
+``BehaviourEnv`` wraps the world ``connrl.envs.robot.recharge.RechargeEnv`` (16 high-level inputs; 14 with
+``xy=False``, Ch. 8) and a behaviour
 library (``connrl.tasks.behaviours``; the shipped one by default). Its action is a behaviour -- 0 DK, 1 DP, 2 WFL,
 3 WFR -- and each step applies ONE primitive step of that behaviour's greedy policy, chosen on the behaviour's own
 Ch. 5 observation of the current scan: the robot decides which behaviour to follow on every primitive step (6.5).
@@ -108,10 +109,10 @@ def make_recharge_env(p) -> BehaviourEnv:
                         success_reward=p.success_reward)
 
 
-def make_high_level_agent(p, rng: np.random.Generator) -> BehaviourQCON:
-    """Q(state, behaviour) of 6.5-6.6 from a Ch. 6 parameter set."""
+def make_high_level_agent(p, rng: np.random.Generator, n_inputs: int = HIGH_SIZE) -> BehaviourQCON:
+    """Q(state, behaviour) of 6.5-6.6 from a Ch. 6 parameter set (``n_inputs``: 14 without X-Y, Ch. 8)."""
     # Q in +-success_reward and T on Q / success_reward, so Exp. 4's reward of 500 keeps Exp. 3's choices (6.6.4)
-    net = NetConfig(HIGH_SIZE, p.hidden, value_range=p.success_reward, init_range=p.init_range, lr=p.lr,
+    net = NetConfig(n_inputs, p.hidden, value_range=p.success_reward, init_range=p.init_range, lr=p.lr,
                     momentum=p.momentum)
     replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
                                                                                 p.lessons_per_trial),

@@ -6,6 +6,7 @@ import pytest
 
 from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
 from connrl.agents.behaviour_level import BehaviourQCON
+from connrl.agents.memory import replay_recurrent_q
 from connrl.core.exploration import TemperatureSchedule
 from connrl.nets import NetConfig
 
@@ -115,3 +116,57 @@ def test_greedy_choice_draws_no_random_numbers():
     state = a.rng.bit_generator.state
     a.act(np.zeros(3), info([True, False, True, True]), greedy=True)
     assert a.rng.bit_generator.state == state
+
+
+# ------------------------------------------------------------------- Ch. 8: recurrent-Q over behaviours (8.3)
+
+def recurrent_agent(seed=0, t=0.05, target_max="applicable", persistence=True):
+    from connrl.agents.behaviour_level import BehaviourRecurrentQ
+    from connrl.agents.memory import RecurrentQConfig
+    from connrl.nets.recurrent import RecurrentNetConfig
+    cfg = RecurrentQConfig(net=RecurrentNetConfig(3, 5, 2, value_range=100.0, init_range=0.5, lr=0.08),
+                           temperature=TemperatureSchedule.direct(t, t, 10), gamma=0.99, lam=0.8,
+                           replay=ReplayConfig(capacity=10, lessons_per_trial=LinearSchedule(2, 2), p_threshold=0.0,
+                                               p_threshold_oldest=0.02, batch=True))
+    return BehaviourRecurrentQ(cfg, 4, np.random.default_rng(seed), persistence=persistence, target_max=target_max)
+
+
+def test_recurrent_choice_reads_the_context_the_chosen_behaviours_net_made():
+    a = recurrent_agent(t=10.0)
+    x0, x1 = np.array([0.5, -0.5, 0.1]), np.array([-0.5, 0.5, 0.3])
+    a.begin_trial(x0, info([True, True, False, True]), trial=0, learning=True)
+    b = a.act(x0, info([True, True, False, True]))
+    assert b != 2  # inapplicable: never chosen
+    # independent reference: the trial's sequence replayed from a zero context by the same weights
+    _, cs = a.net.forward_sequence(np.array([x0, x1]), np.array([b, 0]))
+    np.testing.assert_allclose(a.net.context, cs[1])
+    assert np.abs(cs[1]).sum() > 0
+
+
+def test_recurrent_replay_uses_the_kept_weights_and_applicability():
+    # W = (1, 0, 1, 1) at step 1 rules out the behaviour taken there, so Eq. 6.6 gives it probability 0 and it is not
+    # replayed; applicability (only 0 at x_2) bounds the target's max. Replaying without them must differ.
+    import copy
+
+    a = recurrent_agent(target_max="applicable", persistence=False)
+    xs = [np.array([0.1 * k, -0.2, 0.3]) for k in range(4)]
+    apps = [[True, True, True, True], [True, True, True, True], [True, False, False, False], [True, True, True, True]]
+    a.begin_trial(xs[0], info(apps[0]), trial=0, learning=True)
+    for k in range(3):
+        b = a.act(xs[k], info(apps[k]))
+        a.observe(b, 100.0 if k == 2 else 0.0, xs[k + 1], k == 2, False, info(apps[k + 1]))
+    a.end_trial()
+    lesson = a.book.memory.lessons[-1]
+    np.testing.assert_array_equal(lesson.meta["weights"], np.array(apps[:3], dtype=float))
+    np.testing.assert_array_equal(lesson.meta["applicable"], np.array(apps))
+    lesson.meta["weights"][1] = 1.0
+    lesson.meta["weights"][1, lesson.actions[1]] = 0.0  # as if step 1's choice had been ruled out
+    plain, kept = copy.deepcopy(a.net), copy.deepcopy(a.net)
+    params = a.replay_params(0.01)
+    assert replay_recurrent_q(plain, lesson, params) == 3  # without W and the mask: every step replayed
+    assert replay_recurrent_q(kept, lesson, params, lesson.meta["weights"], lesson.meta["applicable"]) == 2
+    a.replay_lesson(lesson, 0.01)
+    np.testing.assert_allclose(a.net.w1, kept.w1)
+    assert not np.allclose(a.net.w1, plain.w1)
+    with pytest.raises(ValueError, match="kept with each lesson"):
+        a.replay_lesson(lesson, 0.0, weights=np.ones((3, 4)))

@@ -13,6 +13,8 @@ from connrl.core.replay import (
     REPAIRS,
     ReplayParams,
     batch_targets,
+    is_policy_action,
+    policy_mask,
     repair_step,
     replay_ahc,
     replay_q,
@@ -132,6 +134,39 @@ def test_batch_targets_by_hand():
     # a truncated lesson bootstraps from the last input; lambda_returns agrees with p_threshold 0
     t2, w2 = batch_targets(values, actions, rewards, False, ReplayParams(gamma=0.9, lam=0.5))
     assert np.allclose(t2, lambda_returns(rewards, values[1:].max(1), 0.9, 0.5)) and w2.all()
+
+
+def test_batch_targets_with_weights_and_allowed_by_hand():
+    # Ch. 8's batch replay over behaviours: W of Eq. 6.6 decides the non-policy test, ``allowed`` the target's max.
+    values = np.array([[0.0, 0.0], [1.0, 3.0], [2.0, 0.5]])
+    actions, rewards = np.array([0, 1]), np.array([0.0, 0.0])
+    params = ReplayParams(gamma=0.5, lam=0.5, temperature=0.1, p_threshold=0.05)
+    # step 1: action 1 has P ~ 1 by exp(Q/T) alone; W = (1, 0) rules it out, so it is non-policy and cuts lambda
+    allowed = np.array([[1, 1], [1, 0], [0, 0]], dtype=bool)  # at x_1 only action 0; at x_2 none, so all
+    targets, policy = batch_targets(values, actions, rewards, False, params,
+                                    weights=np.array([[1.0, 1.0], [1.0, 0.0]]), allowed=allowed)
+    assert policy.tolist() == [True, False]
+    e1 = 0.0 + 0.5 * 2.0  # u_2 = max over all (none allowed)
+    e0 = 0.0 + 0.5 * 1.0  # u_1 = Q(x_1, 0), the one allowed; lambda cut by the non-policy step 1
+    assert np.allclose(targets, [e0, e1])
+    t_free, p_free = batch_targets(values, actions, rewards, False, params)
+    assert p_free.tolist() == [True, True] and np.isclose(t_free[0], 0.5 * (0.5 * 3.0 + 0.5 * t_free[1]))
+
+
+@pytest.mark.parametrize("weighted", [False, True])
+def test_policy_mask_equals_the_per_step_test(weighted):
+    rng = np.random.default_rng(4)
+    values, actions = rng.normal(0, 30, (200, 4)), rng.integers(0, 4, 200)
+    weights = rng.choice([0.0, 1.0, 100.0], (200, 4)) if weighted else None
+    if weighted:
+        weights[np.arange(200), actions] = np.maximum(weights[np.arange(200), actions], 1.0)
+        weights[::7, actions[::7]] = 0.0
+        weights[~(weights > 0).any(axis=1), 0] = 1.0
+    params = ReplayParams(gamma=0.9, temperature=5.0, p_threshold=0.02)
+    ref = [is_policy_action(values[t], int(actions[t]), params, None if weights is None else weights[t])
+           for t in range(200)]
+    mask = policy_mask(values, actions, params, weights)
+    assert mask.tolist() == ref and 0 < mask.sum() < 200
 
 
 def test_batch_targets_checks_shapes():

@@ -33,6 +33,23 @@ def test_changed_layout_differs_as_in_8_4():
     assert not set(in_a) & set(d.obstacles)  # both A obstacles moved
     for name, loc in c.locations.items():
         assert c.is_free(loc[0], loc[1]), name
+    assert set(d.obstacles) - set(c.obstacles) == set(d.obstacles[:2])  # B's obstacle stays, A's two moved
+    assert [c.doors[k].center[0] - d.doors[k].center[0] for k in "AB"] == [-36.0, 36.0]  # both doors shifted 36 in
+    assert [c.doors[k].width for k in "AB"] == [d.doors[k].width for k in "AB"]
+    for k, g in (("A", "4"), ("B", "5")):  # the hidden-state subgoals stay in front of the doors, as in default
+        assert c.subgoals[g][0] == c.doors[k].center[0] and c.room_at(*c.subgoals[g]) == "C"
+
+
+def test_changed_layout_is_solvable_from_every_room():
+    # the scripted recharging teacher (true pose, the layout's own route) docks from every room of the changed layout
+    import numpy as np
+
+    from connrl.envs.robot.recharge import RechargeEnv, sample_in_room
+    from connrl.envs.robot.teachers import teach_chg
+    env, rng = RechargeEnv(layout="changed"), np.random.default_rng(0)
+    for room in "ABC":
+        for k in range(2):
+            assert teach_chg(env, sample_in_room(rng, env.layout, room), seed=k)[-1][4], room
 
 
 def test_layout_errors_are_clear():

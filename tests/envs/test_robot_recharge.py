@@ -12,7 +12,7 @@ from connrl.envs.robot.recharge import FLAT_SIZE, ROOMS, RechargeEnv, global_son
 from connrl.envs.robot.sim import Reading
 
 
-@pytest.mark.parametrize("env_id", ["connrl/Robot-CHG-v0", "connrl/Robot-CHG-Flat-v0"])
+@pytest.mark.parametrize("env_id", ["connrl/Robot-CHG-v0", "connrl/Robot-CHG-Flat-v0", "connrl/Robot-CHG-NoXY-v0"])
 def test_check_env(env_id):
     check_env(gym.make(env_id).unwrapped, skip_render_check=True)
 
@@ -121,3 +121,20 @@ def test_step_scale_shrinks_moves_and_turns_and_the_reward_is_settable():
     for bad in ({"step_scale": 0.0}, {"step_scale": 1.5}, {"success_reward": 0.0}):
         with pytest.raises(ValueError, match=next(iter(bad))):
             RechargeEnv(**bad)
+
+
+def test_without_xy_the_inputs_are_the_first_14_and_the_two_doorways_look_nearly_alike():
+    with_xy, no_xy = RechargeEnv(obs="high"), RechargeEnv(obs="high", xy=False)
+    a, _ = with_xy.reset(seed=5)
+    b, _ = no_xy.reset(seed=5)
+    assert no_xy.observation_space.shape == (14,) and b.shape == (14,)
+    np.testing.assert_array_equal(a[:14], b)
+    # the Ch. 8 hidden state: facing north in front of each doorway (Fig. 5.3's L3 and L4, subgoals 4 and 5), the
+    # noise-free 14 inputs differ only in the west/east sonar units, by less than the sonar noise makes them vary
+    env = RechargeEnv(obs="high", xy=False, noise=False)
+    views = [env.reset(seed=0, options={"start": tuple(env.layout.locations[k])})[0] for k in ("L3", "L4")]
+    d = np.abs(views[0] - views[1])
+    assert d[8:].max() == 0.0 and 0 < d.max() < 0.1
+    assert RechargeEnv(obs="flat", xy=False).observation_space.shape == (FLAT_SIZE - 2,)
+    with pytest.raises(ValueError, match="xy must be"):
+        RechargeEnv(xy="no")

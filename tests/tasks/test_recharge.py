@@ -12,8 +12,9 @@ from connrl.tasks.behaviours import load_library
 from connrl.tasks.recharge import BehaviourEnv
 
 
-def test_check_env():
-    check_env(gym.make("connrl/Robot-CHG-Behaviours-v0").unwrapped, skip_render_check=True)
+@pytest.mark.parametrize("env_id", ["connrl/Robot-CHG-Behaviours-v0", "connrl/Robot-CHG-Behaviours-NoXY-v0"])
+def test_check_env(env_id):
+    check_env(gym.make(env_id).unwrapped, skip_render_check=True)
 
 
 @pytest.mark.parametrize("b, task", [(0, "DK"), (1, "DP"), (2, "WFL"), (3, "WFR")])

@@ -11,10 +11,11 @@ Observation (``obs="high"`` or ``"flat"``):
     - "high" (16, 6.4.2, :func:`high_level_inputs`): 8 sonar units in *global* coordinates (unit j averages the
       readings whose direction lies within +-22.5 deg of compass bearing 90 + 45 j deg, i.e. north first, then
       counter-clockwise, encoded as Ch. 5's sonar), 3 bits (any collision, any light, any door edge), 3 room bits
-      (A, B, C), 2 X-Y units (x / width - 0.5, y / height - 0.5).
+      (A, B, C), 2 X-Y units (x / width - 0.5, y / height - 0.5). With ``xy=False`` (Ch. 8, 8.1) the 14 units
+      without the X-Y pair: the doorways from room C into A and into B then look alike (a hidden state).
     - "flat" (100, Exp. 1, 6.6.1): every elementary input once -- 24 robot-centred sonar, 24 light, 24 door-edge,
-      4 collision, 2 parallelism, 6 clearance bits -- then the 16 high-level units. The thesis counts 102; it does
-      not list them, and ours holds each input once.
+      4 collision, 2 parallelism, 6 clearance bits -- then the 16 (``xy=False``: 14) high-level units. The thesis
+      counts 102; it does not list them, and ours holds each input once.
     ``info["task_obs"]`` always carries the four elementary observations of the same scan (DK, DP, WFL, WFR: Ch. 5's
     encodings), so behaviours can act on their own inputs.
 
@@ -27,6 +28,8 @@ Episode End: ``terminated`` on docking; ``truncated`` after ``max_steps`` (200, 
 
 ``step_scale`` shrinks every primitive action (Experiment 4, 6.6.4: one fifth, "the robot could move 12 inches
 forward in a single step, while here it could only move 2.4 inches"; turns shrink alike).
+
+``xy=False`` drops the 2 X-Y units (Ch. 8, 8.1); ``layout="changed"`` is 8.4's changed environment.
 
 Differences from the thesis: the X-Y scaling, the global sonar sectors, the uniform choice of start room and the
 flat input's size (100, not 102) are ours (docs/RECONSTRUCTION.md, "Recharging (Ch. 6)").
@@ -47,6 +50,7 @@ from connrl.envs.robot.tasks import R_SUCCESS, _fill_obs, _rejection, _side_feat
 
 ROOMS = ("A", "B", "C")
 HIGH_SIZE = 16
+HIGH_SIZE_NO_XY = 14  # Ch. 8 (8.1): the high-level inputs without X-Y
 FLAT_SIZE = 24 + 24 + 24 + 4 + 2 + 6 + HIGH_SIZE
 BEHAVIOUR_TASKS = ("DK", "DP", "WFL", "WFR")
 
@@ -59,8 +63,9 @@ def global_sonar(sonar: np.ndarray, heading: float) -> np.ndarray:
     return np.bincount(sector, weights=sonar, minlength=8) / np.bincount(sector, minlength=8)
 
 
-def high_level_inputs(rd: Reading, x: float, y: float, layout: Layout, low: float = -0.5) -> np.ndarray:
-    """The 16 units of 6.4.2 from one scan and the position (see the module docstring)."""
+def high_level_inputs(rd: Reading, x: float, y: float, layout: Layout, low: float = -0.5,
+                      xy: bool = True) -> np.ndarray:
+    """The 16 units of 6.4.2 from one scan and the position, or the first 14 without X-Y (module docstring)."""
     high = low + 1.0
     w, h = layout.size
     out = np.empty(HIGH_SIZE, dtype=np.float32)
@@ -69,7 +74,7 @@ def high_level_inputs(rd: Reading, x: float, y: float, layout: Layout, low: floa
                  high if rd.door_edge.any() else low]
     out[11:14] = [high if rd.room == r else low for r in ROOMS]
     out[14:16] = [x / w - 0.5, y / h - 0.5]
-    return out
+    return out if xy else out[:HIGH_SIZE_NO_XY].copy()
 
 
 def task_observations(rd: Reading, low: float = -0.5) -> dict[str, np.ndarray]:
@@ -102,7 +107,7 @@ class RechargeEnv(gym.Env):
     def __init__(self, layout: Layout | str = "default", obs: str = "high", max_steps: int = 200,
                  start_room: str | None = None, collision_penalty: float = 0.0, dock_tolerance: float = 30.0,
                  binary_low: float = -0.5, edge_jump: float = DOOR_EDGE_JUMP, noise: bool = True,
-                 step_scale: float = 1.0, success_reward: float = R_SUCCESS):
+                 step_scale: float = 1.0, success_reward: float = R_SUCCESS, xy: bool = True):
         if obs not in ("high", "flat"):
             raise ValueError(f"obs must be 'high' (16 units, 6.4.2) or 'flat' (100, Exp. 1), got {obs!r}")
         if start_room is not None and start_room not in ROOMS:
@@ -113,14 +118,16 @@ class RechargeEnv(gym.Env):
             raise ValueError(f"collision_penalty must be a finite number <= 0, got {collision_penalty!r}")
         if not (math.isfinite(success_reward) and success_reward > 0):
             raise ValueError(f"success_reward must be a finite number > 0, got {success_reward!r}")
-        self.success_reward = float(success_reward)
+        if not isinstance(xy, bool):
+            raise ValueError(f"xy must be True (X-Y inputs, Ch. 6) or False (none, Ch. 8), got {xy!r}")
+        self.success_reward, self.xy = float(success_reward), xy
         self.layout = layout if isinstance(layout, Layout) else Layout.load(layout)
         self.obs_mode, self.max_steps, self.start_room = obs, int(max_steps), start_room
         self.collision_penalty, self.dock_tolerance = float(collision_penalty), float(dock_tolerance)
         self.binary_low = float(binary_low)
         self.sim = RobotSim(self.layout, np.random.default_rng(), sensor_noise=noise, control_noise=noise,
                             edge_jump=edge_jump, step_scale=step_scale)
-        n = HIGH_SIZE if obs == "high" else FLAT_SIZE
+        n = (HIGH_SIZE if obs == "high" else FLAT_SIZE) - (0 if xy else HIGH_SIZE - HIGH_SIZE_NO_XY)
         lo, hi = min(self.binary_low, -0.5), max(self.binary_low + 1.0, 1.0)
         self.observation_space = spaces.Box(np.full(n, lo, np.float32), np.full(n, hi, np.float32), dtype=np.float32)
         self.action_space = spaces.Discrete(N_ACTIONS)
@@ -134,7 +141,7 @@ class RechargeEnv(gym.Env):
 
     def _observe(self, rd: Reading):
         x, y, _ = self.sim.pose
-        top = high_level_inputs(rd, x, y, self.layout, self.binary_low)
+        top = high_level_inputs(rd, x, y, self.layout, self.binary_low, self.xy)
         tasks = task_observations(rd, self.binary_low)
         if self.obs_mode == "high":
             return top, tasks

@@ -1,0 +1,169 @@
+"""Ch. 8: recharging without the X-Y position, by recurrent-Q over learned behaviours (Fig. 8.1), the changed
+environment (8.4, Fig. 8.2) and the hidden state the recurrent context resolves.
+
+Protocol: Ch. 6's (``connrl.experiments.recharge.run_rooms``: 150 trials, greedy tests on fixed tasks per start room
+before the first trial and after every 10) on the behaviour-level task with the 14 high-level inputs, the X-Y pair
+dropped (8.1). Experiment 1 is Ch. 6 Experiment 3's learner and parameters unchanged (8.2). Experiment 2 (8.3) uses
+recurrent Q-nets (``connrl.agents.behaviour_level.BehaviourRecurrentQ``): lr 0.08, 12 hidden and 8 context units,
+batch-mode replay (one BPTT step per replayed lesson), about 100 lessons per trial, gamma 0.99, lambda 0.8. A third
+curve, Ch. 6 Experiment 3 itself (with X-Y), is run on the same seeds, as Fig. 8.1 shows it.
+
+After the last trial, learning off (Experiment 3, 8.4): the final policy on ``final_tests_per_room`` fresh tasks per
+start room in the original layout and in the changed one (``connrl/data/layouts/changed.json``), the behaviours
+unchanged: the share docked and the primitive steps of the docked trials, per room; one solution path per room in
+the changed layout. From the same original-layout trials, the hidden-state probe: every step taken in room C within
+``PROBE_RADIUS`` of subgoal 4 (in front of door A) or 5 (door B), with its inputs, Q-values, the behaviour chosen and
+(recurrent) the context units that produced them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from connrl.envs.robot import Layout
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, sample_in_room
+from connrl.experiments.recharge import PROFILES, QUANTITIES, RANGES, RechargeParams, run_rooms
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
+from connrl.tasks.integration import make_integration_agent, make_integration_env
+from connrl.tasks.recharge import TARGET_MAX, BehaviourEnv
+
+MEMORY = ("none", "recurrent")
+PROBE_RADIUS = 30.0  # in: "at subgoal 4 / 5" (R)
+LAYOUTS = ("default", "changed")
+
+
+@dataclass(frozen=True)
+class IntegrationParams(RechargeParams):
+    """One Ch. 8 run: Ch. 6 Experiment 3's parameters (``RechargeParams``) without X-Y, and the memory used."""
+
+    xy: bool = False  # the 2 X-Y inputs (Ch. 6) or none (Ch. 8, 8.1)
+    memory: str = "none"  # "none": Exp. 1's memoryless Q-nets (8.2); "recurrent": Exp. 2's recurrent-Q (8.3)
+    context: int = 8  # context units of the recurrent Q-nets (8.3); memory="none" has none
+    share_output: bool = False  # the recurrent nets share their hidden->output connections (7.4: "tends to help")
+    final_tests_per_room: int = 20  # Exp. 3: fresh tasks per start room in each layout after the last trial (R)
+    probe_samples: int = 300  # at most this many near-door steps kept per run for the hidden-state probe (R)
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_types(self, {**RANGES, "context": ">=0", "final_tests_per_room": ">=1", "probe_samples": ">=0"},
+                    target_max=TARGET_MAX, memory=MEMORY)
+        if self.memory == "recurrent" and self.context > self.hidden:
+            raise ValueError(f"parameter context must be at most hidden ({self.hidden}): context units copy hidden "
+                             f"units (7.4), got {self.context}")
+        if self.pretrain_steps or (self.grouping and self.memory == "recurrent"):
+            raise ValueError("parameters pretrain_steps (Ch. 6 Exp. 5) and grouping with memory='recurrent' are not "
+                             "built for Ch. 8: use pretrain_steps=0, and grouping only with memory='none'")
+        if self.memory == "recurrent" and self.online:
+            raise ValueError("parameter online must be False with memory='recurrent': the recurrent nets learn only by "
+                             "batch replay (7.5, 8.3)")
+        if self.memory == "none" and self.share_output:
+            raise ValueError("parameter share_output applies to memory='recurrent' only")
+
+
+def _near_door(layout: Layout, pose) -> str | None:
+    """"A" or "B" when ``pose`` is in room C within PROBE_RADIUS of subgoal 4 (door A) or 5 (door B)."""
+    if layout.room_at(pose[0], pose[1]) != "C":
+        return None
+    for door, g in (("A", "4"), ("B", "5")):
+        gx, gy = layout.subgoals[g]
+        if np.hypot(pose[0] - gx, pose[1] - gy) <= PROBE_RADIUS:
+            return door
+    return None
+
+
+def greedy_trial(env: BehaviourEnv, agent, start, seed: int, probe: list | None = None, trial_id: int = 0):
+    """One test trial (learning off, greedy); returns (docked, steps, poses, behaviours). With ``probe``, appends each
+    near-door step's record (the pose before the choice), tagged ``trial_id``."""
+    obs, info = env.reset(seed=seed, options={"start": start})
+    agent.begin_trial(obs, info, trial=0, learning=False)
+    layout, room0, chosen = env.world.layout, info["room"], []
+    while True:
+        pose = env.world.sim.pose
+        context = agent.net.context.copy() if hasattr(agent, "net") else None  # c_t, which the choice reads
+        b = agent.act(obs, info, greedy=True)
+        door = _near_door(layout, pose) if probe is not None else None
+        if door is not None:
+            probe.append({"door": door, "start_room": room0, "trial": trial_id, "behaviour": b,
+                          "x": np.round(obs, 4).tolist(), "q": np.round(agent.last_q, 3).tolist(),
+                          **({"context": np.round(context, 4).tolist()} if context is not None else {})})
+        obs, _, terminated, truncated, info = env.step(b)
+        chosen.append(BEHAVIOUR_TASKS[b])
+        if terminated or truncated:
+            break
+    agent.end_trial()
+    return bool(info["success"]), len(chosen), env.trace, chosen
+
+
+def final_tests(p: IntegrationParams, agent, rng: np.random.Generator) -> tuple[dict, dict]:
+    """Experiment 3 and the probe (module docstring): metrics, and extra records (changed-layout paths, probe)."""
+    metrics, extra, tid = {}, {"changed_paths": [], "probe": []}, 0
+    for name in LAYOUTS:
+        env = make_integration_env(p, name)
+        for room in ROOMS:
+            docked, steps = 0, []
+            for k in range(p.final_tests_per_room):
+                start = sample_in_room(rng, env.world.layout, room)
+                ok, n, trace, chosen = greedy_trial(env, agent, start, int(rng.integers(2**31)),
+                                                    extra["probe"] if name == "default" else None, tid)
+                tid += 1
+                docked += ok
+                steps += [n] if ok else []
+                if name == "changed" and k == 0:  # Fig. 8.2: one solution path per start room
+                    extra["changed_paths"].append({"room": room, "success": ok, "behaviours": chosen,
+                                                   "poses": [[round(v, 1) for v in pose] for pose in trace]})
+            metrics[f"{name}_docked_{room}"] = docked / p.final_tests_per_room
+            metrics[f"{name}_steps_{room}"] = float(np.mean(steps)) if steps else None
+    probe = extra["probe"]
+    if len(probe) > p.probe_samples:  # keep the run record small: a random subsample, kept in order
+        keep = rng.choice(len(probe), p.probe_samples, replace=False)
+        extra["probe"] = [probe[i] for i in sorted(keep)]
+    return metrics, extra
+
+
+def run_integration(p: IntegrationParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
+    final_rng = rng.spawn(1)[0]  # the same final tasks for every learner of a seed; ``rng``'s stream is not moved
+    result, agent = run_rooms(p, rng, make_integration_env, make_integration_agent, progress)
+    if p.grouping:
+        result.metrics["mean_group_size"] = agent.grouped_steps / max(agent.groups, 1)
+    metrics, extra = final_tests(p, agent, final_rng)
+    result.metrics.update(metrics)
+    result.extra.update(extra)
+    return result
+
+
+def _q(name, text, better="higher", section="8.4"):
+    return Quantity(name, text, better, section)
+
+
+FINAL = tuple(_q(f"{layout}_{what}_{r}", f"{text} from room {r}, {where}, learning off", better)
+              for layout, where in (("default", "original layout"), ("changed", "changed layout (8.4)"))
+              for what, text, better in (("docked", "share of fresh tasks docked", "higher"),
+                                         ("steps", "mean primitive steps of the docked ones", "lower"))
+              for r in ROOMS)
+
+CH8 = {"xy": False, "paths": 1}
+RECURRENT = {"memory": "recurrent", "lr": 0.08, "hidden": 12, "context": 8, "lessons_per_trial": 100,  # 8.3
+             "online": False}
+EXPERIMENTS = [
+    ExperimentSpec(
+        name="integration", title="Exps 1-3: recharging without X-Y, memoryless and with recurrent Q-nets; the "
+        "changed environment", section="8.2-8.4 Figs. 8.1, 8.2", run="connrl.experiments.integration:run_integration",
+        params=override(IntegrationParams(), CH8, "experiment integration"),
+        profiles={**PROFILES, "tiny": {**PROFILES["tiny"], "final_tests_per_room": 1, "probe_samples": 5}},
+        variants=(Variant("Ch. 6 Exp. 3 (with X-Y)", {"xy": True}),
+                  Variant("Exp. 1: memoryless, no X-Y", {}),
+                  Variant("Exp. 2: recurrent-Q, no X-Y", RECURRENT),
+                  # diagnostics (not in the thesis): the recurrent learner with nothing hidden, and at a quarter of
+                  # the thesis's learning rate (batch steps summed over a lesson of up to 200 steps)
+                  Variant("recurrent-Q with X-Y (diagnostic)", {**RECURRENT, "xy": True}),
+                  Variant("recurrent-Q, no X-Y, lr 0.02 (diagnostic)", {**RECURRENT, "lr": 0.02})),
+        quantities=(*QUANTITIES, *FINAL), x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
+        description="Ch. 6 Exp. 3's protocol and parameters on the 14 inputs without X-Y; Exp. 2: recurrent Q-nets, lr "
+                    "0.08, 12 hidden, 8 context units, batch replay, ~100 lessons per trial; after the last trial each "
+                    "policy is tested, learning off, in the original and the changed layout; thesis: memoryless "
+                    "generally fails from room B, recurrent-Q acceptably good after 150 trials and docking in the "
+                    "changed layout without further training"),
+]
+

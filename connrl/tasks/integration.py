@@ -1,0 +1,45 @@
+"""Ch. 8 wiring: the behaviour-level recharging task without X-Y (8.1), in the original or the changed layout (8.4),
+and its two high-level learners -- Ch. 6 Experiment 3's memoryless Q-nets on 14 inputs (8.2) and recurrent Q-nets
+over behaviours (8.3, ``connrl.agents.behaviour_level.BehaviourRecurrentQ``). ``p`` is a Ch. 8 parameter set
+(``connrl.experiments.integration.IntegrationParams``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from connrl.agents import LinearSchedule, ReplayConfig
+from connrl.agents.behaviour_level import BehaviourRecurrentQ
+from connrl.agents.memory import RecurrentQConfig
+from connrl.core.exploration import TemperatureSchedule
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, HIGH_SIZE, HIGH_SIZE_NO_XY
+from connrl.nets.recurrent import RecurrentNetConfig
+from connrl.tasks.recharge import BehaviourEnv, _shipped_library, make_high_level_agent
+
+
+def n_inputs(p) -> int:
+    return HIGH_SIZE if p.xy else HIGH_SIZE_NO_XY
+
+
+def make_integration_env(p, layout: str = "default") -> BehaviourEnv:
+    return BehaviourEnv(_shipped_library(), max_steps=p.max_steps, step_scale=p.step_scale,
+                        success_reward=p.success_reward, xy=p.xy, layout=layout)
+
+
+def make_recurrent_agent(p, rng: np.random.Generator) -> BehaviourRecurrentQ:
+    """Experiment 2's learner (8.3): Ch. 6's choice over behaviours with recurrent Q-nets and batch replay."""
+    net = RecurrentNetConfig(n_inputs(p), p.hidden, p.context, value_range=p.success_reward, init_range=p.init_range,
+                             lr=p.lr, momentum=p.momentum, share_output=p.share_output)
+    replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
+                                                                                p.lessons_per_trial),
+                          p_threshold=0.0, p_threshold_oldest=p.p_oldest, batch=True)
+    cfg = RecurrentQConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials),
+                           gamma=p.gamma, lam=p.lam, replay=replay)
+    return BehaviourRecurrentQ(cfg, len(BEHAVIOUR_TASKS), rng, persistence=p.persistence,
+                               merit_scale=p.success_reward, target_max=p.target_max)
+
+
+def make_integration_agent(p, rng: np.random.Generator):
+    """Experiment 1's memoryless or Experiment 2's recurrent learner, as ``p.memory`` says."""
+    if p.memory == "recurrent":
+        return make_recurrent_agent(p, rng)
+    return make_high_level_agent(p, rng, n_inputs=n_inputs(p))
