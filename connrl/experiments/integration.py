@@ -11,7 +11,8 @@ curve, Ch. 6 Experiment 3 itself (with X-Y), is run on the same seeds, as Fig. 8
 After the last trial, learning off (Experiment 3, 8.4): the final policy on ``final_tests_per_room`` fresh tasks per
 start room in the original layout and in the changed one (``connrl/data/layouts/changed.json``), the behaviours
 unchanged: the share docked and the primitive steps of the docked trials, per room; one solution path per room in
-the changed layout. From the same original-layout trials, the hidden-state probe: every step taken in room C within
+the changed layout, and the first docking from room B in the original one. From the same original-layout trials, the
+hidden-state probe: every step taken in room C within
 ``PROBE_RADIUS`` of subgoal 4 (in front of door A) or 5 (door B), with its inputs, Q-values, the behaviour chosen and
 (recurrent) the context units that produced them.
 """
@@ -96,13 +97,19 @@ def greedy_trial(env: BehaviourEnv, agent, start, seed: int, probe: list | None 
     return bool(info["success"]), len(chosen), env.trace, chosen
 
 
+def _legs(layout: Layout, trace) -> tuple[bool, bool, int]:
+    """(entered C, entered A, passes from C back into B) along a trial's poses."""
+    rooms = [r for r in (layout.room_at(x, y) for x, y, _ in trace) if r is not None]
+    return "C" in rooms, "A" in rooms, sum(a == "C" and b == "B" for a, b in zip(rooms[:-1], rooms[1:], strict=True))
+
+
 def final_tests(p: IntegrationParams, agent, rng: np.random.Generator) -> tuple[dict, dict]:
     """Experiment 3 and the probe (module docstring): metrics, and extra records (changed-layout paths, probe)."""
     metrics, extra, tid = {}, {"changed_paths": [], "probe": []}, 0
     for name in LAYOUTS:
         env = make_integration_env(p, name)
         for room in ROOMS:
-            docked, steps = 0, []
+            docked, steps, legs = 0, [], []
             for k in range(p.final_tests_per_room):
                 start = sample_in_room(rng, env.world.layout, room)
                 ok, n, trace, chosen = greedy_trial(env, agent, start, int(rng.integers(2**31)),
@@ -110,11 +117,19 @@ def final_tests(p: IntegrationParams, agent, rng: np.random.Generator) -> tuple[
                 tid += 1
                 docked += ok
                 steps += [n] if ok else []
+                legs.append(_legs(env.world.layout, trace))
+                path = {"room": room, "success": ok, "behaviours": chosen,
+                        "poses": [[round(v, 1) for v in pose] for pose in trace]}
                 if name == "changed" and k == 0:  # Fig. 8.2: one solution path per start room
-                    extra["changed_paths"].append({"room": room, "success": ok, "behaviours": chosen,
-                                                   "poses": [[round(v, 1) for v in pose] for pose in trace]})
+                    extra["changed_paths"].append(path)
+                if name == "default" and room == "B" and ok and "b_solution" not in extra:
+                    extra["b_solution"] = path  # the first docking from room B, for the story picture
             metrics[f"{name}_docked_{room}"] = docked / p.final_tests_per_room
             metrics[f"{name}_steps_{room}"] = float(np.mean(steps)) if steps else None
+            if room == "B":  # where room B's tests fail: leaving B, crossing C to door A, or back through door B
+                metrics[f"{name}_B_reached_C"] = float(np.mean([g[0] for g in legs]))
+                metrics[f"{name}_B_reached_A"] = float(np.mean([g[1] for g in legs]))
+                metrics[f"{name}_B_returns"] = float(np.mean([g[2] for g in legs]))
     probe = extra["probe"]
     if len(probe) > p.probe_samples:  # keep the run record small: a random subsample, kept in order
         keep = rng.choice(len(probe), p.probe_samples, replace=False)
@@ -137,6 +152,11 @@ def _q(name, text, better="higher", section="8.4"):
     return Quantity(name, text, better, section)
 
 
+LEGS = tuple(_q(f"{layout}_B_{what}", f"{text}, {where}, learning off", better)
+             for layout, where in (("default", "original layout"), ("changed", "changed layout (8.4)"))
+             for what, text, better in (("reached_C", "share of room-B tasks that reach room C", "higher"),
+                                        ("reached_A", "share of room-B tasks that reach room A", "higher"),
+                                        ("returns", "passes from C back into B per room-B task", "lower")))
 FINAL = tuple(_q(f"{layout}_{what}_{r}", f"{text} from room {r}, {where}, learning off", better)
               for layout, where in (("default", "original layout"), ("changed", "changed layout (8.4)"))
               for what, text, better in (("docked", "share of fresh tasks docked", "higher"),
@@ -159,7 +179,8 @@ EXPERIMENTS = [
                   # the thesis's learning rate (batch steps summed over a lesson of up to 200 steps)
                   Variant("recurrent-Q with X-Y (diagnostic)", {**RECURRENT, "xy": True}),
                   Variant("recurrent-Q, no X-Y, lr 0.02 (diagnostic)", {**RECURRENT, "lr": 0.02})),
-        quantities=(*QUANTITIES, *FINAL), x_label="trials", y_label="reinforcement per primitive step (greedy tests)",
+        quantities=(*QUANTITIES, *FINAL, *LEGS), x_label="trials",
+        y_label="reinforcement per primitive step (greedy tests)",
         description="Ch. 6 Exp. 3's protocol and parameters on the 14 inputs without X-Y; Exp. 2: recurrent Q-nets, lr "
                     "0.08, 12 hidden, 8 context units, batch replay, ~100 lessons per trial; after the last trial each "
                     "policy is tested, learning off, in the original and the changed layout; thesis: memoryless "

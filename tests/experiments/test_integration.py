@@ -24,6 +24,14 @@ def test_bad_parameters_are_refused(kw, message):
         IntegrationParams(**kw)
 
 
+def test_legs_of_a_trial_by_hand():
+    from connrl.experiments.integration import _legs
+    L = Layout.load("default")
+    b, c, a = (300.0, 60.0, 0.0), (246.0, 330.0, 0.0), (60.0, 100.0, 0.0)
+    assert _legs(L, [b, c, b, b, c, c, b]) == (True, False, 2)  # out into C and back through door B twice
+    assert _legs(L, [b, c, a]) == (True, True, 0) and _legs(L, [b, b]) == (False, False, 0)
+
+
 def test_near_door_regions_by_hand():
     L = Layout.load("default")  # subgoal 4 (114, 330) in front of door A, 5 (246, 330) in front of door B
     assert _near_door(L, (114.0, 330.0, 90.0)) == "A" and _near_door(L, (246.0, 355.0, 0.0)) == "B"
