@@ -57,7 +57,9 @@ def draw_story(records: list[dict], ch6_label: str, ch8_label: str, file: Path) 
         path = _b_path(records, label)
         if path is not None:
             _segments(ax, path["poses"], path["behaviours"])
-            title += f"\nfrom room B: {'docked' if path['success'] else 'not docked'}, {len(path['behaviours'])} steps"
+            share = np.mean([r["metrics"].get("default_docked_B") or 0.0 for r in records if r["variant"] == label])
+            done = "docked" if path["success"] else "not docked"
+            title += f"\nfrom room B: {done}, {len(path['behaviours'])} steps ({share:.0%} of its room-B tests dock)"
         ax.set_title(title, fontsize=9)
     for b in BEHAVIOUR_TASKS:
         axes[2].plot([], [], color=COLOURS[b], label=b)

@@ -48,3 +48,14 @@ def test_chapter_8_section_from_tiny_runs(tmp_path):
         assert row in md
     for fig in ("integration-changed-paths", "integration-hidden-state", "robot-story"):
         assert (doc.parent / "figures" / f"{fig}.png").exists()
+
+
+def test_solution_paths_take_per_room_the_first_docked_run():
+    def rec(seed, docked, label=ri.RECURRENT):
+        paths = [{"room": r, "success": ok, "poses": [[0, 0, 0]], "behaviours": []}
+                 for r, ok in zip("ABC", docked, strict=True)]
+        return {"seed": seed, "variant": label, "extra": {"changed_paths": paths}}
+
+    records = [rec(1, (False, True, False)), rec(0, (True, False, False)), rec(2, (True, True, True), ri.CH6)]
+    picked = ri.solution_paths(records, ri.RECURRENT)
+    assert [(p["room"], p["seed"], p["success"]) for p in picked] == [("A", 0, True), ("B", 1, True), ("C", 0, False)]
