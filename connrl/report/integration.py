@@ -178,10 +178,11 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
         by_label = {label: [r["extra"].get("probe", []) for r in records if r["variant"] == label]
                     for label in summary["variants"]}
         lines += ["### The hidden state made visible", "",
-                  "Every step of the final greedy tests (original layout) taken in room C within 30 in of subgoal 4 "
-                  "(in front of door A) or 5 (door B). DP is right at door A; at door B it takes a robot that came "
-                  "from room B straight back. The probe is a linear classifier of the doorway fitted within each run "
-                  "and scored on held-out trials (chance 0.5; connrl.report.integration_probe):", "",
+                  "The steps of the final greedy tests (original layout) taken in room C within 30 in of subgoal 4 "
+                  "(in front of door A) or 5 (door B), at most 300 per run (a random subsample). DP is right at door "
+                  "A; at door B it takes a robot that came from room B straight back. The probe is a linear "
+                  "classifier of the doorway fitted within each run and scored on held-out trials (chance 0.5; "
+                  "connrl.report.integration_probe):", "",
                   *probe_table(by_label), ""]
         png = draw_probe(by_label, RECURRENT, out_dir / spec.name / "hidden-state.png")
         if png is not None:

@@ -12,7 +12,7 @@ Observation (``obs="high"`` or ``"flat"``):
       readings whose direction lies within +-22.5 deg of compass bearing 90 + 45 j deg, i.e. north first, then
       counter-clockwise, encoded as Ch. 5's sonar), 3 bits (any collision, any light, any door edge), 3 room bits
       (A, B, C), 2 X-Y units (x / width - 0.5, y / height - 0.5). With ``xy=False`` (Ch. 8, 8.1) the 14 units
-      without the X-Y pair: the doorways from room C into A and into B then look alike (a hidden state).
+      without the X-Y pair: the doorways from room C into A and into B then look nearly alike (a hidden state).
     - "flat" (100, Exp. 1, 6.6.1): every elementary input once -- 24 robot-centred sonar, 24 light, 24 door-edge,
       4 collision, 2 parallelism, 6 clearance bits -- then the 16 (``xy=False``: 14) high-level units. The thesis
       counts 102; it does not list them, and ours holds each input once.
