@@ -143,6 +143,20 @@ def _ratio(a, b):
     return a / b if a is not None and b else None
 
 
+def hidden_state_lines(summary: dict, records: list[dict], folder: Path, doc: Path) -> list[str]:
+    """The doorway probe's table and figure (``connrl.report.integration_probe``)."""
+    by_label = {label: [r["extra"].get("probe", []) for r in records if r["variant"] == label]
+                for label in summary["variants"]}
+    lines = ["### The hidden state made visible", "",
+             "The steps of the final greedy tests (original layout) taken in room C within 30 in of subgoal 4 "
+             "(in front of door A) or 5 (door B), at most 300 per run (a random subsample). DP is right at door "
+             "A; at door B it takes a robot that came from room B straight back. The probe is a linear "
+             "classifier of the doorway fitted within each run and scored on held-out trials (chance 0.5; "
+             "connrl.report.integration_probe):", "", *probe_table(by_label), ""]
+    png = draw_probe(by_label, RECURRENT, folder / "hidden-state.png")
+    return lines + ([figure(png, doc, "integration-hidden-state"), ""] if png is not None else [])
+
+
 def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
     out_dir, doc = Path(out_dir), Path(doc)
     spec, beh_spec = integration.EXPERIMENTS[0], steps.EXPERIMENTS[0]
@@ -175,18 +189,7 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
                       "room, the first run (by seed) whose first final test from that room docked, else the first "
                       f"run's path ({seeds}):", "",
                       figure(png, doc, f"{spec.name}-changed-paths"), ""]
-        by_label = {label: [r["extra"].get("probe", []) for r in records if r["variant"] == label]
-                    for label in summary["variants"]}
-        lines += ["### The hidden state made visible", "",
-                  "The steps of the final greedy tests (original layout) taken in room C within 30 in of subgoal 4 "
-                  "(in front of door A) or 5 (door B), at most 300 per run (a random subsample). DP is right at door "
-                  "A; at door B it takes a robot that came from room B straight back. The probe is a linear "
-                  "classifier of the doorway fitted within each run and scored on held-out trials (chance 0.5; "
-                  "connrl.report.integration_probe):", "",
-                  *probe_table(by_label), ""]
-        png = draw_probe(by_label, RECURRENT, out_dir / spec.name / "hidden-state.png")
-        if png is not None:
-            lines += [figure(png, doc, f"{spec.name}-hidden-state"), ""]
+        lines += hidden_state_lines(summary, records, out_dir / spec.name, doc)
         story = draw_story(records, CH6, RECURRENT, out_dir / spec.name / "story.png")
         if story is not None:
             lines += ["The robot story in one picture (README): behaviours, the hierarchy over them, and a recurrent "
