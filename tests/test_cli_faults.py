@@ -247,7 +247,8 @@ def _run_with_two_workers(out: Path) -> tuple[subprocess.Popen, list[int]]:
     process group, once both worker processes run."""
     parent = subprocess.Popen([sys.executable, "-m", "connrl.cli", "run", "pole-full-ahc", "--profile", "full",
                                "--out", str(out), "--workers", "2", "--quiet"], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.PIPE, start_new_session=True)
+                              stderr=subprocess.PIPE, start_new_session=True,
+                              env={**os.environ, "PYTHONFAULTHANDLER": "1"})  # SIGABRT dumps its stacks
     deadline = time.time() + 120
     workers: list[int] = []
     while time.time() < deadline and len(workers) < 2:
@@ -402,7 +403,12 @@ def test_ctrl_c_stops_the_runs_in_flight_and_keeps_what_finished(tmp_path):
     try:
         start = time.time()
         parent.send_signal(signal.SIGINT)
-        _, err = parent.communicate(timeout=60)
+        try:
+            _, err = parent.communicate(timeout=60)
+        except subprocess.TimeoutExpired:  # say where it hangs: faulthandler prints every thread's stack
+            parent.send_signal(signal.SIGABRT)
+            _, err = parent.communicate(timeout=30)
+            pytest.fail(f"connrl run did not stop within 60 s of Ctrl-C; its stacks:\n{err.decode()[-4000:]}")
         assert parent.returncode == 130 and time.time() - start < 10
         assert b"finished runs are saved; run the same command again to resume" in err
         deadline = time.time() + 5

@@ -209,8 +209,13 @@ class ProcessExecutor:
                         pending[pool.submit(fn, nxt)] = nxt
         except BaseException:
             # Ctrl-C (or any error): stop the runs in flight instead of finishing them; what finished is saved
-            for proc in list(getattr(pool, "_processes", {}).values()):  # no public handle on the workers
+            procs = list(getattr(pool, "_processes", {}).values())  # no public handle on the workers
+            for proc in procs:
                 proc.terminate()
+            for proc in procs:  # a worker that does not go within 5 s is killed: shutdown below waits for them all
+                proc.join(timeout=5)
+                if proc.is_alive():
+                    proc.kill()
             raise
         finally:
             for fut in pending:
