@@ -242,12 +242,27 @@ def _alive(pid: int) -> bool:
     return state != "Z"  # a zombie has exited; only its parent's bookkeeping is left
 
 
+def _terminal_sigint() -> None:
+    """In the child before exec: SIGINT as a terminal leaves it (default action, not blocked), whatever the test
+    process's own state (a pytest worker that has run other tests may block or ignore it; both are inherited)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def _signal_state(pid: int) -> str:
+    try:
+        return " ".join(line.strip() for line in open(f"/proc/{pid}/status") if line.startswith(("SigBlk", "SigIgn",
+                                                                                                 "SigCgt", "SigPnd")))
+    except OSError:
+        return "(no /proc status)"
+
+
 def _run_with_two_workers(out: Path) -> tuple[subprocess.Popen, list[int]]:
     """``connrl run`` of a long experiment (pole-full-ahc never solves: every run takes 1000 trials) in its own
     process group, once both worker processes run."""
     parent = subprocess.Popen([sys.executable, "-m", "connrl.cli", "run", "pole-full-ahc", "--profile", "full",
                                "--out", str(out), "--workers", "2", "--quiet"], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.PIPE, start_new_session=True,
+                              stderr=subprocess.PIPE, start_new_session=True, preexec_fn=_terminal_sigint,
                               env={**os.environ, "PYTHONFAULTHANDLER": "1"})  # SIGABRT dumps its stacks
     deadline = time.time() + 120
     workers: list[int] = []
@@ -406,9 +421,11 @@ def test_ctrl_c_stops_the_runs_in_flight_and_keeps_what_finished(tmp_path):
         try:
             _, err = parent.communicate(timeout=60)
         except subprocess.TimeoutExpired:  # say where it hangs: faulthandler prints every thread's stack
+            state = _signal_state(parent.pid)
             parent.send_signal(signal.SIGABRT)
             _, err = parent.communicate(timeout=30)
-            pytest.fail(f"connrl run did not stop within 60 s of Ctrl-C; its stacks:\n{err.decode()[-4000:]}")
+            pytest.fail(f"connrl run did not stop within 60 s of Ctrl-C; signals: {state}; its stacks:\n"
+                        f"{err.decode()[-4000:]}")
         assert parent.returncode == 130 and time.time() - start < 10
         assert b"finished runs are saved; run the same command again to resume" in err
         deadline = time.time() + 5
