@@ -3,3 +3,12 @@
 from connrl import envs as _envs  # noqa: F401  (registers the thesis's worlds: gymnasium.make("connrl/..."))
 
 __version__ = "0.1.0"
+
+_API = ("make_agent", "load", "evaluate", "Agent", "AgentOptions")
+
+
+def __getattr__(name):  # the own-task API (connrl.api) is imported on first use: ``import connrl`` stays light
+    if name in _API:
+        from connrl import api
+        return getattr(api, name)
+    raise AttributeError(f"module 'connrl' has no attribute {name!r}")

@@ -1,4 +1,5 @@
-"""Command line: ``connrl list | run | show | plot | results | sweep | teach | make-lessons | train-behaviours``."""
+"""Command line: ``connrl list | run | show | plot | results | sweep | teach | make-lessons | train-behaviours | train |
+evaluate``."""
 
 from __future__ import annotations
 
@@ -240,12 +241,84 @@ def cmd_results(args) -> int:
     return 0
 
 
+def _make_env(env_id: str):
+    import gymnasium as gym
+
+    import connrl  # noqa: F401  (registers the thesis's worlds)
+    try:
+        return gym.make(env_id)
+    except gym.error.Error as exc:
+        raise SystemExit(f"connrl: cannot make environment {env_id!r}: {exc}") from None
+
+
+def cmd_train(args) -> int:
+    import json
+
+    import matplotlib.pyplot as plt
+
+    from connrl.api import make_agent
+
+    options = {}
+    for item in args.option:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise SystemExit(f"connrl: --option expects key=value, got {item!r}")
+        try:
+            options[key] = json.loads(value)
+        except json.JSONDecodeError:
+            options[key] = value
+    out = Path(args.save or f"runs/train/{args.env_id.replace('/', '-')}-{args.agent}-seed{args.seed}")
+    _writable(out)
+    env = _make_env(args.env_id)
+    returns = []
+    try:
+        agent = make_agent(env, args.agent, seed=args.seed, **options)
+        agent.learn(args.steps, callback=lambda a, r: returns.append((a.steps_done, r)), progress=not args.quiet)
+    except ValueError as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+    agent.save(out)
+    fig, ax = plt.subplots(figsize=(6, 3.5), dpi=110)
+    ax.plot([s for s, _ in returns], [r for _, r in returns], lw=0.8)
+    ax.set_xlabel("environment steps")
+    ax.set_ylabel("return of each training trial")
+    ax.set_title(f"{args.env_id}, {args.agent}, seed {args.seed}", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "curve.png")
+    plt.close(fig)
+    print(f"saved: {out} (agent.json, agent.npz, curve.png); `connrl evaluate {out}` tests it")
+    return 0
+
+
+def cmd_evaluate(args) -> int:
+    import json
+
+    import numpy as np
+
+    from connrl.api import evaluate, load
+
+    try:
+        env_id = args.env or json.loads((Path(args.path) / "agent.json").read_text()).get("env_id")
+    except (OSError, json.JSONDecodeError):
+        env_id = args.env
+    if not env_id:
+        raise SystemExit(f"connrl: {args.path} holds no readable agent with an environment id; give --env ENV_ID")
+    env = _make_env(env_id)
+    try:
+        returns = evaluate(load(args.path, env), env, args.episodes, seed=args.seed)
+    except ValueError as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+    print(f"{env_id}: greedy return over {len(returns)} episodes: mean {np.mean(returns):.2f}, min "
+          f"{min(returns):.2f}, max {max(returns):.2f}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="connrl", description="Reproduce Lin (1993), Reinforcement Learning for "
                                 "Robots Using Neural Networks, and use its techniques on Gymnasium tasks.")
     sub = p.add_subparsers(dest="command", required=True)
     _add_experiment_commands(sub)
     _add_tool_commands(sub)
+    _add_own_task_commands(sub)
     return p
 
 
@@ -334,6 +407,30 @@ def _add_tool_commands(sub) -> None:
     s.add_argument("--doc", default=None, help="Markdown file to write (default OUT/RESULTS.md; the shipped page "
                    "is docs/RESULTS.md)")
     s.set_defaults(func=cmd_results)
+
+
+def _add_own_task_commands(sub) -> None:
+    """train, evaluate (connrl.api)."""
+    s = sub.add_parser("train", help="train a thesis learner on any Gymnasium task", description="Train QCON or "
+                       "QCON-R on ENV_ID with inputs and values scaled from the task (connrl.api), then save it "
+                       "(agent.json, agent.npz) and its learning curve (curve.png).")
+    s.add_argument("env_id", help="a Gymnasium environment id, e.g. CartPole-v1 or connrl/PoleBalancing-v0")
+    s.add_argument("--agent", default="QCON-R", help="QCON or QCON-R (default)")
+    s.add_argument("--steps", type=_positive_int, default=50_000, help="environment steps (default 50000)")
+    s.add_argument("--seed", type=_seed, default=0)
+    s.add_argument("--save", default=None, help="folder to save in (default runs/train/ENV-AGENT-seedS)")
+    s.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                   help="an AgentOptions field (connrl/api.py), e.g. --option gamma=0.95; repeat for several")
+    s.add_argument("--quiet", action="store_true", help="no progress line")
+    s.set_defaults(func=cmd_train)
+
+    s = sub.add_parser("evaluate", help="the greedy return of a saved agent", description="Load an agent saved "
+                       "by `connrl train` (or Agent.save) and print its greedy return over --episodes episodes.")
+    s.add_argument("path", help="the agent's folder")
+    s.add_argument("--episodes", type=_positive_int, default=10)
+    s.add_argument("--seed", type=_seed, default=0, help="seed of the first episode (default 0)")
+    s.add_argument("--env", default=None, help="environment id (default: the one it was trained on)")
+    s.set_defaults(func=cmd_evaluate)
 
 
 def main(argv: list[str] | None = None) -> int:

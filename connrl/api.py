@@ -1,0 +1,330 @@
+"""connrl on your own task, in the Stable-Baselines3 shape: ``make_agent``, ``learn``, ``save``, ``load``, ``evaluate``.
+
+    import gymnasium as gym, connrl
+    env = gym.make("CartPole-v1")
+    agent = connrl.make_agent(env, "QCON-R", seed=0).learn(50_000)
+    agent.save("cartpole-agent"); agent = connrl.load("cartpole-agent", env)
+    print(connrl.evaluate(agent, env, episodes=10))
+
+Any Gymnasium environment with a ``Discrete`` action space and a flat ``Box`` or ``Discrete`` observation works without
+hand-tuning the scales the thesis's tasks set by hand:
+
+- **Inputs** (``InputScaler``): a bounded ``Box`` dimension is mapped affinely onto [-1, 1]; an unbounded one by the
+  mean and spread of the observations a random policy sees in the first ``warmup_steps`` steps (frozen then, so learning
+  sees one fixed input code); a ``Discrete`` observation is one-hot (+-0.5, the thesis's binary code, 5.3.2).
+- **Values**: the nets' outputs span +-``value_range``, which defaults to the largest |reward| of the warm-up divided by
+  (1 - gamma), the largest discounted return those rewards allow; the temperature acts on Q / value_range, so changing
+  the scale does not change exploration.
+- **Schedules** run over environment steps (``anneal_steps``), not trials: a user states a budget in steps.
+
+Frameworks by the thesis's names: ``"QCON"`` (on-line Q-learning, Fig. 3.4) and ``"QCON-R"`` (with backward TD(lambda)
+experience replay after each trial, 3.5 and 5.1). Files are ``agent.json`` (format, kind, spaces, options, scales) and
+``agent.npz`` (the weights, read without pickle).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from connrl.agents import QCON, LinearSchedule, QCONConfig, ReplayConfig
+from connrl.core.rollout import run_trial
+from connrl.nets import NetConfig
+from connrl.storage import atomic_save_npz, atomic_write_text
+
+FORMAT = 1
+KINDS = ("QCON", "QCON-R")
+
+
+@dataclass(frozen=True)
+class AgentOptions:
+    """The learner's settings; every one has a default (docs: README, "Your own task")."""
+
+    hidden: int = 16  # hidden units of each action's net
+    lr: float = 0.05  # back-propagation learning rate
+    momentum: float = 0.9
+    init_range: float = 0.5  # initial weights uniform in +-init_range
+    gamma: float = 0.99  # discount factor
+    lam: float = 0.7  # TD(lambda) recency factor of replay (QCON-R)
+    t_start: float = 0.05  # Boltzmann temperature on Q / value_range, from ...
+    t_end: float = 0.005  # ... to this over the first anneal_steps steps
+    anneal_steps: int = 50_000
+    lessons_per_trial: int = 20  # lessons replayed after each trial (QCON-R)
+    capacity: int = 100  # latest lessons kept for replay
+    p_threshold: float = 0.01  # non-policy actions (probability below it) are not replayed (3.5.1)
+    value_range: float | None = None  # Q spans +-value_range; None: max |warm-up reward| / (1 - gamma)
+    warmup_steps: int = 1000  # random-policy steps that set the input and value scales
+
+    def __post_init__(self):
+        for name in ("hidden", "anneal_steps", "lessons_per_trial", "capacity", "warmup_steps"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < (0 if name in ("hidden", "lessons_per_trial",
+                                                                                    "warmup_steps") else 1):
+                raise ValueError(f"option {name} must be a whole number >= "
+                                 f"{0 if name in ('hidden', 'lessons_per_trial', 'warmup_steps') else 1}, got {v!r}")
+        for name, lo, hi in (("lr", 0, math.inf), ("init_range", 0, math.inf), ("t_start", 0, math.inf),
+                             ("t_end", 0, math.inf)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo < v < hi:
+                raise ValueError(f"option {name} must be a number > 0, got {v!r}")
+        for name in ("momentum", "p_threshold"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 1:
+                raise ValueError(f"option {name} must be in [0, 1), got {v!r}")
+        for name in ("gamma", "lam"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
+                raise ValueError(f"option {name} must be in [0, 1], got {v!r}")
+        if self.value_range is not None and not (isinstance(self.value_range, (int, float))
+                                                 and 0 < self.value_range < math.inf):
+            raise ValueError(f"option value_range must be None or a number > 0, got {self.value_range!r}")
+
+
+def options_from(kwargs: dict) -> AgentOptions:
+    """``AgentOptions(**kwargs)``, refusing an unknown option with the allowed ones in one line."""
+    allowed = [f.name for f in fields(AgentOptions)]
+    unknown = sorted(set(kwargs) - set(allowed))
+    if unknown:
+        raise ValueError(f"unknown option(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(allowed)}")
+    return AgentOptions(**kwargs)
+
+
+def _space_json(space) -> dict:
+    if isinstance(space, spaces.Discrete):
+        return {"type": "Discrete", "n": int(space.n)}
+    if isinstance(space, spaces.Box):
+        return {"type": "Box", "shape": list(space.shape), "low": np.asarray(space.low, float).ravel().tolist(),
+                "high": np.asarray(space.high, float).ravel().tolist()}
+    return {"type": type(space).__name__}
+
+
+def check_spaces(env) -> None:
+    """Refuse, in one line, an environment connrl's agents cannot act in."""
+    if not isinstance(env.action_space, spaces.Discrete):
+        raise ValueError(f"connrl agents need a Discrete action space, got {env.action_space}")
+    obs = env.observation_space
+    if isinstance(obs, spaces.Box) and len(obs.shape) <= 1 or isinstance(obs, spaces.Discrete):
+        return
+    raise ValueError(f"connrl agents need a flat Box or a Discrete observation space, got {obs} "
+                     "(flatten it with gymnasium.wrappers.FlattenObservation)")
+
+
+class InputScaler:
+    """Observations into the nets' input code (module docstring): ``encode(obs) -> float64 vector``."""
+
+    def __init__(self, kind: str, n: int, offset: np.ndarray | None = None, scale: np.ndarray | None = None):
+        self.kind, self.n = kind, int(n)
+        self.offset = np.zeros(self.n) if offset is None else np.asarray(offset, float)
+        self.scale = np.ones(self.n) if scale is None else np.asarray(scale, float)
+
+    @classmethod
+    def fit(cls, space, samples: np.ndarray) -> InputScaler:
+        if isinstance(space, spaces.Discrete):
+            return cls("onehot", space.n)
+        low, high = np.asarray(space.low, float).ravel(), np.asarray(space.high, float).ravel()
+        x = np.asarray(samples, float).reshape(len(samples), -1)
+        bounded = np.isfinite(low) & np.isfinite(high) & (high - low < 1e6)
+        mean, spread = x.mean(axis=0), x.std(axis=0)
+        lo, hi = np.where(bounded, low, 0.0), np.where(bounded, high, 0.0)
+        offset = np.where(bounded, (lo + hi) / 2, mean)
+        # unbounded: 2 standard deviations of the random policy's observations reach +-1
+        scale = np.where(bounded, (hi - lo) / 2, np.maximum(2 * spread, 1e-6))
+        return cls("affine", low.size, offset, np.where(scale > 0, scale, 1.0))
+
+    @property
+    def n_inputs(self) -> int:
+        return self.n
+
+    def encode(self, obs) -> np.ndarray:
+        if self.kind == "onehot":
+            out = np.full(self.n, -0.5)
+            out[int(obs)] = 0.5
+            return out
+        return (np.asarray(obs, float).ravel() - self.offset) / self.scale
+
+    def to_json(self) -> dict:
+        return {"kind": self.kind, "n": self.n, "offset": self.offset.tolist(), "scale": self.scale.tolist()}
+
+    @classmethod
+    def from_json(cls, d: dict) -> InputScaler:
+        return cls(d["kind"], d["n"], d["offset"], d["scale"])
+
+
+class _Scaled(gym.ObservationWrapper):
+    def __init__(self, env, scaler: InputScaler):
+        super().__init__(env)
+        self.scaler = scaler
+        self.observation_space = spaces.Box(-np.inf, np.inf, (scaler.n_inputs,), np.float64)
+
+    def observation(self, observation):
+        return self.scaler.encode(observation)
+
+
+def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, float]:
+    """Observations and the largest |reward| of ``steps`` random-policy steps (at least one observation)."""
+    obs, _ = env.reset(seed=int(rng.integers(2**31)))
+    seen, r_max = [obs], 0.0
+    for _ in range(steps):
+        obs, r, terminated, truncated, _ = env.step(int(rng.integers(env.action_space.n)))
+        seen.append(obs)
+        r_max = max(r_max, abs(float(r)))
+        if terminated or truncated:
+            obs, _ = env.reset(seed=int(rng.integers(2**31)))
+            seen.append(obs)
+    return np.asarray(seen, dtype=float), r_max
+
+
+class Agent:
+    """A thesis learner bound to one environment's spaces, with its scales (``make_agent`` builds it)."""
+
+    def __init__(self, kind: str, options: AgentOptions, observation_space, action_space, scaler: InputScaler,
+                 value_range: float, seed: int, env_id: str | None):
+        if kind not in KINDS:
+            raise ValueError(f"unknown agent {kind!r}; available: {', '.join(KINDS)}")
+        self.kind, self.options, self.scaler, self.value_range = kind, options, scaler, float(value_range)
+        self.observation_space, self.action_space = observation_space, action_space
+        self.env_id, self.seed = env_id, seed
+        self.rng = np.random.default_rng(seed)
+        self.steps_done, self.trials_done = 0, 0
+        o = options
+        net = NetConfig(scaler.n_inputs, o.hidden, value_range=self.value_range, init_range=o.init_range, lr=o.lr,
+                        momentum=o.momentum)
+        replay = None if kind == "QCON" else ReplayConfig(
+            capacity=o.capacity, lessons_per_trial=LinearSchedule(o.lessons_per_trial, o.lessons_per_trial),
+            p_threshold=o.p_threshold)
+        cfg = QCONConfig(net=net, temperature=self.temperature, gamma=o.gamma, lam=o.lam, replay=replay)
+        self.learner = QCON(cfg, int(action_space.n), self.rng)
+
+    def temperature(self, trial: int) -> float:
+        """T in Q units at the current step: linear on Q / value_range from t_start to t_end over anneal_steps."""
+        o = self.options
+        frac = min(self.steps_done / o.anneal_steps, 1.0)
+        return (o.t_start + (o.t_end - o.t_start) * frac) * self.value_range
+
+    def learn(self, total_steps: int, callback=None, progress: bool = False, env=None) -> Agent:
+        """Train for at least ``total_steps`` environment steps (whole trials) in ``env`` (the one given to
+        ``make_agent`` by default); ``callback(agent, trial_return)`` after each trial, False from it stops."""
+        env = env if env is not None else getattr(self, "_env", None)
+        if env is None:
+            raise ValueError("learn() needs the environment: make_agent(env, ...) keeps it, load(path, env) too")
+        if isinstance(total_steps, bool) or not isinstance(total_steps, int) or total_steps < 1:
+            raise ValueError(f"total_steps must be a whole number >= 1, got {total_steps!r}")
+        scaled, end = _Scaled(env, self.scaler), self.steps_done + total_steps
+        while self.steps_done < end:
+            stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
+                              seed=int(self.rng.integers(2**31)))
+            self.steps_done += stats.steps
+            self.trials_done += 1
+            if progress:
+                print(f"\rsteps {self.steps_done}/{end}  trial {self.trials_done}  return {stats.total_reward:.1f}",
+                      end="", flush=True)
+            if callback is not None and callback(self, stats.total_reward) is False:
+                break
+        if progress:
+            print()
+        return self
+
+    def predict(self, obs) -> int:
+        """The greedy action (T = 0) for a raw observation."""
+        q = self.learner.q.values(self.scaler.encode(obs))
+        return int(np.argmax(q))
+
+    def save(self, path) -> Path:
+        """``path/agent.json`` and ``path/agent.npz`` (no pickle), each written atomically; returns ``path``."""
+        path = Path(path)
+        atomic_save_npz(path / "agent.npz", **self.learner.q.state_dict())
+        atomic_write_text(path / "agent.json", json.dumps({
+            "format": FORMAT, "kind": "connrl agent", "agent": self.kind, "connrl": _version(),
+            "env_id": self.env_id, "observation_space": _space_json(self.observation_space),
+            "action_space": _space_json(self.action_space), "options": asdict(self.options),
+            "scaler": self.scaler.to_json(), "value_range": self.value_range, "seed": self.seed,
+            "steps_done": self.steps_done, "trials_done": self.trials_done}, indent=1) + "\n")
+        return path
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("connrl")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def make_agent(env, kind: str = "QCON-R", seed: int = 0, **options) -> Agent:
+    """A thesis learner for ``env`` with its input and value scales set from a random-policy warm-up (module
+    docstring); ``options`` are ``AgentOptions`` fields."""
+    check_spaces(env)
+    if kind not in KINDS:
+        raise ValueError(f"unknown agent {kind!r}; available: {', '.join(KINDS)}")
+    o = options_from(options)
+    rng = np.random.default_rng(seed)
+    seen, r_max = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
+    scaler = InputScaler.fit(env.observation_space, seen)
+    value_range = o.value_range or max(r_max, 1e-3) / max(1.0 - o.gamma, 1e-3)
+    spec = getattr(env, "spec", None)
+    agent = Agent(kind, o, env.observation_space, env.action_space, scaler, value_range,
+                  int(rng.integers(2**31)), spec.id if spec is not None else None)
+    agent._env = env
+    return agent
+
+
+def load(path, env=None) -> Agent:
+    """An agent written by ``Agent.save``; with ``env``, its spaces must be the saved ones. ValueError in one line."""
+    path = Path(path)
+    meta, npz = path / "agent.json", path / "agent.npz"
+    try:
+        m = json.loads(meta.read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{meta}: not a readable connrl agent file ({exc})") from None
+    if not isinstance(m, dict) or m.get("kind") != "connrl agent":
+        raise ValueError(f"{meta}: not a connrl agent file")
+    if m.get("format") != FORMAT:
+        raise ValueError(f"{meta}: agent file format {m.get('format')!r}; this connrl reads format {FORMAT}")
+    if env is not None:
+        for name in ("observation_space", "action_space"):
+            if _space_json(getattr(env, name)) != m[name]:
+                raise ValueError(f"{meta}: saved for {m.get('env_id') or 'another environment'} with {name} "
+                                 f"{m[name]}, the given environment has {_space_json(getattr(env, name))}")
+    obs_space = _space_from(m["observation_space"])
+    act_space = spaces.Discrete(m["action_space"]["n"])
+    try:
+        agent = Agent(m["agent"], options_from(m["options"]), obs_space, act_space,
+                      InputScaler.from_json(m["scaler"]), m["value_range"], m["seed"], m.get("env_id"))
+        with np.load(npz, allow_pickle=False) as z:
+            agent.learner.q.load_state_dict({k: z[k] for k in z.files})
+    except (KeyError, TypeError, ValueError, OSError) as exc:
+        raise ValueError(f"{path}: not a readable connrl agent ({type(exc).__name__}: {exc})") from None
+    agent.steps_done, agent.trials_done = int(m.get("steps_done", 0)), int(m.get("trials_done", 0))
+    agent._env = env
+    return agent
+
+
+def _space_from(d: dict):
+    if d["type"] == "Discrete":
+        return spaces.Discrete(d["n"])
+    shape = tuple(d["shape"])
+    return spaces.Box(np.asarray(d["low"]).reshape(shape), np.asarray(d["high"]).reshape(shape), dtype=np.float64)
+
+
+def evaluate(agent: Agent, env, episodes: int = 10, seed: int = 0) -> list[float]:
+    """The greedy policy's return in each of ``episodes`` episodes (seeds ``seed``, ``seed + 1``, ...); nothing
+    learnt."""
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes must be a whole number >= 1, got {episodes!r}")
+    returns = []
+    for k in range(episodes):
+        obs, _ = env.reset(seed=seed + k)
+        total, done = 0.0, False
+        while not done:
+            obs, r, terminated, truncated, _ = env.step(agent.predict(obs))
+            total += float(r)
+            done = terminated or truncated
+        returns.append(total)
+    return returns
+

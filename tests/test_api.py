@@ -1,0 +1,109 @@
+"""The own-task API (connrl.api): input and value scales by hand, refusals in one line, save -> load -> evaluate
+identical, determinism, and a short CartPole smoke run."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium import spaces
+
+import connrl
+from connrl.api import InputScaler, make_agent
+
+
+class Toy(gym.Env):
+    """Two actions; reward 2 for action 1, -1 for action 0; 5 steps; observation [t, t^2] unbounded."""
+
+    observation_space = spaces.Box(-np.inf, np.inf, (2,), np.float64)
+    action_space = spaces.Discrete(2)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.t = 0
+        return np.array([0.0, 0.0]), {}
+
+    def step(self, a):
+        self.t += 1
+        return np.array([self.t, self.t ** 2], float), 2.0 if a == 1 else -1.0, False, self.t >= 5, {}
+
+
+def test_input_scales_by_hand():
+    box = spaces.Box(np.array([-2.0, -np.inf]), np.array([2.0, np.inf]), dtype=np.float64)
+    s = InputScaler.fit(box, np.array([[0.0, 1.0], [1.0, 3.0]]))  # second unit: mean 2, std 1 -> scale 2
+    np.testing.assert_allclose(s.encode([2.0, 4.0]), [1.0, 1.0])
+    np.testing.assert_allclose(s.encode([-1.0, 0.0]), [-0.5, -1.0])
+    d = InputScaler.fit(spaces.Discrete(3), np.zeros((1, 1)))
+    assert d.encode(2).tolist() == [-0.5, -0.5, 0.5]
+    assert InputScaler.from_json(s.to_json()).encode([0.5, 2.0]).tolist() == s.encode([0.5, 2.0]).tolist()
+
+
+def test_value_range_follows_the_reward_scale_and_gamma():
+    agent = make_agent(Toy(), "QCON", seed=0, warmup_steps=50, gamma=0.9)
+    assert agent.value_range == pytest.approx(2.0 / 0.1)  # max |reward| / (1 - gamma)
+    assert agent.temperature(0) == pytest.approx(0.05 * agent.value_range)  # T acts on Q / value_range
+    assert make_agent(Toy(), value_range=7.0).value_range == 7.0
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: make_agent(Toy(), "DQN"), "unknown agent 'DQN'; available: QCON, QCON-R"),
+    (lambda: make_agent(Toy(), learning_rate=0.1), "unknown option(s) 'learning_rate'; allowed: hidden"),
+    (lambda: make_agent(Toy(), gamma=2), "option gamma must be in [0, 1], got 2"),
+    (lambda: make_agent(gym.make("Pendulum-v1")), "connrl agents need a Discrete action space"),
+    (lambda: make_agent(Toy()).learn(0), "total_steps must be a whole number >= 1"),
+])
+def test_bad_input_is_one_clear_line(call, message):
+    with pytest.raises(ValueError) as exc:
+        call()
+    assert message in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_learning_is_deterministic_and_save_load_evaluate_gives_the_same_returns(tmp_path):
+    a = make_agent(Toy(), "QCON-R", seed=3, warmup_steps=20).learn(200)
+    b = make_agent(Toy(), "QCON-R", seed=3, warmup_steps=20).learn(200)
+    np.testing.assert_array_equal(a.learner.q.w1, b.learner.q.w1)
+    assert connrl.evaluate(a, Toy(), episodes=2) == [10.0, 10.0]  # it has learnt action 1 everywhere
+    a.save(tmp_path / "agent")
+    c = connrl.load(tmp_path / "agent", Toy())
+    assert connrl.evaluate(c, Toy(), 3, seed=5) == connrl.evaluate(a, Toy(), 3, seed=5)
+    assert (c.steps_done, c.kind, c.value_range) == (a.steps_done, "QCON-R", a.value_range)
+    c.learn(20)  # a loaded agent trains on in the environment it was loaded with
+
+
+def test_a_file_for_another_environment_or_format_is_refused(tmp_path):
+    make_agent(Toy(), "QCON", warmup_steps=10).save(tmp_path / "agent")
+    with pytest.raises(ValueError, match="saved for another environment with observation_space"):
+        connrl.load(tmp_path / "agent", gym.make("CartPole-v1"))
+    meta = tmp_path / "agent" / "agent.json"
+    meta.write_text(meta.read_text().replace('"format": 1', '"format": 99'))
+    with pytest.raises(ValueError, match="agent file format 99; this connrl reads format 1"):
+        connrl.load(tmp_path / "agent")
+    with pytest.raises(ValueError, match="not a readable connrl agent file"):
+        connrl.load(tmp_path / "nowhere")
+
+
+def test_cartpole_smoke():
+    env = gym.make("CartPole-v1")
+    agent = connrl.make_agent(env, "QCON-R", seed=0).learn(2000)
+    assert agent.steps_done >= 2000 and agent.trials_done > 10
+    assert all(r >= 8 for r in connrl.evaluate(agent, env, 2))
+
+
+def test_cli_train_then_evaluate(tmp_path, capsys):
+    from connrl import cli
+    assert cli.main(["train", "CartPole-v1", "--steps", "300", "--save", str(tmp_path / "a"), "--quiet",
+                     "--option", "hidden=4"]) == 0
+    assert {p.name for p in (tmp_path / "a").iterdir()} == {"agent.json", "agent.npz", "curve.png"}
+    assert cli.main(["evaluate", str(tmp_path / "a"), "--episodes", "2"]) == 0
+    assert "CartPole-v1: greedy return over 2 episodes" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args, message", [
+    (["train", "Nope-v9", "--steps", "10"], "cannot make environment 'Nope-v9'"),
+    (["train", "CartPole-v1", "--steps", "10", "--option", "lr"], "--option expects key=value, got 'lr'"),
+    (["train", "CartPole-v1", "--steps", "10", "--option", "lr2=1"], "unknown option(s) 'lr2'"),
+    (["evaluate", "nowhere"], "holds no readable agent"),
+])
+def test_cli_refuses_bad_input_in_one_line(args, message, tmp_path):
+    from connrl import cli
+    with pytest.raises(SystemExit) as exc:
+        cli.main(args + (["--save", str(tmp_path / "x")] if args[0] == "train" else []))
+    assert message in str(exc.value)
