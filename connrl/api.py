@@ -34,6 +34,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connrl.agents import QCON, LinearSchedule, QCONConfig, ReplayConfig
+from connrl.core.lessons import Lesson
 from connrl.core.rollout import run_trial
 from connrl.nets import NetConfig
 from connrl.storage import atomic_save_npz, atomic_write_text
@@ -166,18 +167,25 @@ class _Scaled(gym.ObservationWrapper):
         return self.scaler.encode(observation)
 
 
-def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, float]:
-    """Observations and the largest |reward| of ``steps`` random-policy steps (at least one observation)."""
+def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, float, list]:
+    """Observations, the largest |reward| and the episodes (observations, actions, rewards, terminated) of ``steps``
+    random-policy steps (at least one observation)."""
     obs, _ = env.reset(seed=int(rng.integers(2**31)))
-    seen, r_max = [obs], 0.0
+    seen, r_max, episodes, ep = [obs], 0.0, [], ([obs], [], [])
     for _ in range(steps):
-        obs, r, terminated, truncated, _ = env.step(int(rng.integers(env.action_space.n)))
+        a = int(rng.integers(env.action_space.n))
+        obs, r, terminated, truncated, _ = env.step(a)
         seen.append(obs)
+        ep[0].append(obs)
+        ep[1].append(a)
+        ep[2].append(float(r))
         r_max = max(r_max, abs(float(r)))
         if terminated or truncated:
+            episodes.append((*ep, bool(terminated)))
             obs, _ = env.reset(seed=int(rng.integers(2**31)))
             seen.append(obs)
-    return np.asarray(seen, dtype=float), r_max
+            ep = ([obs], [], [])
+    return np.asarray(seen, dtype=float), r_max, episodes
 
 
 class Agent:
@@ -264,12 +272,16 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, **options) -> Agent:
         raise ValueError(f"unknown agent {kind!r}; available: {', '.join(KINDS)}")
     o = options_from(options)
     rng = np.random.default_rng(seed)
-    seen, r_max = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
+    seen, r_max, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
     scaler = InputScaler.fit(env.observation_space, seen)
     value_range = o.value_range or max(r_max, 1e-3) / max(1.0 - o.gamma, 1e-3)
     spec = getattr(env, "spec", None)
     agent = Agent(kind, o, env.observation_space, env.action_space, scaler, value_range,
                   int(rng.integers(2**31)), spec.id if spec is not None else None)
+    if agent.learner.book.memory is not None:  # QCON-R replays the warm-up's episodes too: every action's net
+        for obs, acts, rews, terminated in episodes:  # learns from the start, so none is left at its initial value
+            agent.learner.book.memory.add(Lesson(np.array([scaler.encode(x) for x in obs]), np.array(acts),
+                                                 np.array(rews), terminated=terminated, truncated=not terminated))
     agent._env = env
     return agent
 

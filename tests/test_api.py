@@ -107,3 +107,14 @@ def test_cli_refuses_bad_input_in_one_line(args, message, tmp_path):
     with pytest.raises(SystemExit) as exc:
         cli.main(args + (["--save", str(tmp_path / "x")] if args[0] == "train" else []))
     assert message in str(exc.value)
+
+
+def test_the_readme_snippet_runs(tmp_path, monkeypatch):
+    from pathlib import Path
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    section = readme[readme.index("## Using the techniques on your own task"):]
+    code = section.split("```python\n", 1)[1].split("```", 1)[0]
+    assert "connrl.make_agent" in code and "connrl.load" in code
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code.replace("50_000", "300"), "README", "exec"), {})
+    assert (tmp_path / "cartpole-agent" / "agent.npz").exists()
