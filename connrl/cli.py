@@ -1,5 +1,5 @@
-"""Command line: ``connrl list | run | show | plot | results | sweep | teach | make-lessons | train-behaviours | train |
-evaluate``."""
+"""Command line: ``connrl list | run | reproduce | show | plot | results | sweep | teach | make-lessons |
+train-behaviours | train | evaluate``."""
 
 from __future__ import annotations
 
@@ -86,6 +86,40 @@ def cmd_run(args) -> int:
         raise SystemExit(f"connrl: {exc}") from None
     _writable(args.out)
     return _run_and_report(spec, args, profile=args.profile, runs=args.runs, seed=args.seed)
+
+
+def cmd_reproduce(args) -> int:
+    import time
+
+    from connrl.experiments.registry import CHAPTERS, by_chapter
+    from connrl.report.page import write_results
+
+    try:
+        chapters = sorted({int(c) for c in args.chapters.split(",")})
+    except ValueError:
+        chapters = []
+    known = sorted(set(CHAPTERS.values()))
+    if not chapters or not set(chapters) <= set(known):
+        raise SystemExit(f"connrl: --chapters takes a comma-separated list of {', '.join(map(str, known))}, got "
+                         f"{args.chapters!r}")
+    specs = by_chapter(chapters)
+    for spec in specs:  # every profile is checked before the first run
+        try:
+            spec.resolve(args.profile, None)
+        except ValueError as exc:
+            raise SystemExit(f"connrl: {exc}") from None
+    _writable(args.out)
+    start = time.time()
+    for k, spec in enumerate(specs, 1):
+        print(f"[{k}/{len(specs)}] connrl run {spec.name} --profile {args.profile} --seed {spec.seed}", flush=True)
+        code = _run_and_report(spec, args, profile=args.profile, runs=None, seed=spec.seed)
+        if code:
+            return code
+    doc = Path(args.doc) if args.doc else Path(args.out) / "RESULTS.md"
+    _writable(doc.parent)
+    print(f"results: {write_results(Path(args.out), doc)}; chapters {', '.join(map(str, chapters))}, "
+          f"{len(specs)} experiments, {time.time() - start:.0f} s")
+    return 0
 
 
 def _run_and_report(spec, args, *, profile: str, runs: int | None, seed: int, mean_curve: bool = False) -> int:
@@ -340,6 +374,17 @@ def _add_experiment_commands(sub) -> None:
     s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")
     s.add_argument("--quiet", action="store_true", help="no live progress display")
     s.set_defaults(func=cmd_run)
+
+    s = sub.add_parser("reproduce", help="run every experiment of the thesis's chapters, then the results page",
+                       description="`connrl run` each experiment of the chosen chapters (on the seeds its stored "
+                       "results use), resuming what is stored, then write the results page.")
+    s.add_argument("--chapters", default="4,5,6,7,8", help="comma-separated chapters (default 4,5,6,7,8)")
+    s.add_argument("--profile", choices=PROFILES, default="quick", help="tiny, quick (default) or full")
+    s.add_argument("--out", default="runs", help="output directory (default ./runs)")
+    s.add_argument("--doc", default=None, help="results page to write (default OUT/RESULTS.md)")
+    s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")
+    s.add_argument("--quiet", action="store_true", help="no live progress display")
+    s.set_defaults(func=cmd_reproduce)
 
     s = sub.add_parser("plot", help="redraw an experiment's plot", description="Redraw OUT/NAME/curve.png and "
                        ".svg from the stored runs of the latest `connrl run NAME`.")

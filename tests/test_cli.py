@@ -123,3 +123,17 @@ def test_train_behaviours_writes_a_library(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "DP: 2 trials" in out and (tmp_path / "library.json").exists()
     assert sorted(p.name for p in tmp_path.glob("*.npz")) == ["dk.npz", "dp.npz", "wfl.npz", "wfr.npz"]
+
+
+def test_reproduce_runs_a_chapter_then_the_results_page(tmp_path, capsys):
+    from connrl.experiments.registry import CHAPTERS, SPEC_MODULES, by_chapter
+    assert set(CHAPTERS) == set(SPEC_MODULES)  # every experiment belongs to a chapter
+    assert sorted(s.name for s in by_chapter([4, 5, 6, 7, 8])) == sorted(all_experiments())
+    assert {s.name: s.seed for s in by_chapter([5]) if s.seed} == {"robot-dp-calibration": 100, "robot-dp-fresh": 1000}
+    assert cli.main(["reproduce", "--chapters", "8", "--profile", "tiny", "--out", str(tmp_path), "--workers", "1",
+                     "--quiet"]) == 0
+    for name in ("integration", "steps-to-learn"):
+        assert (tmp_path / name / "summary.json").exists()
+    assert "## Chapter 8" in (tmp_path / "RESULTS.md").read_text()
+    with pytest.raises(SystemExit, match="--chapters takes a comma-separated list of 4, 5, 6, 7, 8, got '3'"):
+        cli.main(["reproduce", "--chapters", "3"])

@@ -20,6 +20,23 @@ SPEC_MODULES = (
 )
 
 
+# the thesis chapter each module's experiments belong to (`connrl reproduce --chapters`); the pole experiments are
+# 7.5.4's (Appendix C's task)
+CHAPTERS = {"connrl.experiments.survival": 4, "connrl.experiments.robot": 5, "connrl.experiments.robot_bounds": 5,
+            "connrl.experiments.recharge_flat": 6, "connrl.experiments.recharge": 6, "connrl.experiments.complexity": 6,
+            "connrl.experiments.pole": 7, "connrl.experiments.hidden_state": 7, "connrl.experiments.integration": 8,
+            "connrl.experiments.steps": 8}
+
+
+def by_chapter(chapters) -> list[ExperimentSpec]:
+    """The experiments of the given chapters, chapter by chapter in the registry's order."""
+    out = []
+    for chapter in sorted(set(chapters)):
+        for mod in (m for m in SPEC_MODULES if CHAPTERS[m] == chapter):
+            out += list(importlib.import_module(mod).EXPERIMENTS)
+    return out
+
+
 def all_experiments() -> dict[str, ExperimentSpec]:
     out: dict[str, ExperimentSpec] = {}
     for mod in SPEC_MODULES:

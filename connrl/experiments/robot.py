@@ -205,8 +205,8 @@ PROFILES = {
 }
 
 
-def _spec(name, title, section, base, variants, quantities, paths=0, description=""):
-    return ExperimentSpec(name=name, title=title, section=section, run="connrl.experiments.robot:run_robot",
+def _spec(name, title, section, base, variants, quantities, paths=0, description="", seed=0):
+    return ExperimentSpec(name=name, seed=seed, title=title, section=section, run="connrl.experiments.robot:run_robot",
                           params=override(RobotParams(), {**base, "paths": paths}, f"experiment {name}"),
                           profiles={k: ({**v, "paths": min(v.get("paths", paths), paths)} if paths else dict(v))
                                     for k, v in PROFILES.items()},
@@ -262,7 +262,7 @@ EXPERIMENTS = [
           [Variant(f"{w:g}-in doors, no teaching", {"door_width": w}, {"trials_to_2.5": 280})
            for w in (36.0, 42.0, 48.0)],
           _DP_Q, description="criterion: the mean no-teaching curve at trial 280 closest to the thesis's 2.5 "
-                             "(docs/RECONSTRUCTION.md, 'Calibration of door passing')"),
+                             "(docs/RECONSTRUCTION.md, 'Calibration of door passing')", seed=100),
     _spec("robot-dp-geometry", "The previous (SPEC) DP reconstruction and each calibrated change alone "
           "(not a thesis figure)", "5.4.1, 5.6; R", {"task": "DP"},
           [Variant(f"{label}, {n} lessons", {**over, "lessons": n},
@@ -286,7 +286,7 @@ EXPERIMENTS = [
            Variant("3 lessons", {"lessons": 3}, {"trials_to_2.5": 20}),
            Variant("10 lessons", {"lessons": 10}, {"trials_to_2.5": 10, "trials_to_5": 65}),
            Variant("10 lessons, lambda=0", {"lessons": 10, "lam": 0.0}, {"trials_to_5": 280}),
-           Variant("10 lessons, lambda=0.3", {"lessons": 10, "lam": 0.3}, {"trials_to_5": 140})], _DP_Q),
+           Variant("10 lessons, lambda=0.3", {"lessons": 10, "lam": 0.3}, {"trials_to_5": 140})], _DP_Q, seed=1000),
     _spec("robot-dk-geometry", "Sensitivity of DK to the reconstructed docking tolerance, multi- vs single-layer "
           "(not a thesis figure)", "5.4.1, 5.4.4; R", {"task": "DK"},
           [Variant(f"{tol:g} deg, {arch}, {n} lessons",
