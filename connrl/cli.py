@@ -84,6 +84,7 @@ def cmd_run(args) -> int:
         spec.resolve(args.profile, args.runs)
     except ValueError as exc:
         raise SystemExit(f"connrl: {exc}") from None
+    _check_executor(args)
     _writable(args.out)
     return _run_and_report(spec, args, profile=args.profile, runs=args.runs, seed=args.seed)
 
@@ -103,6 +104,7 @@ def cmd_reproduce(args) -> int:
         raise SystemExit(f"connrl: --chapters takes a comma-separated list of {', '.join(map(str, known))}, got "
                          f"{args.chapters!r}")
     specs = by_chapter(chapters)
+    _check_executor(args)
     for spec in specs:  # every profile is checked before the first run
         try:
             spec.resolve(args.profile, None)
@@ -131,7 +133,8 @@ def _run_and_report(spec, args, *, profile: str, runs: int | None, seed: int, me
 
     try:
         outcome = run_experiment(spec, profile=profile, runs=runs, seed=seed, out=Path(args.out),
-                                 workers=args.workers, show_progress=not args.quiet, on_damaged=_damaged)
+                                 workers=args.workers, show_progress=not args.quiet, on_damaged=_damaged,
+                                 executor=getattr(args, "executor", "process"), address=getattr(args, "address", None))
     except KeyboardInterrupt:
         print("\ninterrupted: finished runs are saved; run the same command again to resume.", file=sys.stderr)
         return 130
@@ -356,6 +359,23 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _executor_options(s) -> None:
+    s.add_argument("--executor", default="process", help="process: worker processes here (default); ray: Ray "
+                   "tasks, on a local instance or the cluster at --address (pip install -e \".[ray]\")")
+    s.add_argument("--address", default=None, help="a Ray cluster's head, HOST:PORT (with --executor ray)")
+
+
+def _check_executor(args) -> None:
+    from connrl.experiments.runner import check_executor
+
+    try:
+        check_executor(args.executor)
+    except ValueError as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+    if args.address and args.executor != "ray":
+        raise SystemExit("connrl: --address is for --executor ray")
+
+
 def _add_experiment_commands(sub) -> None:
     """list, run, plot, show, teach."""
     s = sub.add_parser("list", help="list the experiments", description="List every experiment with its "
@@ -373,6 +393,7 @@ def _add_experiment_commands(sub) -> None:
     s.add_argument("--out", default="runs", help="output directory (default ./runs)")
     s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")
     s.add_argument("--quiet", action="store_true", help="no live progress display")
+    _executor_options(s)
     s.set_defaults(func=cmd_run)
 
     s = sub.add_parser("reproduce", help="run every experiment of the thesis's chapters, then the results page",
@@ -384,6 +405,7 @@ def _add_experiment_commands(sub) -> None:
     s.add_argument("--doc", default=None, help="results page to write (default OUT/RESULTS.md)")
     s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")
     s.add_argument("--quiet", action="store_true", help="no live progress display")
+    _executor_options(s)
     s.set_defaults(func=cmd_reproduce)
 
     s = sub.add_parser("plot", help="redraw an experiment's plot", description="Redraw OUT/NAME/curve.png and "

@@ -110,6 +110,14 @@ def _exit_with_parent(parent: int) -> None:
 
 def execute_job(job: Job) -> dict:
     """Run one job in this process and write its records; returns the metadata record."""
+    record, rows = run_job(job)
+    write_run_records(Path(job.path), record, rows)
+    return record
+
+
+def run_job(job: Job) -> tuple[dict, list[dict]]:
+    """Run one job in this process: (the metadata record, the CSV rows), nothing written (a Ray worker may be on
+    another machine: the driver writes)."""
     fn = load_callable(job.run_ref)
     params = load_callable(job.params_type)(**job.params)
     rng = np.random.default_rng(job.seed)
@@ -146,8 +154,7 @@ def execute_job(job: Job) -> dict:
         "compile_time_s": compile_s,
         "diverged": diverged,
     }
-    write_run_records(Path(job.path), record, result.rows)
-    return record
+    return record, result.rows
 
 
 def compile_seconds(events) -> float:
@@ -223,6 +230,54 @@ class ProcessExecutor:
             pool.shutdown(wait=True, cancel_futures=True)
 
 
+class RayExecutor:
+    """Runs as Ray tasks (``--executor ray``): on a local Ray instance started here, or on the cluster at ``address``
+    (``ray start --head`` on one machine, ``ray start --address=HEAD:6379`` on the others; ``--address HEAD:6379``
+    here). The tasks compute; this process writes every record, so the cluster needs no shared disk."""
+
+    def __init__(self, workers: int, address: str | None = None):
+        self.workers, self.address = workers, address
+
+    def map_unordered(self, fn, jobs, tick):
+        import ray
+
+        started = not ray.is_initialized()
+        if started:
+            ray.init(address=self.address, num_cpus=None if self.address else self.workers, include_dashboard=False,
+                     log_to_driver=False, configure_logging=False)
+        task = ray.remote(num_cpus=1)(run_job)
+        pending = {task.remote(job): job for job in jobs}
+        try:
+            while pending:
+                done, _ = ray.wait(list(pending), num_returns=1, timeout=0.25)
+                tick()
+                for ref in done:
+                    job = pending.pop(ref)
+                    record, rows = ray.get(ref)
+                    write_run_records(Path(job.path), record, rows)
+                    yield job, record
+        except BaseException:
+            for ref in pending:  # Ctrl-C or an error: stop the runs in flight; what finished is saved
+                ray.cancel(ref, force=True)
+            raise
+        finally:
+            if started:
+                ray.shutdown()
+
+
+EXECUTORS = ("process", "ray")
+
+
+def check_executor(executor: str) -> None:
+    """Refuse an unknown executor, or Ray when it is not installed, in one line before any run."""
+    if executor not in EXECUTORS:
+        raise ValueError(f"unknown executor {executor!r}; available: {', '.join(EXECUTORS)}")
+    if executor == "ray":
+        import importlib.util
+        if importlib.util.find_spec("ray") is None:
+            raise ValueError("--executor ray needs Ray: pip install -e \".[ray]\" (or pip install ray)")
+
+
 # ---------------------------------------------------------------------------------------------- summary
 
 def summarize(spec: ExperimentSpec, profile: str, seed: int, records: list[dict], wall: float) -> dict:
@@ -287,9 +342,12 @@ class RunOutcome:
 
 def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | None = None, seed: int = 0,
                    out: Path | str = "runs", workers: int | None = None, show_progress: bool = True,
-                   on_damaged: Callable[[Path, str], None] = lambda path, reason: None) -> RunOutcome:
+                   on_damaged: Callable[[Path, str], None] = lambda path, reason: None, executor: str = "process",
+                   address: str | None = None) -> RunOutcome:
     """Run what is not stored yet and write summary.json; ``on_damaged(path, reason)`` hears of each damaged
-    run record, which is redone."""
+    run record, which is redone. ``executor``: worker processes here ("process") or Ray tasks ("ray", on the cluster
+    at ``address`` or a local instance)."""
+    check_executor(executor)
     out = Path(out)
     jobs = make_jobs(spec, profile, runs, seed, out)
     prepare_outputs(out / spec.name, jobs)
@@ -303,7 +361,7 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     workers = workers or os.cpu_count() or 1
     t0 = time.perf_counter()
     if todo:
-        records.extend(_execute(todo, min(workers, len(todo)), show_progress, spec.name))
+        records.extend(_execute(todo, min(workers, len(todo)), show_progress, spec.name, executor, address))
     wall = time.perf_counter() - t0
     summary = summarize(spec, profile, seed, records, wall)
     summary_path = out / spec.name / "summary.json"
@@ -311,10 +369,12 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     return RunOutcome(summary, summary_path, records, len(todo), reused)
 
 
-def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str) -> list[dict]:
+def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind: str = "process",
+             address: str | None = None) -> list[dict]:
     # a plain queue handed to the workers when they start (no manager process that could outlive us)
     q = (mp.get_context("spawn").Queue() if workers > 1 else queue.SimpleQueue()) if show_progress else None
-    executor: Executor = ProcessExecutor(workers, q) if workers > 1 else SerialExecutor(q)
+    executor: Executor = (RayExecutor(workers, address) if kind == "ray" else
+                          ProcessExecutor(workers, q) if workers > 1 else SerialExecutor(q))
     results = []
     display = _Progress(jobs, title) if show_progress else None
 
