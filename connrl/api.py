@@ -17,8 +17,10 @@ hand-tuning the scales the thesis's tasks set by hand:
   the scale does not change exploration.
 - **Schedules** run over environment steps (``anneal_steps``), not trials: a user states a budget in steps.
 
-Frameworks by the thesis's names: ``"QCON"`` (on-line Q-learning, Fig. 3.4) and ``"QCON-R"`` (with backward TD(lambda)
-experience replay after each trial, 3.5 and 5.1). Files are ``agent.json`` (format, kind, spaces, options, scales) and
+Frameworks by the thesis's names: ``"QCON"`` (on-line Q-learning, Fig. 3.4), ``"QCON-R"`` (with backward TD(lambda)
+experience replay after each trial, 3.5 and 5.1), and for tasks with hidden state Ch. 7's ``"window-Q"`` (the
+``window`` latest observations and actions as input) and ``"recurrent-Q"`` (recurrent Q-nets, batch BPTT replay).
+Files are ``agent.json`` (format, kind, spaces, options, scales) and
 ``agent.npz`` (the weights, read without pickle).
 """
 
@@ -34,13 +36,16 @@ import numpy as np
 from gymnasium import spaces
 
 from connrl.agents import QCON, LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents.memory import RecurrentQ, RecurrentQConfig, WindowQ, window_input_size
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import run_trial
 from connrl.nets import NetConfig
+from connrl.nets.recurrent import RecurrentNetConfig
 from connrl.storage import atomic_save_npz, atomic_write_text
 
 FORMAT = 1
-KINDS = ("QCON", "QCON-R")
+KINDS = ("QCON", "QCON-R", "window-Q", "recurrent-Q")
+MEMORY_KINDS = ("window-Q", "recurrent-Q")  # act on a history: predict() needs one, evaluate() keeps it
 
 
 @dataclass(frozen=True)
@@ -61,14 +66,15 @@ class AgentOptions:
     p_threshold: float = 0.01  # non-policy actions (probability below it) are not replayed (3.5.1)
     value_range: float | None = None  # Q spans +-value_range; None: max |warm-up reward| / (1 - gamma)
     warmup_steps: int = 1000  # random-policy steps that set the input and value scales
+    window: int = 2  # window-Q: the N latest observations and actions beside the current one (7.3)
+    context: int = 8  # recurrent-Q: context units, at most hidden (7.3-7.4)
 
     def __post_init__(self):
-        for name in ("hidden", "anneal_steps", "lessons_per_trial", "capacity", "warmup_steps"):
+        for name in ("hidden", "anneal_steps", "lessons_per_trial", "capacity", "warmup_steps", "window", "context"):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < (0 if name in ("hidden", "lessons_per_trial",
-                                                                                    "warmup_steps") else 1):
-                raise ValueError(f"option {name} must be a whole number >= "
-                                 f"{0 if name in ('hidden', 'lessons_per_trial', 'warmup_steps') else 1}, got {v!r}")
+            low = 0 if name in ("hidden", "lessons_per_trial", "warmup_steps", "context") else 1
+            if isinstance(v, bool) or not isinstance(v, int) or v < low:
+                raise ValueError(f"option {name} must be a whole number >= {low}, got {v!r}")
         for name, lo, hi in (("lr", 0, math.inf), ("init_range", 0, math.inf), ("t_start", 0, math.inf),
                              ("t_end", 0, math.inf)):
             v = getattr(self, name)
@@ -201,13 +207,13 @@ class Agent:
         self.rng = np.random.default_rng(seed)
         self.steps_done, self.trials_done = 0, 0
         o = options
-        net = NetConfig(scaler.n_inputs, o.hidden, value_range=self.value_range, init_range=o.init_range, lr=o.lr,
-                        momentum=o.momentum)
-        replay = None if kind == "QCON" else ReplayConfig(
-            capacity=o.capacity, lessons_per_trial=LinearSchedule(o.lessons_per_trial, o.lessons_per_trial),
-            p_threshold=o.p_threshold)
-        cfg = QCONConfig(net=net, temperature=self.temperature, gamma=o.gamma, lam=o.lam, replay=replay)
-        self.learner = QCON(cfg, int(action_space.n), self.rng)
+        self.learner = _learner(kind, o, scaler.n_inputs, int(action_space.n), self.value_range, self.temperature,
+                                self.rng)
+
+    @property
+    def nets(self):
+        """The learner's networks (``state_dict`` / ``load_state_dict``)."""
+        return self.learner.net if self.kind == "recurrent-Q" else self.learner.q
 
     def temperature(self, trial: int) -> float:
         """T in Q units at the current step: linear on Q / value_range from t_start to t_end over anneal_steps."""
@@ -239,14 +245,17 @@ class Agent:
         return self
 
     def predict(self, obs) -> int:
-        """The greedy action (T = 0) for a raw observation."""
+        """The greedy action (T = 0) for a raw observation (memoryless agents: window-Q and recurrent-Q act on a
+        history, which ``evaluate`` keeps)."""
+        if self.kind in MEMORY_KINDS:
+            raise ValueError(f"{self.kind} acts on a history, not one observation: use connrl.evaluate(agent, env)")
         q = self.learner.q.values(self.scaler.encode(obs))
         return int(np.argmax(q))
 
     def save(self, path) -> Path:
         """``path/agent.json`` and ``path/agent.npz`` (no pickle), each written atomically; returns ``path``."""
         path = Path(path)
-        atomic_save_npz(path / "agent.npz", **self.learner.q.state_dict())
+        atomic_save_npz(path / "agent.npz", **self.nets.state_dict())
         atomic_write_text(path / "agent.json", json.dumps({
             "format": FORMAT, "kind": "connrl agent", "agent": self.kind, "connrl": _version(),
             "env_id": self.env_id, "observation_space": _space_json(self.observation_space),
@@ -254,6 +263,24 @@ class Agent:
             "scaler": self.scaler.to_json(), "value_range": self.value_range, "seed": self.seed,
             "steps_done": self.steps_done, "trials_done": self.trials_done}, indent=1) + "\n")
         return path
+
+
+def _learner(kind: str, o: AgentOptions, n_inputs: int, n_actions: int, value_range: float, temperature, rng):
+    """The thesis learner ``kind`` on ``n_inputs`` scaled inputs, its Q in +-value_range."""
+    replay = None if kind == "QCON" else ReplayConfig(
+        capacity=o.capacity, lessons_per_trial=LinearSchedule(o.lessons_per_trial, o.lessons_per_trial),
+        p_threshold=o.p_threshold, batch=kind == "recurrent-Q")
+    if kind == "recurrent-Q":
+        net = RecurrentNetConfig(n_inputs, max(o.hidden, 1), min(o.context, max(o.hidden, 1)), value_range=value_range,
+                                 init_range=o.init_range, lr=o.lr, momentum=o.momentum)
+        return RecurrentQ(RecurrentQConfig(net=net, temperature=temperature, gamma=o.gamma, lam=o.lam, replay=replay),
+                          n_actions, rng)
+    size = window_input_size(n_inputs, n_actions, o.window) if kind == "window-Q" else n_inputs
+    net = NetConfig(size, o.hidden, value_range=value_range, init_range=o.init_range, lr=o.lr, momentum=o.momentum)
+    cfg = QCONConfig(net=net, temperature=temperature, gamma=o.gamma, lam=o.lam, replay=replay)
+    if kind == "window-Q":
+        return WindowQ(cfg, n_actions, rng, n_sensation=n_inputs, window=o.window)
+    return QCON(cfg, n_actions, rng)
 
 
 def _version() -> str:
@@ -278,8 +305,9 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, **options) -> Agent:
     spec = getattr(env, "spec", None)
     agent = Agent(kind, o, env.observation_space, env.action_space, scaler, value_range,
                   int(rng.integers(2**31)), spec.id if spec is not None else None)
-    if agent.learner.book.memory is not None:  # QCON-R replays the warm-up's episodes too: every action's net
-        for obs, acts, rews, terminated in episodes:  # learns from the start, so none is left at its initial value
+    if agent.learner.book.memory is not None and kind != "window-Q":  # replay the warm-up's episodes too: every
+        for obs, acts, rews, terminated in episodes:  # action's net learns from the start, none left as it began
+            # (window-Q's lessons hold windows the warm-up did not record)
             agent.learner.book.memory.add(Lesson(np.array([scaler.encode(x) for x in obs]), np.array(acts),
                                                  np.array(rews), terminated=terminated, truncated=not terminated))
     agent._env = env
@@ -309,7 +337,7 @@ def load(path, env=None) -> Agent:
         agent = Agent(m["agent"], options_from(m["options"]), obs_space, act_space,
                       InputScaler.from_json(m["scaler"]), m["value_range"], m["seed"], m.get("env_id"))
         with np.load(npz, allow_pickle=False) as z:
-            agent.learner.q.load_state_dict({k: z[k] for k in z.files})
+            agent.nets.load_state_dict({k: z[k] for k in z.files})
     except (KeyError, TypeError, ValueError, OSError) as exc:
         raise ValueError(f"{path}: not a readable connrl agent ({type(exc).__name__}: {exc})") from None
     agent.steps_done, agent.trials_done = int(m.get("steps_done", 0)), int(m.get("trials_done", 0))
@@ -329,14 +357,7 @@ def evaluate(agent: Agent, env, episodes: int = 10, seed: int = 0) -> list[float
     learnt."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a whole number >= 1, got {episodes!r}")
-    returns = []
-    for k in range(episodes):
-        obs, _ = env.reset(seed=seed + k)
-        total, done = 0.0, False
-        while not done:
-            obs, r, terminated, truncated, _ = env.step(agent.predict(obs))
-            total += float(r)
-            done = terminated or truncated
-        returns.append(total)
-    return returns
+    scaled = _Scaled(env, agent.scaler)  # the learner's own greedy trial (T = 0, no random draws, nothing learnt)
+    return [run_trial(scaled, agent.learner, trial=agent.trials_done, learning=False, seed=seed + k).total_reward
+            for k in range(episodes)]
 

@@ -478,11 +478,11 @@ def _add_tool_commands(sub) -> None:
 
 def _add_own_task_commands(sub) -> None:
     """train, evaluate (connrl.api)."""
-    s = sub.add_parser("train", help="train a thesis learner on any Gymnasium task", description="Train QCON or "
-                       "QCON-R on ENV_ID with inputs and values scaled from the task (connrl.api), then save it "
-                       "(agent.json, agent.npz) and its learning curve (curve.png).")
+    s = sub.add_parser("train", help="train a thesis learner on any Gymnasium task", description="Train QCON, "
+                       "QCON-R, window-Q or recurrent-Q on ENV_ID with inputs and values scaled from the task "
+                       "(connrl.api), then save it (agent.json, agent.npz) and its learning curve (curve.png).")
     s.add_argument("env_id", help="a Gymnasium environment id, e.g. CartPole-v1 or connrl/PoleBalancing-v0")
-    s.add_argument("--agent", default="QCON-R", help="QCON or QCON-R (default)")
+    s.add_argument("--agent", default="QCON-R", help="QCON, QCON-R (default), window-Q or recurrent-Q")
     s.add_argument("--steps", type=_positive_int, default=50_000, help="environment steps (default 50000)")
     s.add_argument("--seed", type=_seed, default=0)
     s.add_argument("--save", default=None, help="folder to save in (default runs/train/ENV-AGENT-seedS)")

@@ -118,3 +118,24 @@ def test_the_readme_snippet_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     exec(compile(code.replace("50_000", "300"), "README", "exec"), {})
     assert (tmp_path / "cartpole-agent" / "agent.npz").exists()
+
+
+@pytest.mark.parametrize("kind", ["window-Q", "recurrent-Q"])
+def test_memory_agents_learn_save_load_and_evaluate_on_a_hidden_state_task(kind, tmp_path):
+    env = gym.make("connrl/CupCollection-v0")  # Ch. 7's task: the sensation does not tell the two instances apart
+    agent = connrl.make_agent(env, kind, seed=1, warmup_steps=100, hidden=6, context=4).learn(400)
+    assert agent.steps_done >= 400
+    agent.save(tmp_path / kind)
+    again = connrl.load(tmp_path / kind, env)
+    assert connrl.evaluate(again, env, 3, seed=2) == connrl.evaluate(agent, env, 3, seed=2)
+    with pytest.raises(ValueError, match="acts on a history"):
+        agent.predict(env.reset(seed=0)[0])
+
+
+def test_evaluating_does_not_move_the_learners_random_stream():
+    a = make_agent(Toy(), "QCON-R", seed=4, warmup_steps=20).learn(60)
+    b = make_agent(Toy(), "QCON-R", seed=4, warmup_steps=20).learn(60)
+    connrl.evaluate(a, Toy(), 3)  # greedy: no draws
+    a.learn(60)
+    b.learn(60)
+    np.testing.assert_array_equal(a.learner.q.w1, b.learner.q.w1)
