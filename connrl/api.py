@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
@@ -168,9 +169,15 @@ class _Scaled(gym.ObservationWrapper):
         super().__init__(env)
         self.scaler = scaler
         self.observation_space = spaces.Box(-np.inf, np.inf, (scaler.n_inputs,), np.float64)
+        self.max_abs_reward = 0.0  # the largest |reward| it has passed on
 
     def observation(self, observation):
         return self.scaler.encode(observation)
+
+    def step(self, action):
+        obs, r, terminated, truncated, info = super().step(action)
+        self.max_abs_reward = max(self.max_abs_reward, abs(float(r)))
+        return obs, r, terminated, truncated, info
 
 
 def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, float, list]:
@@ -235,6 +242,7 @@ class Agent:
                               seed=int(self.rng.integers(2**31)))
             self.steps_done += stats.steps
             self.trials_done += 1
+            self._check_range(scaled.max_abs_reward)
             if progress:
                 print(f"\rsteps {self.steps_done}/{end}  trial {self.trials_done}  return {stats.total_reward:.1f}",
                       end="", flush=True)
@@ -243,6 +251,17 @@ class Agent:
         if progress:
             print()
         return self
+
+    def _check_range(self, r_max: float) -> None:
+        """Warn once when a reward seen while learning allows returns beyond +-value_range (|r| / (1 - gamma) above
+        it): such targets are cut off by the nets' output range and the Q-values stop telling actions apart."""
+        bound = r_max / max(1.0 - self.options.gamma, 1e-3)
+        if not getattr(self, "_range_warned", False) and bound > self.value_range * (1 + 1e-9):
+            self._range_warned = True
+            warnings.warn(f"a reward of {r_max:.3g} allows returns up to {bound:.3g}, beyond value_range "
+                          f"+-{self.value_range:.3g}: such targets are cut off; give a larger value_range "
+                          "(make_agent(..., value_range=...) or connrl train --option value_range=...)", RuntimeWarning,
+                          stacklevel=3)
 
     def predict(self, obs) -> int:
         """The greedy action (T = 0) for a raw observation (memoryless agents: window-Q and recurrent-Q act on a

@@ -139,3 +139,13 @@ def test_evaluating_does_not_move_the_learners_random_stream():
     a.learn(60)
     b.learn(60)
     np.testing.assert_array_equal(a.learner.q.w1, b.learner.q.w1)
+
+
+def test_a_value_range_too_small_for_the_returns_is_warned_once():
+    with pytest.warns(RuntimeWarning, match=r"a reward of 2 allows returns up to 200, beyond value_range \+-1") as w:
+        make_agent(Toy(), "QCON-R", seed=0, warmup_steps=20, value_range=1.0).learn(100)
+    assert len([x for x in w if "value_range" in str(x.message)]) == 1
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        make_agent(Toy(), "QCON-R", seed=0, warmup_steps=20).learn(100)  # the default range: no warning
