@@ -73,7 +73,7 @@ class AgentOptions:
     def __post_init__(self):
         for name in ("hidden", "anneal_steps", "lessons_per_trial", "capacity", "warmup_steps", "window", "context"):
             v = getattr(self, name)
-            low = 0 if name in ("hidden", "lessons_per_trial", "warmup_steps", "context") else 1
+            low = 0 if name in ("hidden", "lessons_per_trial", "context") else 1
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"option {name} must be a whole number >= {low}, got {v!r}")
         for name, lo, hi in (("lr", 0, math.inf), ("init_range", 0, math.inf), ("t_start", 0, math.inf),
@@ -89,8 +89,8 @@ class AgentOptions:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
                 raise ValueError(f"option {name} must be in [0, 1], got {v!r}")
-        if self.value_range is not None and not (isinstance(self.value_range, (int, float))
-                                                 and 0 < self.value_range < math.inf):
+        if self.value_range is not None and (isinstance(self.value_range, bool) or not (
+                isinstance(self.value_range, (int, float)) and 0 < self.value_range < math.inf)):
             raise ValueError(f"option value_range must be None or a number > 0, got {self.value_range!r}")
 
 
@@ -105,7 +105,7 @@ def options_from(kwargs: dict) -> AgentOptions:
 
 def _space_json(space) -> dict:
     if isinstance(space, spaces.Discrete):
-        return {"type": "Discrete", "n": int(space.n)}
+        return {"type": "Discrete", "n": int(space.n), "start": int(space.start)}
     if isinstance(space, spaces.Box):
         return {"type": "Box", "shape": list(space.shape), "low": np.asarray(space.low, float).ravel().tolist(),
                 "high": np.asarray(space.high, float).ravel().tolist()}
@@ -134,7 +134,7 @@ class InputScaler:
     @classmethod
     def fit(cls, space, samples: np.ndarray) -> InputScaler:
         if isinstance(space, spaces.Discrete):
-            return cls("onehot", space.n)
+            return cls("onehot", space.n, offset=np.full(space.n, float(space.start)))
         low, high = np.asarray(space.low, float).ravel(), np.asarray(space.high, float).ravel()
         x = np.asarray(samples, float).reshape(len(samples), -1)
         bounded = np.isfinite(low) & np.isfinite(high) & (high - low < 1e6)
@@ -142,8 +142,8 @@ class InputScaler:
         lo, hi = np.where(bounded, low, 0.0), np.where(bounded, high, 0.0)
         offset = np.where(bounded, (lo + hi) / 2, mean)
         # unbounded: 2 standard deviations of the random policy's observations reach +-1
-        scale = np.where(bounded, (hi - lo) / 2, np.maximum(2 * spread, 1e-6))
-        return cls("affine", low.size, offset, np.where(scale > 0, scale, 1.0))
+        scale = np.where(bounded, (hi - lo) / 2, 2 * spread)
+        return cls("affine", low.size, offset, np.where(scale > 1e-6, scale, 1.0))  # no spread seen: left as it is
 
     @property
     def n_inputs(self) -> int:
@@ -152,7 +152,7 @@ class InputScaler:
     def encode(self, obs) -> np.ndarray:
         if self.kind == "onehot":
             out = np.full(self.n, -0.5)
-            out[int(obs)] = 0.5
+            out[int(obs) - int(self.offset[0])] = 0.5  # the offset holds the space's start
             return out
         return (np.asarray(obs, float).ravel() - self.offset) / self.scale
 
@@ -236,6 +236,7 @@ class Agent:
             raise ValueError("learn() needs the environment: make_agent(env, ...) keeps it, load(path, env) too")
         if isinstance(total_steps, bool) or not isinstance(total_steps, int) or total_steps < 1:
             raise ValueError(f"total_steps must be a whole number >= 1, got {total_steps!r}")
+        self.check_env(env)
         scaled, end = _Scaled(env, self.scaler), self.steps_done + total_steps
         while self.steps_done < end:
             stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
@@ -251,6 +252,14 @@ class Agent:
         if progress:
             print()
         return self
+
+    def check_env(self, env) -> None:
+        """Refuse, in one line, an environment whose spaces are not the ones this agent was made for."""
+        for name in ("observation_space", "action_space"):
+            mine, theirs = _space_json(getattr(self, name)), _space_json(getattr(env, name))
+            if mine != theirs:
+                raise ValueError(f"this agent was made for {self.env_id or 'another environment'} with {name} "
+                                 f"{mine}; the given environment has {theirs}")
 
     def _check_range(self, r_max: float) -> None:
         """Warn once when a reward seen while learning allows returns beyond +-value_range (|r| / (1 - gamma) above
@@ -274,13 +283,19 @@ class Agent:
     def save(self, path) -> Path:
         """``path/agent.json`` and ``path/agent.npz`` (no pickle), each written atomically; returns ``path``."""
         path = Path(path)
-        atomic_save_npz(path / "agent.npz", **self.nets.state_dict())
+        memory = self.learner.book.memory
+        lessons = memory.lessons if memory is not None else []
+        arrays = {f"lesson{k}_{name}": getattr(lesson, name) for k, lesson in enumerate(lessons)
+                  for name in ("inputs", "actions", "rewards")}  # the replay memory: learning goes on as it would
+        atomic_save_npz(path / "agent.npz", **self.nets.state_dict(), **arrays)
         atomic_write_text(path / "agent.json", json.dumps({
             "format": FORMAT, "kind": "connrl agent", "agent": self.kind, "connrl": _version(),
             "env_id": self.env_id, "observation_space": _space_json(self.observation_space),
             "action_space": _space_json(self.action_space), "options": asdict(self.options),
             "scaler": self.scaler.to_json(), "value_range": self.value_range, "seed": self.seed,
-            "steps_done": self.steps_done, "trials_done": self.trials_done}, indent=1) + "\n")
+            "steps_done": self.steps_done, "trials_done": self.trials_done,
+            "lesson_ends": [[bool(lesson.terminated), bool(lesson.truncated)] for lesson in lessons],
+            "rng": self.rng.bit_generator.state}, indent=1) + "\n")
         return path
 
 
@@ -334,39 +349,46 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, **options) -> Agent:
 
 
 def load(path, env=None) -> Agent:
-    """An agent written by ``Agent.save``; with ``env``, its spaces must be the saved ones. ValueError in one line."""
+    """An agent written by ``Agent.save`` (weights, replay memory, random state: learning goes on as it would have);
+    with ``env``, its spaces must be the saved ones. ValueError in one line."""
     path = Path(path)
     meta, npz = path / "agent.json", path / "agent.npz"
     try:
         m = json.loads(meta.read_text())
-    except (OSError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{meta}: not a readable connrl agent file ({exc})") from None
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{meta}: not a readable connrl agent file ({type(exc).__name__})") from None
     if not isinstance(m, dict) or m.get("kind") != "connrl agent":
         raise ValueError(f"{meta}: not a connrl agent file")
     if m.get("format") != FORMAT:
         raise ValueError(f"{meta}: agent file format {m.get('format')!r}; this connrl reads format {FORMAT}")
-    if env is not None:
-        for name in ("observation_space", "action_space"):
-            if _space_json(getattr(env, name)) != m[name]:
-                raise ValueError(f"{meta}: saved for {m.get('env_id') or 'another environment'} with {name} "
-                                 f"{m[name]}, the given environment has {_space_json(getattr(env, name))}")
-    obs_space = _space_from(m["observation_space"])
-    act_space = spaces.Discrete(m["action_space"]["n"])
     try:
-        agent = Agent(m["agent"], options_from(m["options"]), obs_space, act_space,
-                      InputScaler.from_json(m["scaler"]), m["value_range"], m["seed"], m.get("env_id"))
+        agent = Agent(m["agent"], options_from(m["options"]), _space_from(m["observation_space"]),
+                      spaces.Discrete(m["action_space"]["n"]), InputScaler.from_json(m["scaler"]), m["value_range"],
+                      m["seed"], m.get("env_id"))
         with np.load(npz, allow_pickle=False) as z:
-            agent.nets.load_state_dict({k: z[k] for k in z.files})
-    except (KeyError, TypeError, ValueError, OSError) as exc:
+            arrays = {k: z[k] for k in z.files}
+        agent.nets.load_state_dict({k: v for k, v in arrays.items() if not k.startswith("lesson")})
+        for k, (terminated, truncated) in enumerate(m.get("lesson_ends", [])):
+            agent.learner.book.memory.add(Lesson(arrays[f"lesson{k}_inputs"], arrays[f"lesson{k}_actions"],
+                                                 arrays[f"lesson{k}_rewards"], terminated=bool(terminated),
+                                                 truncated=bool(truncated)))
+        if "rng" in m:
+            agent.rng.bit_generator.state = m["rng"]
+        agent.steps_done, agent.trials_done = int(m.get("steps_done", 0)), int(m.get("trials_done", 0))
+    except Exception as exc:  # any damage (missing keys, a truncated or foreign archive) is one clear line
         raise ValueError(f"{path}: not a readable connrl agent ({type(exc).__name__}: {exc})") from None
-    agent.steps_done, agent.trials_done = int(m.get("steps_done", 0)), int(m.get("trials_done", 0))
+    if env is not None:
+        try:
+            agent.check_env(env)
+        except ValueError as exc:
+            raise ValueError(f"{meta}: {exc}") from None
     agent._env = env
     return agent
 
 
 def _space_from(d: dict):
     if d["type"] == "Discrete":
-        return spaces.Discrete(d["n"])
+        return spaces.Discrete(d["n"], start=d.get("start", 0))
     shape = tuple(d["shape"])
     return spaces.Box(np.asarray(d["low"]).reshape(shape), np.asarray(d["high"]).reshape(shape), dtype=np.float64)
 
@@ -376,6 +398,7 @@ def evaluate(agent: Agent, env, episodes: int = 10, seed: int = 0) -> list[float
     learnt."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a whole number >= 1, got {episodes!r}")
+    agent.check_env(env)
     scaled = _Scaled(env, agent.scaler)  # the learner's own greedy trial (T = 0, no random draws, nothing learnt)
     return [run_trial(scaled, agent.learner, trial=agent.trials_done, learning=False, seed=seed + k).total_reward
             for k in range(episodes)]

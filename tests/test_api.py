@@ -70,7 +70,7 @@ def test_learning_is_deterministic_and_save_load_evaluate_gives_the_same_returns
 
 def test_a_file_for_another_environment_or_format_is_refused(tmp_path):
     make_agent(Toy(), "QCON", warmup_steps=10).save(tmp_path / "agent")
-    with pytest.raises(ValueError, match="saved for another environment with observation_space"):
+    with pytest.raises(ValueError, match="this agent was made for another environment with observation_space"):
         connrl.load(tmp_path / "agent", gym.make("CartPole-v1"))
     meta = tmp_path / "agent" / "agent.json"
     meta.write_text(meta.read_text().replace('"format": 1', '"format": 99'))
@@ -149,3 +149,31 @@ def test_a_value_range_too_small_for_the_returns_is_warned_once():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         make_agent(Toy(), "QCON-R", seed=0, warmup_steps=20).learn(100)  # the default range: no warning
+
+
+@pytest.mark.parametrize("kind", ["QCON", "QCON-R", "window-Q", "recurrent-Q"])
+def test_a_loaded_agent_learns_on_exactly_as_the_saved_one_would(kind, tmp_path):
+    a = make_agent(Toy(), kind, seed=2, warmup_steps=30, hidden=4, context=2).learn(100)
+    a.save(tmp_path / "a")
+    b = connrl.load(tmp_path / "a", Toy())
+    a.learn(100)
+    b.learn(100)
+    np.testing.assert_array_equal(a.nets.state_dict()["w1"], b.nets.state_dict()["w1"])
+
+
+def test_a_damaged_agent_file_and_the_wrong_environment_are_one_line(tmp_path):
+    agent = make_agent(Toy(), "QCON-R", warmup_steps=10).save(tmp_path / "a")
+    (agent / "agent.npz").write_bytes(b"")
+    with pytest.raises(ValueError, match="not a readable connrl agent"):
+        connrl.load(agent)
+    (agent / "agent.json").write_text("[1]")
+    with pytest.raises(ValueError, match="not a connrl agent file"):
+        connrl.load(agent)
+    fresh = make_agent(Toy(), "QCON-R", warmup_steps=10)
+    with pytest.raises(ValueError, match="this agent was made for"):
+        connrl.evaluate(fresh, gym.make("CartPole-v1"))
+
+
+def test_an_input_without_spread_in_the_warm_up_is_left_as_it_is():
+    s = InputScaler.fit(spaces.Box(-np.inf, np.inf, (2,)), np.array([[3.0, 1.0], [3.0, 2.0]]))
+    np.testing.assert_allclose(s.encode([4.0, 1.5]), [1.0, 0.0])  # offset 3, scale 1 (no spread); 1.5 - 1.5 = 0

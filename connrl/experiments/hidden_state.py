@@ -244,6 +244,7 @@ EXPERIMENTS = [
         y_label="test steps to collect both cups in both instances", y_reference={"optimal": OPTIMAL_SCORE}),
     ExperimentSpec(
         name="pole-hidden", title="Task 4: pole balancing from cart position and pole angle only (Table 7.1)",
+        full_runs=18,  # the stored results: 18 runs for a median over enough runs (RESULTS, Ch. 7)
         section="7.5.4", run="connrl.experiments.hidden_state:run_pole_hidden", params=PoleHiddenParams(),
         profiles={"tiny": {"runs": 1, "trials": 3, "test_steps": 200},
                   "quick": {"runs": 2, "trials": 300},

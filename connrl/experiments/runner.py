@@ -242,9 +242,13 @@ class RayExecutor:
         import ray
 
         started = not ray.is_initialized()
-        if started:
-            ray.init(address=self.address, num_cpus=None if self.address else self.workers, include_dashboard=False,
-                     log_to_driver=False, configure_logging=False)
+        if started:  # "local": a fresh instance here, whatever RAY_ADDRESS says; else the cluster at address
+            try:
+                ray.init(address=self.address or "local", num_cpus=None if self.address else self.workers,
+                         include_dashboard=False, log_to_driver=False, configure_logging=False)
+            except Exception as exc:  # unreachable address, a cluster refusing num_cpus, ...: one line
+                raise ExecutorError(f"cannot start or reach Ray at {self.address or 'a local instance'}: "
+                                    f"{type(exc).__name__}: {exc}") from None
         task = ray.remote(num_cpus=1)(run_job)
         pending = {task.remote(job): job for job in jobs}
         try:
@@ -266,6 +270,10 @@ class RayExecutor:
 
 
 EXECUTORS = ("process", "ray")
+
+
+class ExecutorError(RuntimeError):
+    """The executor could not start (said in one line by the CLI)."""
 
 
 def check_executor(executor: str) -> None:

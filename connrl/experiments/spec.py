@@ -137,6 +137,7 @@ class ExperimentSpec:
     y_reference: Mapping[str, float] = field(default_factory=dict)  # horizontal lines on the plot
     x_reference: Mapping[str, float] = field(default_factory=dict)  # vertical lines on the plot
     seed: int = 0  # the first seed its stored results use (`connrl reproduce`); development or fresh-seed checks differ
+    full_runs: int | None = None  # runs per variant of its stored full-profile results, where not the profile's
 
     def __post_init__(self):
         if not dataclasses.is_dataclass(self.params) or isinstance(self.params, type):
