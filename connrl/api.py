@@ -213,6 +213,8 @@ class Agent:
         self.env_id, self.seed = env_id, seed
         self.rng = np.random.default_rng(seed)
         self.steps_done, self.trials_done = 0, 0
+        self._env = None  # the environment make_agent / load was given: learn() trains in it by default
+        self._range_warned = False
         o = options
         self.learner = _learner(kind, o, scaler.n_inputs, int(action_space.n), self.value_range, self.temperature,
                                 self.rng)
@@ -231,7 +233,7 @@ class Agent:
     def learn(self, total_steps: int, callback=None, progress: bool = False, env=None) -> Agent:
         """Train for at least ``total_steps`` environment steps (whole trials) in ``env`` (the one given to
         ``make_agent`` by default); ``callback(agent, trial_return)`` after each trial, False from it stops."""
-        env = env if env is not None else getattr(self, "_env", None)
+        env = env if env is not None else self._env
         if env is None:
             raise ValueError("learn() needs the environment: make_agent(env, ...) keeps it, load(path, env) too")
         if isinstance(total_steps, bool) or not isinstance(total_steps, int) or total_steps < 1:
@@ -265,7 +267,7 @@ class Agent:
         """Warn once when a reward seen while learning allows returns beyond +-value_range (|r| / (1 - gamma) above
         it): such targets are cut off by the nets' output range and the Q-values stop telling actions apart."""
         bound = r_max / max(1.0 - self.options.gamma, 1e-3)
-        if not getattr(self, "_range_warned", False) and bound > self.value_range * (1 + 1e-9):
+        if not self._range_warned and bound > self.value_range * (1 + 1e-9):
             self._range_warned = True
             warnings.warn(f"a reward of {r_max:.3g} allows returns up to {bound:.3g}, beyond value_range "
                           f"+-{self.value_range:.3g}: such targets are cut off; give a larger value_range "

@@ -14,7 +14,7 @@ from connrl.experiments.steps import GOOD_FRACTION, THESIS_CHG_WITH_XY, THESIS_S
 from connrl.report.integration_probe import draw_probe, probe_table
 from connrl.report.page import figure, load_summary, note, run_rows, stored, summary_table
 from connrl.report.recharge import draw_room_curves
-from connrl.report.recharge_claims import at_end, draw_paths
+from connrl.report.recharge_claims import at_end, draw_paths, quantity
 from connrl.report.story import draw_story
 
 EXPERIMENTS = [*integration.EXPERIMENTS, *steps.EXPERIMENTS]
@@ -60,7 +60,7 @@ def claims(summary: dict) -> list[str]:
         lines.append(f"| acceptably good after 150 trials (8.3) | final performance at least {ACCEPTABLE:.0%} of Ch. 6 "
                      f"Exp. 3's (with X-Y, same seeds) | {_mean(rec):.2f} vs {_mean(ch6):.2f} ({_f(ratio)}) | "
                      f"{'yes' if ratio is not None and ratio >= ACCEPTABLE else 'no'} |")
-    changed = [_mean(per_run(summary, RECURRENT, f"changed_docked_{r}")) for r in ROOMS]
+    changed = [quantity(summary, RECURRENT, f"changed_docked_{r}") for r in ROOMS]
     if all(c is not None for c in changed):
         lines.append(f"| in the changed layout the recurrent policy still docks, learning off (8.4) | docks from "
                      f"most (> 50 %) fresh tasks of each room | A {changed[0]:.2f}, B {changed[1]:.2f}, C "
@@ -74,7 +74,7 @@ def layouts_table(summary: dict) -> list[str]:
              "|---|---|---|---|---|---|"]
     for label in summary["variants"]:
         for r in ROOMS:
-            cells = [_f(_mean(per_run(summary, label, f"{lay}_{what}_{r}")), 2 if what == "docked" else 0)
+            cells = [_f(quantity(summary, label, f"{lay}_{what}_{r}"), 2 if what == "docked" else 0)
                      for what in ("docked", "steps") for lay in ("default", "changed")]
             lines.append(f"| {label} | {r} | " + " | ".join(cells) + " |")
     return lines
@@ -85,7 +85,7 @@ def legs_table(summary: dict) -> list[str]:
     lines = ["| learner | reach room C | reach room A | docked | passes from C back into B per task |",
              "|---|---|---|---|---|"]
     for label in summary["variants"]:
-        cells = [_f(_mean(per_run(summary, label, f"default_{key}"))) for key in
+        cells = [_f(quantity(summary, label, f"default_{key}")) for key in
                  ("B_reached_C", "B_reached_A", "docked_B", "B_returns")]
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return lines
@@ -102,8 +102,8 @@ def steps_table(chg: tuple | None, beh: tuple | None) -> list[str]:
             task = v.params["task"]
             runs = run_rows(spec, summary, out, v.label)
             trials, spent = steps_to_good(runs)
-            teach = _mean(per_run(summary, v.label, "teaching_steps"))
-            ratio = _ratio(at_end(runs, "performance"), _mean(per_run(summary, v.label, "teacher_performance")))
+            teach = quantity(summary, v.label, "teaching_steps")
+            ratio = _ratio(at_end(runs, "performance"), quantity(summary, v.label, "teacher_performance"))
             rows.append((task, THESIS_STEPS[task][0], teach, THESIS_STEPS[task][1], spent, trials, ratio))
     if chg is not None:
         spec, summary, out = chg
@@ -111,7 +111,7 @@ def steps_table(chg: tuple | None, beh: tuple | None) -> list[str]:
                                     (CH6, "CHG with X-Y (Ch. 6 Exp. 3; 8.5 fn. 1)", THESIS_CHG_WITH_XY)):
             runs = run_rows(spec, summary, out, label)
             trials, spent = steps_to_good(runs)
-            ratio = _ratio(at_end(runs, "performance"), _mean(per_run(summary, label, "teacher_performance")))
+            ratio = _ratio(at_end(runs, "performance"), quantity(summary, label, "teacher_performance"))
             rows.append((task, 0, 0, thesis, spent, trials, ratio))
     for task, t_th, t_ours, e_th, e_ours, trials, ratio in rows:
         lines.append(f"| {task} | {t_th:,} | {_f(t_ours, 0)} | {e_th:,} | {_f(e_ours, 0)} ({_f(trials, 0)}) | "
@@ -160,12 +160,11 @@ def hidden_state_lines(summary: dict, records: list[dict], folder: Path, doc: Pa
 def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
     out_dir, doc = Path(out_dir), Path(doc)
     spec, beh_spec = integration.EXPERIMENTS[0], steps.EXPERIMENTS[0]
-    summary, beh_summary = load_summary(out_dir, spec.name), load_summary(out_dir, beh_spec.name)
+    (summary, records), beh_summary = stored(spec, out_dir), load_summary(out_dir, beh_spec.name)
     if summary is None and beh_summary is None:
         return ""
     lines = ["## Chapter 8: integration -- recharging without X-Y (Figs. 8.1, 8.2, the 8.5 table)", ""]
     if summary is not None:
-        _, records = stored(spec, out_dir)
         lines += ["### The claims of 8.2-8.4 beside ours", "", *claims(summary), "",
                   f"### {spec.name}: {spec.title} (thesis {spec.section})", "", summary_table(_core(summary)), "",
                   "The final tests' quantities (per room, both layouts) are in the tables below and in "
