@@ -233,7 +233,8 @@ class ProcessExecutor:
 class RayExecutor:
     """Runs as Ray tasks (``--executor ray``): on a local Ray instance started here, or on the cluster at ``address``
     (``ray start --head`` on one machine, ``ray start --address=HEAD:6379`` on the others; ``--address HEAD:6379``
-    here). The tasks compute; this process writes every record, so the cluster needs no shared disk."""
+    here). ``fn(job)`` runs as a task and its result comes back here (``_execute`` gives it ``run_job``, which writes
+    nothing, and writes the records itself, so the cluster needs no shared disk)."""
 
     def __init__(self, workers: int, address: str | None = None):
         self.workers, self.address = workers, address
@@ -249,7 +250,7 @@ class RayExecutor:
             except Exception as exc:  # unreachable address, a cluster refusing num_cpus, ...: one line
                 raise ExecutorError(f"cannot start or reach Ray at {self.address or 'a local instance'}: "
                                     f"{type(exc).__name__}: {exc}") from None
-        task = ray.remote(num_cpus=1)(run_job)
+        task = ray.remote(num_cpus=1)(fn)
         pending = {task.remote(job): job for job in jobs}
         try:
             while pending:
@@ -257,9 +258,7 @@ class RayExecutor:
                 tick()
                 for ref in done:
                     job = pending.pop(ref)
-                    record, rows = ray.get(ref)
-                    write_run_records(Path(job.path), record, rows)
-                    yield job, record
+                    yield job, ray.get(ref)
         except BaseException:
             for ref in pending:  # Ctrl-C or an error: stop the runs in flight; what finished is saved
                 ray.cancel(ref, force=True)
@@ -379,8 +378,10 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
 
 def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind: str = "process",
              address: str | None = None) -> list[dict]:
-    # a plain queue handed to the workers when they start (no manager process that could outlive us)
-    q = (mp.get_context("spawn").Queue() if workers > 1 else queue.SimpleQueue()) if show_progress else None
+    # a plain queue handed to the workers when they start (no manager process that could outlive us); Ray's tasks
+    # report no progress, only their end
+    q = None if kind == "ray" or not show_progress else (
+        mp.get_context("spawn").Queue() if workers > 1 else queue.SimpleQueue())
     executor: Executor = (RayExecutor(workers, address) if kind == "ray" else
                           ProcessExecutor(workers, q) if workers > 1 else SerialExecutor(q))
     results = []
@@ -393,7 +394,10 @@ def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kin
     try:
         if display:
             display.start()
-        for job, rec in executor.map_unordered(execute_job, jobs, tick):
+        for job, rec in executor.map_unordered(run_job if kind == "ray" else execute_job, jobs, tick):
+            if kind == "ray":  # the task ran elsewhere: its records are written here
+                rec, rows = rec
+                write_run_records(Path(job.path), rec, rows)
             results.append(rec)
             tick()
             if display:
