@@ -4,7 +4,7 @@ from connrl import envs as _envs  # noqa: F401  (registers the thesis's worlds: 
 
 __version__ = "0.1.0"
 
-_API = ("make_agent", "load", "evaluate", "Agent", "AgentOptions")
+_API = ("make_agent", "load", "evaluate", "record_lessons", "Agent", "AgentOptions")
 
 
 def __getattr__(name):  # the own-task API (connrl.api) is imported on first use: ``import connrl`` stays light

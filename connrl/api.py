@@ -18,15 +18,16 @@ hand-tuning the scales the thesis's tasks set by hand:
 - **Schedules** run over environment steps (``anneal_steps``), not trials: a user states a budget in steps.
 
 Frameworks by the thesis's names: ``"QCON"`` (on-line Q-learning, Fig. 3.4), ``"QCON-R"`` (with backward TD(lambda)
-experience replay after each trial, 3.5 and 5.1), and for tasks with hidden state Ch. 7's ``"window-Q"`` (the
-``window`` latest observations and actions as input) and ``"recurrent-Q"`` (recurrent Q-nets, batch BPTT replay).
-Files are ``agent.json`` (format, kind, spaces, options, scales) and
-``agent.npz`` (the weights, read without pickle).
+experience replay after each trial, 3.5 and 5.1), ``"QCON-T"`` (QCON-R that also replays a teacher's lessons after
+every trial, 3.7: ``make_agent(env, "QCON-T", lessons="file.json")``, a file ``record_lessons`` writes), the
+adaptive heuristic critic ``"AHCON"`` / ``"AHCON-R"`` / ``"AHCON-T"`` (a V-net and policy nets, Fig. 3.2, with
+replay and teaching likewise), and for tasks with hidden state Ch. 7's ``"window-Q"`` (the ``window`` latest
+observations and actions as input) and ``"recurrent-Q"`` (recurrent Q-nets, batch BPTT replay).
+Files are ``agent.json`` and ``agent.npz`` (no pickle; connrl.api_files).
 """
 
 from __future__ import annotations
 
-import json
 import math
 import warnings
 from dataclasses import asdict, dataclass, fields
@@ -36,17 +37,18 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from connrl.agents import QCON, LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
 from connrl.agents.memory import RecurrentQ, RecurrentQConfig, WindowQ, window_input_size
+from connrl.api_files import read_agent, read_taught, record_lessons, space_from, space_json, write_agent
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import run_trial
 from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
-from connrl.storage import atomic_save_npz, atomic_write_text
 
-FORMAT = 1
-KINDS = ("QCON", "QCON-R", "window-Q", "recurrent-Q")
+KINDS = ("QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q", "recurrent-Q")
 MEMORY_KINDS = ("window-Q", "recurrent-Q")  # act on a history: predict() needs one, evaluate() keeps it
+TAUGHT_KINDS = ("QCON-T", "AHCON-T")  # need a lesson file: make_agent(..., lessons=path)
+__all__ = ["Agent", "AgentOptions", "InputScaler", "evaluate", "load", "make_agent", "record_lessons"]
 
 
 @dataclass(frozen=True)
@@ -64,7 +66,8 @@ class AgentOptions:
     anneal_steps: int = 50_000
     lessons_per_trial: int = 20  # lessons replayed after each trial (QCON-R)
     capacity: int = 100  # latest lessons kept for replay
-    p_threshold: float = 0.01  # non-policy actions (probability below it) are not replayed (3.5.1)
+    p_threshold: float | None = None  # actions less likely than this are not replayed (3.5.1); None: the thesis's
+    # value for the framework (4.2.7): 0.01 for Q-learning, 0.2 for AHC
     value_range: float | None = None  # Q spans +-value_range; None: max |warm-up reward| / (1 - gamma)
     warmup_steps: int = 1000  # random-policy steps that set the input and value scales
     window: int = 2  # window-Q: the N latest observations and actions beside the current one (7.3)
@@ -83,6 +86,8 @@ class AgentOptions:
                 raise ValueError(f"option {name} must be a number > 0, got {v!r}")
         for name in ("momentum", "p_threshold"):
             v = getattr(self, name)
+            if v is None and name == "p_threshold":
+                continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 1:
                 raise ValueError(f"option {name} must be in [0, 1), got {v!r}")
         for name in ("gamma", "lam"):
@@ -101,15 +106,6 @@ def options_from(kwargs: dict) -> AgentOptions:
     if unknown:
         raise ValueError(f"unknown option(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(allowed)}")
     return AgentOptions(**kwargs)
-
-
-def _space_json(space) -> dict:
-    if isinstance(space, spaces.Discrete):
-        return {"type": "Discrete", "n": int(space.n), "start": int(space.start)}
-    if isinstance(space, spaces.Box):
-        return {"type": "Box", "shape": list(space.shape), "low": np.asarray(space.low, float).ravel().tolist(),
-                "high": np.asarray(space.high, float).ravel().tolist()}
-    return {"type": type(space).__name__}
 
 
 def check_spaces(env) -> None:
@@ -221,7 +217,9 @@ class Agent:
 
     @property
     def nets(self):
-        """The learner's networks (``state_dict`` / ``load_state_dict``)."""
+        """The learner's networks (``state_dict`` / ``load_state_dict``; AHCON's V-net and policy nets as one)."""
+        if self.kind.startswith("AHCON"):
+            return _NetPair(self.learner.v, self.learner.policy)
         return self.learner.net if self.kind == "recurrent-Q" else self.learner.q
 
     def temperature(self, trial: int) -> float:
@@ -258,7 +256,7 @@ class Agent:
     def check_env(self, env) -> None:
         """Refuse, in one line, an environment whose spaces are not the ones this agent was made for."""
         for name in ("observation_space", "action_space"):
-            mine, theirs = _space_json(getattr(self, name)), _space_json(getattr(env, name))
+            mine, theirs = space_json(getattr(self, name)), space_json(getattr(env, name))
             if mine != theirs:
                 raise ValueError(f"this agent was made for {self.env_id or 'another environment'} with {name} "
                                  f"{mine}; the given environment has {theirs}")
@@ -279,33 +277,45 @@ class Agent:
         history, which ``evaluate`` keeps)."""
         if self.kind in MEMORY_KINDS:
             raise ValueError(f"{self.kind} acts on a history, not one observation: use connrl.evaluate(agent, env)")
-        q = self.learner.q.values(self.scaler.encode(obs))
-        return int(np.argmax(q))
+        x = self.scaler.encode(obs)
+        merits = self.learner.policy.values(x) if self.kind.startswith("AHCON") else self.learner.q.values(x)
+        return int(np.argmax(merits))
 
     def save(self, path) -> Path:
-        """``path/agent.json`` and ``path/agent.npz`` (no pickle), each written atomically; returns ``path``."""
+        """``path/agent.json`` and ``path/agent.npz`` (no pickle; connrl.api_files), each written atomically;
+        returns ``path``."""
         path = Path(path)
         memory = self.learner.book.memory
-        lessons = memory.lessons if memory is not None else []
-        arrays = {f"lesson{k}_{name}": getattr(lesson, name) for k, lesson in enumerate(lessons)
-                  for name in ("inputs", "actions", "rewards")}  # the replay memory: learning goes on as it would
-        atomic_save_npz(path / "agent.npz", **self.nets.state_dict(), **arrays)
-        atomic_write_text(path / "agent.json", json.dumps({
-            "format": FORMAT, "kind": "connrl agent", "agent": self.kind, "connrl": _version(),
-            "env_id": self.env_id, "observation_space": _space_json(self.observation_space),
-            "action_space": _space_json(self.action_space), "options": asdict(self.options),
+        write_agent(path, {
+            "agent": self.kind, "env_id": self.env_id, "observation_space": space_json(self.observation_space),
+            "action_space": space_json(self.action_space), "options": asdict(self.options),
             "scaler": self.scaler.to_json(), "value_range": self.value_range, "seed": self.seed,
-            "steps_done": self.steps_done, "trials_done": self.trials_done,
-            "lesson_ends": [[bool(lesson.terminated), bool(lesson.truncated)] for lesson in lessons],
-            "rng": self.rng.bit_generator.state}, indent=1) + "\n")
+            "steps_done": self.steps_done, "trials_done": self.trials_done, "rng": self.rng.bit_generator.state},
+            self.nets.state_dict(), memory.lessons if memory is not None else [], self.learner.book.taught)
         return path
 
 
+class _NetPair:
+    """AHCON's V-net and policy nets behind one ``state_dict`` (keys ``v.*`` and ``policy.*``)."""
+
+    def __init__(self, v, policy):
+        self.parts = {"v": v, "policy": policy}
+
+    def state_dict(self) -> dict:
+        return {f"{name}.{k}": a for name, net in self.parts.items() for k, a in net.state_dict().items()}
+
+    def load_state_dict(self, state: dict) -> None:
+        for name, net in self.parts.items():
+            net.load_state_dict({k.split(".", 1)[1]: a for k, a in state.items() if k.startswith(name + ".")})
+
+
 def _learner(kind: str, o: AgentOptions, n_inputs: int, n_actions: int, value_range: float, temperature, rng):
-    """The thesis learner ``kind`` on ``n_inputs`` scaled inputs, its Q in +-value_range."""
-    replay = None if kind == "QCON" else ReplayConfig(
+    """The thesis learner ``kind`` on ``n_inputs`` scaled inputs, its Q (or V and merits) in +-value_range."""
+    ahc = kind.startswith("AHCON")
+    p_threshold = o.p_threshold if o.p_threshold is not None else (0.2 if ahc else 0.01)  # 4.2.7
+    replay = None if kind in ("QCON", "AHCON") else ReplayConfig(
         capacity=o.capacity, lessons_per_trial=LinearSchedule(o.lessons_per_trial, o.lessons_per_trial),
-        p_threshold=o.p_threshold, batch=kind == "recurrent-Q")
+        p_threshold=p_threshold, batch=kind == "recurrent-Q")
     if kind == "recurrent-Q":
         net = RecurrentNetConfig(n_inputs, max(o.hidden, 1), min(o.context, max(o.hidden, 1)), value_range=value_range,
                                  init_range=o.init_range, lr=o.lr, momentum=o.momentum)
@@ -313,34 +323,36 @@ def _learner(kind: str, o: AgentOptions, n_inputs: int, n_actions: int, value_ra
                           n_actions, rng)
     size = window_input_size(n_inputs, n_actions, o.window) if kind == "window-Q" else n_inputs
     net = NetConfig(size, o.hidden, value_range=value_range, init_range=o.init_range, lr=o.lr, momentum=o.momentum)
+    if ahc:  # the policy nets' merits share V's scale: Fig. 3.2 moves them by V's TD error
+        return AHCON(AHCONConfig(v_net=net, policy_net=net, temperature=temperature, gamma=o.gamma, lam=o.lam,
+                                 replay=replay), n_actions, rng)
     cfg = QCONConfig(net=net, temperature=temperature, gamma=o.gamma, lam=o.lam, replay=replay)
     if kind == "window-Q":
         return WindowQ(cfg, n_actions, rng, n_sensation=n_inputs, window=o.window)
     return QCON(cfg, n_actions, rng)
 
 
-def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-    try:
-        return version("connrl")
-    except PackageNotFoundError:
-        return "unknown"
-
-
-def make_agent(env, kind: str = "QCON-R", seed: int = 0, **options) -> Agent:
+def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options) -> Agent:
     """A thesis learner for ``env`` with its input and value scales set from a random-policy warm-up (module
-    docstring); ``options`` are ``AgentOptions`` fields."""
+    docstring); ``options`` are ``AgentOptions`` fields; ``lessons`` is the lesson file QCON-T and AHCON-T replay
+    (``record_lessons`` writes one)."""
     check_spaces(env)
     if kind not in KINDS:
         raise ValueError(f"unknown agent {kind!r}; available: {', '.join(KINDS)}")
+    if (lessons is None) == (kind in TAUGHT_KINDS):
+        raise ValueError(f"{kind} needs a lesson file: make_agent(env, {kind!r}, lessons=path)" if lessons is None
+                         else f"lessons are replayed by {' and '.join(TAUGHT_KINDS)} only, not by {kind}")
     o = options_from(options)
     rng = np.random.default_rng(seed)
     seen, r_max, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
     scaler = InputScaler.fit(env.observation_space, seen)
+    taught = read_taught(lessons, env, scaler.encode) if lessons is not None else []  # refused before any learning
+    r_max = max([r_max] + [float(np.abs(x.rewards).max()) for x in taught if x.rewards.size])
     value_range = o.value_range or max(r_max, 1e-3) / max(1.0 - o.gamma, 1e-3)
     spec = getattr(env, "spec", None)
     agent = Agent(kind, o, env.observation_space, env.action_space, scaler, value_range,
                   int(rng.integers(2**31)), spec.id if spec is not None else None)
+    agent.learner.add_taught_lessons(taught)
     if agent.learner.book.memory is not None and kind != "window-Q":  # replay the warm-up's episodes too: every
         for obs, acts, rews, terminated in episodes:  # action's net learns from the start, none left as it began
             # (window-Q's lessons hold windows the warm-up did not record)
@@ -351,48 +363,29 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, **options) -> Agent:
 
 
 def load(path, env=None) -> Agent:
-    """An agent written by ``Agent.save`` (weights, replay memory, random state: learning goes on as it would have);
-    with ``env``, its spaces must be the saved ones. ValueError in one line."""
+    """An agent written by ``Agent.save`` (weights, replay memory, taught lessons, random state: learning goes on as it
+    would have); with ``env``, its spaces must be the saved ones. ValueError in one line."""
     path = Path(path)
-    meta, npz = path / "agent.json", path / "agent.npz"
+    m, state, memory, taught = read_agent(path)
     try:
-        m = json.loads(meta.read_text())
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{meta}: not a readable connrl agent file ({type(exc).__name__})") from None
-    if not isinstance(m, dict) or m.get("kind") != "connrl agent":
-        raise ValueError(f"{meta}: not a connrl agent file")
-    if m.get("format") != FORMAT:
-        raise ValueError(f"{meta}: agent file format {m.get('format')!r}; this connrl reads format {FORMAT}")
-    try:
-        agent = Agent(m["agent"], options_from(m["options"]), _space_from(m["observation_space"]),
-                      spaces.Discrete(m["action_space"]["n"]), InputScaler.from_json(m["scaler"]), m["value_range"],
+        agent = Agent(m["agent"], options_from(m["options"]), space_from(m["observation_space"]),
+                      space_from(m["action_space"]), InputScaler.from_json(m["scaler"]), m["value_range"],
                       m["seed"], m.get("env_id"))
-        with np.load(npz, allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-        agent.nets.load_state_dict({k: v for k, v in arrays.items() if not k.startswith("lesson")})
-        for k, (terminated, truncated) in enumerate(m.get("lesson_ends", [])):
-            agent.learner.book.memory.add(Lesson(arrays[f"lesson{k}_inputs"], arrays[f"lesson{k}_actions"],
-                                                 arrays[f"lesson{k}_rewards"], terminated=bool(terminated),
-                                                 truncated=bool(truncated)))
-        if "rng" in m:
-            agent.rng.bit_generator.state = m["rng"]
-        agent.steps_done, agent.trials_done = int(m.get("steps_done", 0)), int(m.get("trials_done", 0))
-    except Exception as exc:  # any damage (missing keys, a truncated or foreign archive) is one clear line
+        agent.nets.load_state_dict(state)
+        for lesson in memory:
+            agent.learner.book.memory.add(lesson)
+        agent.learner.add_taught_lessons(taught)
+        agent.rng.bit_generator.state = m["rng"]
+        agent.steps_done, agent.trials_done = int(m["steps_done"]), int(m["trials_done"])
+    except Exception as exc:  # any damage (missing keys, wrong shapes) is one clear line
         raise ValueError(f"{path}: not a readable connrl agent ({type(exc).__name__}: {exc})") from None
     if env is not None:
         try:
             agent.check_env(env)
         except ValueError as exc:
-            raise ValueError(f"{meta}: {exc}") from None
+            raise ValueError(f"{path / 'agent.json'}: {exc}") from None
     agent._env = env
     return agent
-
-
-def _space_from(d: dict):
-    if d["type"] == "Discrete":
-        return spaces.Discrete(d["n"], start=d.get("start", 0))
-    shape = tuple(d["shape"])
-    return spaces.Box(np.asarray(d["low"]).reshape(shape), np.asarray(d["high"]).reshape(shape), dtype=np.float64)
 
 
 def evaluate(agent: Agent, env, episodes: int = 10, seed: int = 0) -> list[float]:

@@ -52,7 +52,8 @@ def cmd_train(args) -> int:
 
     import matplotlib.pyplot as plt
 
-    from connrl.api import make_agent, options_from
+    from connrl.api import TAUGHT_KINDS, make_agent, options_from
+    from connrl.core.lesson_files import load_lessons
 
     options = {}
     for item in args.option:
@@ -63,8 +64,13 @@ def cmd_train(args) -> int:
             options[key] = json.loads(value)
         except json.JSONDecodeError:
             options[key] = value
+    args.agent = args.agent or ("QCON-T" if args.teach else "QCON-R")
     try:
-        options_from(options)  # every option checked before the environment is made or a folder written
+        options_from(options)  # every option and the lesson file checked before the environment is made
+        if args.teach and args.agent not in TAUGHT_KINDS:
+            raise ValueError(f"--teach gives lessons to {' or '.join(TAUGHT_KINDS)}, not to {args.agent}")
+        if args.teach:
+            load_lessons(args.teach)
     except (ValueError, TypeError) as exc:
         raise SystemExit(f"connrl: {exc}") from None
     name = args.env_id.replace("/", "-").replace(":", "-")
@@ -73,7 +79,7 @@ def cmd_train(args) -> int:
     _writable(out)
     returns = []
     try:
-        agent = make_agent(env, args.agent, seed=args.seed, **options)
+        agent = make_agent(env, args.agent, seed=args.seed, lessons=args.teach, **options)
         agent.learn(args.steps, callback=lambda a, r: returns.append((a.steps_done, r)), progress=not args.quiet)
     except ValueError as exc:
         raise SystemExit(f"connrl: {exc}") from None
@@ -116,12 +122,15 @@ def cmd_evaluate(args) -> int:
 
 def add_own_task_commands(sub) -> None:
     """train, evaluate (connrl.api)."""
-    s = sub.add_parser("train", help="train a thesis learner on any Gymnasium task", description="Train QCON, "
-                       "QCON-R, window-Q or recurrent-Q on ENV_ID with inputs and values scaled from the task "
-                       "(connrl.api), then save it (agent.json, agent.npz) and its learning curve (curve.png).")
+    s = sub.add_parser("train", help="train a thesis learner on any Gymnasium task", description="Train a thesis "
+                       "learner on ENV_ID with inputs and values scaled from the task (connrl.api), then save it "
+                       "(agent.json, agent.npz) and its learning curve (curve.png).")
     s.add_argument("env_id", help="a Gymnasium environment id, e.g. CartPole-v1 or connrl/PoleBalancing-v0")
-    s.add_argument("--agent", default="QCON-R", choices=("QCON", "QCON-R", "window-Q", "recurrent-Q"),
-                   help="QCON, QCON-R (default), window-Q or recurrent-Q")
+    kinds = ("QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q", "recurrent-Q")  # connrl.api.KINDS
+    s.add_argument("--agent", default=None, choices=kinds, metavar="AGENT",
+                   help=f"one of {', '.join(kinds)} (default QCON-R, or QCON-T with --teach)")
+    s.add_argument("--teach", default=None, metavar="FILE", help="a lesson file (connrl.record_lessons) that QCON-T "
+                   "or AHCON-T replays after every trial")
     s.add_argument("--steps", type=_positive_int, default=50_000, help="environment steps (default 50000)")
     s.add_argument("--seed", type=_seed, default=0)
     s.add_argument("--save", default=None, help="folder to save in (default runs/train/ENV-AGENT-seedS)")

@@ -151,14 +151,19 @@ def test_a_value_range_too_small_for_the_returns_is_warned_once():
         make_agent(Toy(), "QCON-R", seed=0, warmup_steps=20).learn(100)  # the default range: no warning
 
 
-@pytest.mark.parametrize("kind", ["QCON", "QCON-R", "window-Q", "recurrent-Q"])
+@pytest.mark.parametrize("kind", ["QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q",
+                                  "recurrent-Q"])
 def test_a_loaded_agent_learns_on_exactly_as_the_saved_one_would(kind, tmp_path):
-    a = make_agent(Toy(), kind, seed=2, warmup_steps=30, hidden=4, context=2).learn(100)
+    taught = {"lessons": _toy_lessons(tmp_path)} if kind.endswith("-T") else {}
+    a = make_agent(Toy(), kind, seed=2, warmup_steps=30, hidden=4, context=2, **taught).learn(100)
     a.save(tmp_path / "a")
     b = connrl.load(tmp_path / "a", Toy())
     a.learn(100)
     b.learn(100)
-    np.testing.assert_array_equal(a.nets.state_dict()["w1"], b.nets.state_dict()["w1"])
+    sa, sb = a.nets.state_dict(), b.nets.state_dict()
+    assert sorted(sa) == sorted(sb) and len(sa) >= 2
+    for key in sa:
+        np.testing.assert_array_equal(sa[key], sb[key])
 
 
 def test_a_damaged_agent_file_and_the_wrong_environment_are_one_line(tmp_path):
@@ -177,3 +182,64 @@ def test_a_damaged_agent_file_and_the_wrong_environment_are_one_line(tmp_path):
 def test_an_input_without_spread_in_the_warm_up_is_left_as_it_is():
     s = InputScaler.fit(spaces.Box(-np.inf, np.inf, (2,)), np.array([[3.0, 1.0], [3.0, 2.0]]))
     np.testing.assert_allclose(s.encode([4.0, 1.5]), [1.0, 0.0])  # offset 3, scale 1 (no spread); 1.5 - 1.5 = 0
+
+
+def _toy_lessons(tmp_path):
+    connrl.record_lessons(Toy(), lambda obs: 1, 2, tmp_path / "toy.json")
+    return tmp_path / "toy.json"
+
+
+def test_recorded_lessons_hold_the_raw_observations_and_qcon_t_replays_them_scaled(tmp_path):
+    import json
+    doc = json.loads(_toy_lessons(tmp_path).read_text())
+    assert len(doc["lessons"]) == 2
+    first = doc["lessons"][0]
+    assert first["inputs"] == [[0, 0], [1, 1], [2, 4], [3, 9], [4, 16], [5, 25]]  # [t, t^2], by hand
+    assert first["actions"] == [1] * 5 and first["rewards"] == [2.0] * 5
+    assert (first["terminated"], first["truncated"], first["taught"]) == (False, True, True)
+    agent = make_agent(Toy(), "QCON-T", seed=0, warmup_steps=20, lessons=tmp_path / "toy.json")
+    taught = agent.learner.book.taught
+    assert len(taught) == 2 and all(x.taught for x in taught)
+    s = agent.scaler  # the agent's own input code: (raw - offset) / scale
+    np.testing.assert_allclose(taught[0].inputs[3], (np.array([3.0, 9.0]) - s.offset) / s.scale)
+    before = agent.learner.q.values(taught[0].inputs[0]).copy()
+    agent.learn(5)  # one trial: the taught lessons are replayed after it
+    assert not np.array_equal(before, agent.learner.q.values(taught[0].inputs[0]))
+
+
+def test_replay_thresholds_follow_the_framework_unless_given():
+    assert make_agent(Toy(), "QCON-R", warmup_steps=10).learner.config.replay.p_threshold == 0.01
+    assert make_agent(Toy(), "AHCON-R", warmup_steps=10).learner.config.replay.p_threshold == 0.2  # 4.2.7
+    assert make_agent(Toy(), "AHCON-R", warmup_steps=10, p_threshold=0.05).learner.config.replay.p_threshold == 0.05
+
+
+def test_lessons_are_refused_in_one_line_where_they_do_not_fit(tmp_path):
+    path = tmp_path / "cart.json"
+    connrl.record_lessons(gym.make("CartPole-v1"), lambda obs: 0, 1, path)
+    cases = [(lambda: make_agent(Toy(), "QCON-T"), "QCON-T needs a lesson file"),
+             (lambda: make_agent(Toy(), "QCON-R", lessons=path), "lessons are replayed by QCON-T and AHCON-T only"),
+             (lambda: make_agent(gym.make("Acrobot-v1"), "QCON-T", lessons=path),
+              "lessons were recorded on 'CartPole-v1', expected 'Acrobot-v1'"),
+             (lambda: make_agent(Toy(), "AHCON-T", lessons=path), "has 4 inputs, the agent expects 2"),
+             (lambda: connrl.record_lessons(Toy(), lambda obs: 5, 1, tmp_path / "x.json"),
+              "the teacher chose action 5")]
+    for call, message in cases:
+        with pytest.raises(ValueError) as exc:
+            call()
+        assert message in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_cli_train_with_a_lesson_file(tmp_path, capsys):
+    from connrl import cli
+    path = tmp_path / "cart.json"
+    connrl.record_lessons(gym.make("CartPole-v1"), lambda obs: int(obs[2] + 0.5 * obs[3] > 0), 1, path)
+    assert cli.main(["train", "CartPole-v1", "--steps", "200", "--teach", str(path), "--save", str(tmp_path / "a"),
+                     "--quiet", "--option", "hidden=4"]) == 0
+    import json
+    assert json.loads((tmp_path / "a" / "agent.json").read_text())["agent"] == "QCON-T"  # --teach's default
+    for args, message in ((["--agent", "QCON-R"], "--teach gives lessons to QCON-T or AHCON-T, not to QCON-R"),
+                          (["--teach", str(tmp_path / "none.json")], "no such lesson file")):
+        base = ["train", "CartPole-v1", "--steps", "10", "--save", str(tmp_path / "b")]
+        with pytest.raises(SystemExit) as exc:
+            cli.main(base + (args if "--teach" in args else args + ["--teach", str(path)]))
+        assert message in str(exc.value)
