@@ -209,7 +209,12 @@ def environment_info() -> dict:
                                     cwd=Path(__file__).parent).stdout.strip() or None
         except (OSError, subprocess.SubprocessError):
             commit = None
+        import llvmlite.binding as llvm
+
+        # numba compiles its kernels for this CPU (or NUMBA_CPU_NAME), and fastmath lets the sums' order follow
+        # its vector width: long learning runs are bit-identical on one CPU type, not across types
         _ENV_INFO = {"python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
                      "gymnasium": gymnasium.__version__, "connrl": connrl.__version__, "git_commit": commit,
-                     "machine": platform.machine(), "cpus": os.cpu_count()}
+                     "machine": platform.machine(), "cpus": os.cpu_count(),
+                     "numba_cpu": os.environ.get("NUMBA_CPU_NAME") or llvm.get_host_cpu_name()}
     return _ENV_INFO

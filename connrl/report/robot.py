@@ -12,12 +12,14 @@ from connrl.envs.robot import Layout, render_figure_5_3, render_paths
 from connrl.experiments.robot import EXPERIMENTS as SKILLS
 from connrl.experiments.robot import SPEC_DP, THRESHOLDS, first_reaching, quantity_name
 from connrl.experiments.robot_bounds import EXPERIMENTS as BOUNDS
+from connrl.experiments.robot_noise import EXPERIMENTS as NOISE
+from connrl.experiments.robot_noise import TASK_LESSONS, THESIS, about_the_same
 from connrl.experiments.spec import ExperimentSpec
 from connrl.report.page import figure, fixed, note, stored
 from connrl.report.plots import save_figure
 from connrl.report.robot_dp import copy_table, dp_notes
 
-EXPERIMENTS = [*SKILLS[:1], *BOUNDS, *SKILLS[1:]]  # what this section covers; the copy bound beside the DP curves
+EXPERIMENTS = [*SKILLS[:1], *BOUNDS, *SKILLS[1:], *NOISE]  # what this section covers; the copy bound beside DP
 
 
 def mean_curve(records: list[dict]) -> tuple[np.ndarray, np.ndarray]:
@@ -123,8 +125,26 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
               "above).", ""]
     lines += _speedup_tables(curves)
     lines += ["### Where Ch. 5 falls short", "", note("robot-shortfall"), "",
-              *dp_notes(curves, copy_summary, seeds), *_docking_notes(curves, seeds)]
+              *dp_notes(curves, copy_summary, seeds), *_docking_notes(curves, seeds), *_noise_verdict(out_dir)]
     return "\n".join(lines)
+
+
+def _noise_verdict(out_dir: Path) -> list[str]:
+    """5.5's noise claim beside ours, per task (empty when robot-noise was not run)."""
+    summary, _ = stored(NOISE[0], out_dir)
+    if summary is None:
+        return []
+    out = ["### Noise (thesis 5.5)", "", f"The thesis: \"{THESIS}\" "
+           f"(`connrl run robot-noise --profile {summary['profile']}`, {summary['runs_per_variant']} runs per variant; "
+           "\"about the same\": final performances within 2 SE of their difference or within 10 %).", "",
+           "| task | final perf., noisy | final perf., noise-free | difference | 2 SE | about the same? |",
+           "|---|---|---|---|---|---|"]
+    for task, _ in TASK_LESSONS:
+        qs = [summary["variants"][f"{task}, {w}"]["quantities"]["final_performance"] for w in ("noisy", "noise-free")]
+        diff, two_se, same = about_the_same(qs[0]["per_run"], qs[1]["per_run"])
+        out.append(f"| {task} | {fixed(qs[0]['mean'])} | {fixed(qs[1]['mean'])} | {diff:+.2f} | {two_se:.2f} | "
+                   f"{'yes' if same else '**no**'} |")
+    return out + [""]
 
 
 _PANELS = {  # experiments drawn as small multiples: panel title -> [(line label, variant label)]

@@ -45,7 +45,7 @@ def make_env(p) -> RobotTaskEnv:
         layout = layout.with_door_width(p.door_width)
     return RobotTaskEnv(p.task, layout=layout, binary_low=p.binary_low, max_steps=p.max_steps,
                         dp_heading=p.dp_heading, dp_depth=(24.0, p.dp_far), dock_tolerance=p.dock_tolerance,
-                        edge_jump=p.edge_jump)
+                        edge_jump=p.edge_jump, noise=getattr(p, "noise", True))  # RobotNoiseParams (5.5) sets it
 
 
 def spread_heading(start: tuple, k: int, layout: Layout) -> tuple:
