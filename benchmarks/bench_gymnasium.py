@@ -138,8 +138,8 @@ def main() -> None:
     print("\nratios, connrl QCON-R / SB3-DQN (steps: mean over the seeds that held; a side that never held: n/a)")
     for task in args.tasks:
         (ours, our_rate), (theirs, their_rate) = summary[task, "QCON-R"], summary[task, "SB3-DQN"]
-        steps = f"{np.mean(ours) / np.mean(theirs):.2f}" if ours and theirs else "n/a"
-        print(f"{task:<16} held {len(ours)} vs {len(theirs)} of {args.seeds}; steps to held solve {steps}x; "
+        steps = f"{np.mean(ours) / np.mean(theirs):.2f}x" if ours and theirs else "n/a"
+        print(f"{task:<16} held {len(ours)} vs {len(theirs)} of {args.seeds}; steps to held solve {steps}; "
               f"steps/s {our_rate / their_rate:.1f}x")
 
 if __name__ == "__main__":

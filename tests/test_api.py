@@ -109,15 +109,19 @@ def test_cli_refuses_bad_input_in_one_line(args, message, tmp_path):
     assert message in str(exc.value)
 
 
-def test_the_readme_snippet_runs(tmp_path, monkeypatch):
+def test_the_readme_snippets_run(tmp_path, monkeypatch):
     from pathlib import Path
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    section = readme[readme.index("## Using the techniques on your own task"):]
-    code = section.split("```python\n", 1)[1].split("```", 1)[0]
-    assert "connrl.make_agent" in code and "connrl.load" in code
+    section = readme[readme.index("## Using the techniques on your own task"):readme.index("## Layout")]
+    blocks = [b.split("```", 1)[0] for b in section.split("```python\n")[1:]]
+    assert len(blocks) == 2 and "connrl.make_agent" in blocks[0] and "connrl.load" in blocks[0]
+    assert "record_lessons" in blocks[1] and "QCON-T" in blocks[1]
     monkeypatch.chdir(tmp_path)
-    exec(compile(code.replace("50_000", "300"), "README", "exec"), {})
-    assert (tmp_path / "cartpole-agent" / "agent.npz").exists()
+    namespace = {}
+    for code in blocks:  # the second uses the first's env
+        exec(compile(code.replace("50_000", "300").replace("10_000", "300"), "README", "exec"), namespace)
+    assert (tmp_path / "cartpole-agent" / "agent.npz").exists() and (tmp_path / "teacher.json").exists()
+    assert namespace["agent"].kind == "QCON-T" and len(namespace["agent"].learner.book.taught) == 3
 
 
 @pytest.mark.parametrize("kind", ["window-Q", "recurrent-Q"])

@@ -54,7 +54,8 @@ GOLDEN = json.loads((Path(__file__).parent / "data" / "tiny_e172482.json").read_
 
 def _same(a, b) -> bool:
     """Equal, numbers to 1e-9 relative: a least-squares fit (the complexity exponents) moves in its last bits with
-    the BLAS a NumPy release ships; another seed or a changed algorithm moves far more."""
+    the machine (the CPU the compiled and BLAS code is chosen for); another seed or a changed algorithm moves far
+    more."""
     if isinstance(a, dict) and isinstance(b, dict):
         return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
     if isinstance(a, list) and isinstance(b, list):

@@ -3,6 +3,7 @@ time (the others kept), on development seeds (never the seeds the README reports
 of 10 episodes, evaluation seeds 500-509) after ``--steps`` steps, per seed and averaged.
 
     python scripts/own_task/defaults_sweep.py [--seeds 100 101 102] [--steps 50000] [--workers 2] [--out FILE.json]
+        [--tasks CartPole-v1 Acrobot-v1] [--variants defaults "lam 0.9" ...]
 """
 
 from __future__ import annotations
@@ -36,10 +37,15 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=50_000)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default=None, help="also write the per-seed returns as JSON")
+    ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
+    ap.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     args = ap.parse_args()
-    jobs = [(t, v, s, args.steps) for t in TASKS for v in VARIANTS for s in args.seeds]
+    jobs = [(t, v, s, args.steps) for t in args.tasks for v in args.variants for s in args.seeds]
+    results = []
     with ProcessPoolExecutor(args.workers) as pool:
-        results = list(pool.map(one, jobs))
+        for r in pool.map(one, jobs):  # in order, each printed as it is known
+            results.append(r)
+            print(f"{r[0]} {r[1]} seed {r[2]}: {r[3]:.1f}", flush=True)
     table = {}
     for task, variant, seed, mean in results:
         table.setdefault(task, {}).setdefault(variant, {})[seed] = mean

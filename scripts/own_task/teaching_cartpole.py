@@ -44,8 +44,8 @@ def main() -> None:
                 agent = connrl.make_agent(env, kind, seed=seed, **extra).learn(args.steps)
                 mean = float(np.mean(connrl.evaluate(agent, env, 10, seed=500)))
                 means.append(mean)
-                print(f"{kind:<8} seed {seed}: {args.steps} steps ({agent.trials_done} trials), greedy return {mean:.1f}"
-                      f" ({time.perf_counter() - t0:.0f} s)", flush=True)
+                print(f"{kind:<8} seed {seed}: {args.steps} steps ({agent.trials_done} trials), greedy return "
+                      f"{mean:.1f} ({time.perf_counter() - t0:.0f} s)", flush=True)
             print(f"{kind:<8} mean over seeds {args.seeds}: {np.mean(means):.1f}")
 
 
