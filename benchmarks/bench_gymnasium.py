@@ -5,7 +5,9 @@
 Per task and seed: the environment steps until a *held solve* -- the greedy policy's mean return over 10 episodes at
 or above the task's threshold (CartPole 475, Acrobot -100, MountainCar -110) at five evaluations in a row, one every
 5,000 steps, the steps counted at the fifth -- within RL-Zoo's budget for DQN (50k, 100k, 120k); the training wall time
-(evaluations excluded) and environment steps per second. SB3-DQN runs only where ``stable_baselines3`` imports
+(evaluations excluded) and environment steps per second. connrl's random warm-up (1,000 steps that set its scales) is
+counted in its steps and its time, as SB3's ``learning_starts`` steps are in SB3's; connrl evaluates after the trial
+that crosses each 5,000 mark, SB3 on the mark. SB3-DQN runs only where ``stable_baselines3`` imports
 (``pip install -e ".[bench]"``), with RL-Zoo's DQN hyperparameters (``RL_ZOO_DQN``, copied from rl-baselines3-zoo's
 hyperparams/dqn.yml) and one torch thread, as each connrl run has one core; the ratios are printed after both.
 """
@@ -37,7 +39,7 @@ RL_ZOO_DQN = {  # rl-baselines3-zoo hyperparams/dqn.yml (n_timesteps is TASKS' b
 
 
 class _Held:
-    """Counts the evaluations in a row at the threshold; ``check(steps, greedy_mean)`` is False once a solve is held."""
+    """Counts the evaluations in a row at the threshold; ``check(steps, returns)`` is False once a solve is held."""
 
     def __init__(self, threshold: float):
         self.threshold, self.next, self.streak, self.held, self.eval_s = threshold, EVAL_EVERY, 0, None, 0.0
@@ -58,20 +60,21 @@ def run_connrl(task: str, seed: int) -> tuple[int | None, float, int]:
     """(steps to a held solve or None, training seconds, training steps) of QCON-R with its defaults."""
     threshold, budget = TASKS[task]
     env, eval_env = gym.make(task), gym.make(task)
+    t0 = time.perf_counter()
     agent = connrl.make_agent(env, "QCON-R", seed=seed)
+    warmup = agent.options.warmup_steps  # environment steps too: counted like SB3's learning_starts
     held = _Held(threshold)
 
     def evaluate(a, _ret):
-        if not held.due(a.steps_done):
+        if not held.due(warmup + a.steps_done):
             return True
-        t0 = time.perf_counter()
+        t1 = time.perf_counter()
         returns = connrl.evaluate(a, eval_env, EVAL_EPISODES, seed=10_000)
-        held.eval_s += time.perf_counter() - t0
-        return held.check(a.steps_done, returns)
+        held.eval_s += time.perf_counter() - t1
+        return held.check(warmup + a.steps_done, returns)
 
-    t0 = time.perf_counter()
-    agent.learn(budget, callback=evaluate)
-    return held.held, time.perf_counter() - t0 - held.eval_s, agent.steps_done
+    agent.learn(budget - warmup, callback=evaluate)
+    return held.held, time.perf_counter() - t0 - held.eval_s, warmup + agent.steps_done
 
 
 def run_sb3(task: str, seed: int) -> tuple[int | None, float, int]:
@@ -129,18 +132,21 @@ def main() -> None:
                 rates.append(steps / secs)
                 print(f"{task:<16} {name:<10} {seed:>4} {held if held else 'not held':>20} {secs:>8.1f} "
                       f"{steps / secs:>9.0f}", flush=True)
-            summary[task, name] = ([h for h in held_all if h is not None], float(np.mean(rates)))
-            print(f"{task:<16} {name} held a solve in {len(summary[task, name][0])} of {args.seeds} seeds "
+            summary[task, name] = (held_all, float(np.mean(rates)))
+            print(f"{task:<16} {name} held a solve in {sum(h is not None for h in held_all)} of {args.seeds} seeds "
                   f"within {TASKS[task][1]:,} steps")
     if not sb3:
         print("SB3-DQN: not run (stable_baselines3 is not installed: pip install -e \".[bench]\"); no ratios")
         return
-    print("\nratios, connrl QCON-R / SB3-DQN (steps: mean over the seeds that held; a side that never held: n/a)")
+    print("\nratios, connrl QCON-R / SB3-DQN (steps: mean over the seeds where both held; none such: n/a)")
     for task in args.tasks:
         (ours, our_rate), (theirs, their_rate) = summary[task, "QCON-R"], summary[task, "SB3-DQN"]
-        steps = f"{np.mean(ours) / np.mean(theirs):.2f}x" if ours and theirs else "n/a"
+        both = [(a, b) for a, b in zip(ours, theirs, strict=True) if a is not None and b is not None]
+        steps = f"{np.mean([a for a, _ in both]) / np.mean([b for _, b in both]):.2f}x" if both else "n/a"
+        ours, theirs = [h for h in ours if h is not None], [h for h in theirs if h is not None]
         print(f"{task:<16} held {len(ours)} vs {len(theirs)} of {args.seeds}; steps to held solve {steps}; "
               f"steps/s {our_rate / their_rate:.1f}x")
+
 
 if __name__ == "__main__":
     main()

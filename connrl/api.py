@@ -112,6 +112,8 @@ def check_spaces(env) -> None:
     """Refuse, in one line, an environment connrl's agents cannot act in."""
     if not isinstance(env.action_space, spaces.Discrete):
         raise ValueError(f"connrl agents need a Discrete action space, got {env.action_space}")
+    if int(env.action_space.start) != 0:  # the nets number their actions 0..n-1
+        raise ValueError(f"connrl agents need a Discrete action space that starts at 0, got {env.action_space}")
     obs = env.observation_space
     if isinstance(obs, spaces.Box) and len(obs.shape) <= 1 or isinstance(obs, spaces.Discrete):
         return
@@ -344,9 +346,11 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options
                          else f"lessons are replayed by {' and '.join(TAUGHT_KINDS)} only, not by {kind}")
     o = options_from(options)
     rng = np.random.default_rng(seed)
+    raw_taught = read_taught(lessons, env) if lessons is not None else []  # a file for another task: refused first
     seen, r_max, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
     scaler = InputScaler.fit(env.observation_space, seen)
-    taught = read_taught(lessons, env, scaler.encode) if lessons is not None else []  # refused before any learning
+    taught = [Lesson(np.array([scaler.encode(x) for x in lesson.inputs]), lesson.actions, lesson.rewards,
+                     terminated=lesson.terminated, truncated=lesson.truncated, taught=True) for lesson in raw_taught]
     r_max = max([r_max] + [float(np.abs(x.rewards).max()) for x in taught if x.rewards.size])
     value_range = o.value_range or max(r_max, 1e-3) / max(1.0 - o.gamma, 1e-3)
     spec = getattr(env, "spec", None)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
-from connrl.core.lesson_files import load_lessons, save_lessons
+from connrl.core.lesson_files import LessonFileError, check_lesson_file, load_lessons, save_lessons
 from connrl.core.lessons import Lesson
 from connrl.storage import atomic_save_npz, atomic_write_text
 
@@ -111,9 +111,11 @@ def record_lessons(env, teacher, episodes: int, path, seed: int = 0) -> list[Les
         rows, actions, rewards = [observation_row(env.observation_space, obs)], [], []
         terminated = truncated = False
         while not (terminated or truncated):
-            a = int(teacher(obs))
-            if not env.action_space.contains(a):
-                raise ValueError(f"the teacher chose action {a!r}; the task's actions are {env.action_space}")
+            a = teacher(obs)
+            if isinstance(a, bool) or not isinstance(a, (int, np.integer)) or not env.action_space.contains(int(a)):
+                raise ValueError(f"the teacher chose {a!r}; it must return one of the task's actions, a whole number "
+                                 f"in {env.action_space}")
+            a = int(a)
             obs, r, terminated, truncated, _ = env.step(a)
             rows.append(observation_row(env.observation_space, obs))
             actions.append(a)
@@ -122,18 +124,32 @@ def record_lessons(env, teacher, episodes: int, path, seed: int = 0) -> list[Les
                               truncated=bool(truncated), taught=True))
     spec = getattr(env, "spec", None)
     save_lessons(Path(path), lessons, env_id=spec.id if spec is not None else "",
+                 env_kwargs=_plain(spec.kwargs) if spec is not None else {},
                  source=f"connrl.record_lessons: {episodes} episodes, seeds {seed}..{seed + episodes - 1}")
     return lessons
 
 
-def read_taught(path, env, encode) -> list[Lesson]:
-    """A lesson file's lessons for ``env``, their raw observations put through ``encode``; LessonFileError (a
-    ValueError) in one line when the file is not for this task."""
+def read_taught(path, env) -> list[Lesson]:
+    """A lesson file's lessons for ``env``, each input row as ``observation_row`` wrote it (a Discrete observation as
+    its integer); LessonFileError (a ValueError) in one line when the file is not for this task: another env id or
+    env options, another input width, an action or a Discrete observation outside the spaces."""
     spec = getattr(env, "spec", None)
-    width = 1 if isinstance(env.observation_space, spaces.Discrete) else int(np.prod(env.observation_space.shape))
-    lessons = load_lessons(path, env_id=spec.id if spec is not None else None, input_dim=width,
-                           n_actions=int(env.action_space.n))
-    discrete = isinstance(env.observation_space, spaces.Discrete)
-    return [Lesson(np.array([encode(row[0] if discrete else row) for row in lesson.inputs]), lesson.actions,
-                   lesson.rewards,
-                   terminated=lesson.terminated, truncated=lesson.truncated, taught=True) for lesson in lessons]
+    space = env.observation_space
+    discrete = isinstance(space, spaces.Discrete)
+    width = 1 if discrete else int(np.prod(space.shape))
+    kwargs = _plain(spec.kwargs) if spec is not None else None
+    if spec is not None:
+        check_lesson_file(path, env_id=spec.id, env_kwargs=kwargs, input_dim=width, n_actions=int(env.action_space.n))
+    lessons = load_lessons(path, input_dim=width, n_actions=int(env.action_space.n))
+    for k, lesson in enumerate(lessons):
+        rows = lesson.inputs[:, 0] if discrete else None
+        if discrete and not np.all((rows == np.round(rows)) & (rows >= space.start) & (rows < space.start + space.n)):
+            raise LessonFileError(f"{path}: lesson {k} holds observations outside {space} (whole numbers "
+                                  f"{space.start}..{space.start + space.n - 1} are allowed)")
+    return [Lesson(x.inputs[:, 0] if discrete else x.inputs, x.actions, x.rewards, terminated=x.terminated,
+                   truncated=x.truncated, taught=True) for x in lessons]
+
+
+def _plain(kwargs: dict) -> dict:
+    """An environment's make() options as JSON reads them back (what a lesson file records and is checked by)."""
+    return json.loads(json.dumps(kwargs, default=repr))

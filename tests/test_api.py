@@ -206,9 +206,21 @@ def test_recorded_lessons_hold_the_raw_observations_and_qcon_t_replays_them_scal
     assert len(taught) == 2 and all(x.taught for x in taught)
     s = agent.scaler  # the agent's own input code: (raw - offset) / scale
     np.testing.assert_allclose(taught[0].inputs[3], (np.array([3.0, 9.0]) - s.offset) / s.scale)
-    before = agent.learner.q.values(taught[0].inputs[0]).copy()
+    twin = make_agent(Toy(), "QCON-T", seed=0, warmup_steps=20, lessons=tmp_path / "toy.json")
+    twin.learner.book.taught.clear()  # the same agent, its taught lessons taken away
     agent.learn(5)  # one trial: the taught lessons are replayed after it
-    assert not np.array_equal(before, agent.learner.q.values(taught[0].inputs[0]))
+    twin.learn(5)
+    assert not np.array_equal(twin.learner.q.values(taught[0].inputs[0]), agent.learner.q.values(taught[0].inputs[0]))
+
+
+def test_the_cli_offers_the_apis_kinds():
+    import argparse
+
+    from connrl.api import KINDS
+    from connrl.cli_task import add_own_task_commands
+    sub = argparse.ArgumentParser().add_subparsers()
+    add_own_task_commands(sub)
+    assert tuple(sub.choices["train"]._option_string_actions["--agent"].choices) == KINDS
 
 
 def test_replay_thresholds_follow_the_framework_unless_given():
@@ -217,7 +229,18 @@ def test_replay_thresholds_follow_the_framework_unless_given():
     assert make_agent(Toy(), "AHCON-R", warmup_steps=10, p_threshold=0.05).learner.config.replay.p_threshold == 0.05
 
 
+class Shifted(Toy):
+    action_space = spaces.Discrete(2, start=1)
+
+
+class Lake4(gym.Env):
+    """FrozenLake's 4x4 spaces without a registered id (a user's own task)."""
+
+    observation_space, action_space = spaces.Discrete(16), spaces.Discrete(4)
+
+
 def test_lessons_are_refused_in_one_line_where_they_do_not_fit(tmp_path):
+    import json
     path = tmp_path / "cart.json"
     connrl.record_lessons(gym.make("CartPole-v1"), lambda obs: 0, 1, path)
     cases = [(lambda: make_agent(Toy(), "QCON-T"), "QCON-T needs a lesson file"),
@@ -225,8 +248,19 @@ def test_lessons_are_refused_in_one_line_where_they_do_not_fit(tmp_path):
              (lambda: make_agent(gym.make("Acrobot-v1"), "QCON-T", lessons=path),
               "lessons were recorded on 'CartPole-v1', expected 'Acrobot-v1'"),
              (lambda: make_agent(Toy(), "AHCON-T", lessons=path), "has 4 inputs, the agent expects 2"),
-             (lambda: connrl.record_lessons(Toy(), lambda obs: 5, 1, tmp_path / "x.json"),
-              "the teacher chose action 5")]
+             (lambda: connrl.record_lessons(Toy(), lambda obs: 5, 1, tmp_path / "x.json"), "the teacher chose 5"),
+             (lambda: connrl.record_lessons(Toy(), lambda obs: 0.9, 1, tmp_path / "x.json"), "the teacher chose 0.9"),
+             (lambda: make_agent(gym.make("FrozenLake-v1", map_name="4x4"), "QCON-T", lessons=lake),
+              "lessons were recorded with world options map_name='8x8'"),
+             (lambda: make_agent(Lake4(), "QCON-T", lessons=odd), "lesson 0 holds observations outside Discrete(16)"),
+             (lambda: make_agent(Shifted(), "QCON-R"), "a Discrete action space that starts at 0")]
+    lake = tmp_path / "lake.json"
+    connrl.record_lessons(gym.make("FrozenLake-v1", map_name="8x8"), lambda obs: 1, 1, lake)
+    odd = tmp_path / "odd.json"  # a hand-made file for an unregistered task: observation 99 of 16 states
+    doc = json.loads(lake.read_text())
+    doc.update(env_id="", env_kwargs={})
+    doc["lessons"][0]["inputs"][0] = [99]
+    odd.write_text(json.dumps(doc))
     for call, message in cases:
         with pytest.raises(ValueError) as exc:
             call()
@@ -241,9 +275,13 @@ def test_cli_train_with_a_lesson_file(tmp_path, capsys):
                      "--quiet", "--option", "hidden=4"]) == 0
     import json
     assert json.loads((tmp_path / "a" / "agent.json").read_text())["agent"] == "QCON-T"  # --teach's default
-    for args, message in ((["--agent", "QCON-R"], "--teach gives lessons to QCON-T or AHCON-T, not to QCON-R"),
-                          (["--teach", str(tmp_path / "none.json")], "no such lesson file")):
-        base = ["train", "CartPole-v1", "--steps", "10", "--save", str(tmp_path / "b")]
+    base = ["train", "CartPole-v1", "--steps", "10", "--save", str(tmp_path / "b")]
+    for args, message in ((["--agent", "QCON-R", "--teach", str(path)], "--teach gives lessons to QCON-T or AHCON-T"),
+                          (["--teach", str(tmp_path / "none.json")], "no such lesson file"),
+                          (["--agent", "AHCON-T"], "AHCON-T needs --teach FILE")):
         with pytest.raises(SystemExit) as exc:
-            cli.main(base + (args if "--teach" in args else args + ["--teach", str(path)]))
+            cli.main(base + args)
         assert message in str(exc.value)
+    with pytest.raises(SystemExit, match="lessons were recorded on 'CartPole-v1', expected 'Acrobot-v1'"):
+        cli.main(["train", "Acrobot-v1", "--teach", str(path), "--save", str(tmp_path / "c")])
+    assert not (tmp_path / "c").exists()  # refused before any folder or compute
