@@ -93,7 +93,7 @@ def figure(png: Path, doc: Path, name: str) -> str:
 
 NOTES_DIR = Path(__file__).resolve().parents[2] / "docs" / "notes"
 SECTIONS = ("connrl.report.pole", "connrl.report.survival", "connrl.report.hidden_state", "connrl.report.robot",
-            "connrl.report.recharge", "connrl.report.complexity", "connrl.report.integration")
+            "connrl.report.td_depth", "connrl.report.recharge", "connrl.report.complexity", "connrl.report.integration")
 
 
 def note(name: str) -> str:
