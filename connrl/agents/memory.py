@@ -262,6 +262,7 @@ class RecurrentModelQ(LessonAgent):
         self.book = LessonBook(config.replay)  # raw lessons; the latest 70 are replayed into the Q-net
         self.history: list[Lesson] = []  # all past lessons: the model trains on them (7.5 fn. 2)
         self.freeze_model = False  # 7.5.2: "I fixed the model at some point of learning"
+        self.last_model_error: dict[str, float] | None = None  # on the latest lesson, before training on it (7.5.1)
         self.trial, self.learning = 0, True
         self._x: np.ndarray | None = None
         self._xq: np.ndarray | None = None
@@ -322,10 +323,23 @@ class RecurrentModelQ(LessonAgent):
         return Lesson(np.hstack([lesson.inputs, cs[:-1]]), lesson.actions, lesson.rewards,
                       terminated=lesson.terminated, truncated=lesson.truncated, taught=lesson.taught)
 
+    def model_error(self, lesson: Lesson) -> dict[str, float]:
+        """How well the model predicts a lesson (7.5.1), measured without training: the share of steps whose
+        next sensation it gets wrong in any bit (sign of the output against the +-0.5 bit), the share of wrong
+        bits, and the mean absolute payoff error."""
+        ys, _ = self.model.forward_sequence(lesson.inputs[:-1], lesson.actions)
+        pred = ys[np.arange(lesson.actions.size), lesson.actions]  # the taken action's net
+        target = model_targets(lesson, self.config.payoff_scale)
+        wrong = (pred[:, :-1] > 0) != (target[:, :-1] > 0)
+        return {"model_wrong_steps": float(wrong.any(axis=1).mean()), "model_wrong_bits": float(wrong.mean()),
+                "model_payoff_error": float(np.abs(pred[:, -1] - target[:, -1]).mean() / self.config.payoff_scale)}
+
     def learn(self) -> None:
-        """After a trial: train the model, then replay the latest lessons into the Q-net (7.5)."""
+        """After a trial: train the model, then replay the latest lessons into the Q-net (7.5). The model's error
+        on the new lesson, before it learns from it, is kept in ``last_model_error``."""
         if not self.learning:
             return
+        self.last_model_error = self.model_error(self.history[-1]) if self.history else None
         self.train_model()
         super().learn()
 

@@ -133,17 +133,39 @@ class PoleHiddenParams(HiddenStateParams):
                     arch=ARCHITECTURES, task=(4,))
 
 
+@dataclass(frozen=True)
+class FrozenModelParams(CupParams):
+    """7.5.2's test: recurrent-model whose action model stops learning after ``freeze_at`` trials."""
+
+    freeze_at: int | None = None  # trials after which the model is fixed (None: it learns throughout)
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_types(self, {"freeze_at": ">=0"})
+
+    def check_combination(self):
+        if self.freeze_at is not None and self.arch != "recurrent-model":
+            raise ValueError(f"parameter freeze_at needs arch 'recurrent-model' (only it has a model), "
+                             f"got {self.arch!r}")
+
+
 def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
-    """7.5.1's protocol: after every training trial, one greedy test episode from each instance."""
+    """7.5.1's protocol: after every training trial, one greedy test episode from each instance. A
+    recurrent-model agent's rows also hold its model's error on each new lesson before learning from it
+    (7.5.1); with ``FrozenModelParams`` the model is fixed after ``freeze_at`` trials (7.5.2)."""
     train_env, test_env = make_cup_envs(p.task)
     train_env.reset(seed=int(rng.integers(2**31)))
     test_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, train_env.observation_space.shape[0], 3, rng)
     rows, scores, wasted, last = [], [], [], {}
+    freeze_at = getattr(p, "freeze_at", None)
 
     def train(k):
+        if freeze_at is not None:
+            agent.freeze_model = k >= freeze_at
         stats = run_trial(train_env, agent, trial=k, learning=True)
-        last.update(train_steps=stats.steps, train_done=stats.terminated)
+        last.update(train_steps=stats.steps, train_done=stats.terminated, **(getattr(agent, "last_model_error", None)
+                                                                              or {}))
 
     def test(n):
         test_env.wasted = 0
@@ -228,12 +250,29 @@ def _cup_spec(task: int) -> ExperimentSpec:
         y_label="test steps to collect both cups in both instances", y_reference={"optimal": OPTIMAL_SCORE})
 
 
+def _frozen_spec() -> ExperimentSpec:
+    stuck = {"optimal_last100": 1.0}  # 7.5.2: with the model fixed "the agent found the optimal policy and indeed
+    # stuck to it" (no number: 1.0 is "stuck to it" over the last 100 tests)
+    return ExperimentSpec(
+        name="cup-task2-frozen", title="Task 2 recurrent-model with its action model fixed part-way (7.5.2)",
+        section="7.5.2", run="connrl.experiments.hidden_state:run_cup",
+        params=FrozenModelParams(task=2, arch="recurrent-model", lam=0.8), profiles=_CUP_PROFILES,
+        variants=(Variant("model learns throughout (as cup-task2)"),
+                  Variant("model fixed after 200 trials", {"freeze_at": 200}, stuck),
+                  Variant("model fixed after 300 trials", {"freeze_at": 300}, stuck)),
+        quantities=(_CUP_QUANTITIES[2], _CUP_QUANTITIES[3], _CUP_QUANTITIES[0], _CUP_QUANTITIES[1]),
+        x_label="trials", y_label="test steps to collect both cups in both instances",
+        y_reference={"optimal": OPTIMAL_SCORE}, x_reference={"fixed (200)": 200, "fixed (300)": 300},
+        description="7.5.2: the model's changing context units destabilise a trained Q-net; fixed, it should not")
+
+
 _POLE_THESIS = {"window-Q": 206, "recurrent-Q": 552, "recurrent-model": 247}  # Table 7.1
 
 EXPERIMENTS = [
     _cup_spec(1),
     _cup_spec(2),
     _cup_spec(3),
+    _frozen_spec(),
     ExperimentSpec(
         name="cup-robustness",
         title="Robustness probe of 7.5.1: interrupt a trained Task-1 agent, force it the wrong way",
