@@ -75,7 +75,7 @@ def _study_rows(out: Path, name: str, panels: dict) -> tuple[list[str], list[tup
                 continue
             panels.setdefault(column, []).append((f"{name[-6:]}, {agent.split()[0]}", ends, curve))
             s = settles(ends, curve)
-            found.append((column, s, last))
+            found.append((column, s, last, f"{name[-6:]} {agent.split()[0]}", curve[-1] / curve[0]))
             at = {int(e): v for e, v in zip(ends, curve, strict=True)}
             lines.append(f"| {name} | {agent} | {text} | {at.get(10, float('nan')):.4f} | "
                          f"{at.get(50, float('nan')):.4f} | {curve[-1]:.4f} | {'-' if s is None else f'{s:.0f}'} | "
@@ -115,9 +115,13 @@ def model_accuracy(out: Path, doc: Path) -> list[str]:
         commands += [command] if command else []
     if not rows:
         return []
-    probe = [s for c, s, _ in found if "probe" in c]
+    probe = [s for c, s, *_ in found if "probe" in c]
     near = [s for s in probe if s is not None and s <= 2 * THESIS_SETTLES]
-    never_zero = all(last.min() > 0 for _, _, last in found)
+    never_zero = all(f[2].min() > 0 for f in found)
+    kept = [f[4] for f in found if "probe" in f[0]]  # final probe error as a share of plays 1-10's
+    where = "; ".join(f"{text.split(',')[0]}: " + ", ".join(f"{who} {'-' if s is None else f'{s:.0f}'}"
+                                                          for c, s, _, who, _ in found if c == column)
+                      for column, text in MEASURES if "probe" in column)
     head = ["### 4.4.3: the learned model's prediction accuracy (Studies 1 and 2)", "",
             " and ".join(commands) + ": the -M agents with the learned model, errors per play from the run records.",
             "", "The thesis: \"In both studies, the model's prediction accuracy approached its asymptote after "
@@ -129,11 +133,14 @@ def model_accuracy(out: Path, doc: Path) -> list[str]:
     level = ("no probe errors in these runs (they were made before the probes were recorded)" if not probe else
              f"on the fixed probes {len(near)} of {len(probe)} curves settle by play {2 * THESIS_SETTLES} (within "
              "twice the thesis's 50 plays) — " + ("reproduced" if len(near) == len(probe) else
-                                                  "**not reproduced**" if not near else "partly"))
+                                                  "**not reproduced**" if not near else "partly")
+             + f" (settling plays, {where})")
     verdict = [
         "", f"**Verdict.** Levelling off: {level}. The on-line errors also move with the agent's behaviour (it "
         "meets other states as it improves), so they are no clean measure of the model. Never nearly perfect: "
-        + ("reproduced — no run's error reaches 0 after 300 plays." if never_zero
-           else "**not reproduced** — some run's error reaches 0."), ""]
+        + ("reproduced — no run's error reaches 0 after 300 plays" if never_zero
+           else "**not reproduced** — some run's error reaches 0")
+        + (f"; the last {BLOCK} plays' probe errors are {min(kept):.0%}-{max(kept):.0%} of those of plays "
+           f"1-{BLOCK}." if kept else "."), ""]
     return head + rows + verdict + [figure(_draw(panels, Path(out) / "survival-model-accuracy.png"), doc,
                                            "survival-model-accuracy"), ""]
