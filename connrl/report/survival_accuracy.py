@@ -13,9 +13,10 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from connrl.experiments.survival import EXPERIMENTS
+from connrl.experiments.survival import EXPERIMENTS, PROBE_SEED, PROBE_SIZE
 from connrl.report.page import figure, run_rows, stored
 from connrl.report.plots import save_figure
+from connrl.tasks.survival_models import probe_experiences
 
 _SPECS = {s.name: s for s in EXPERIMENTS}
 AGENTS = ("AHCON-M (learned model)", "QCON-M (learned model)")
@@ -75,13 +76,45 @@ def _study_rows(out: Path, name: str, panels: dict) -> tuple[list[str], list[tup
                 continue
             panels.setdefault(column, []).append((f"{name[-6:]}, {agent.split()[0]}", ends, curve))
             s = settles(ends, curve)
-            found.append((column, s, last, f"{name[-6:]} {agent.split()[0]}", curve[-1] / curve[0]))
+            found.append({"column": column, "settles": s, "last": last, "who": f"{name[-6:]} {agent.split()[0]}",
+                          "kept": curve[-1] / curve[0], "final": curve[-1],
+                          "rep": "global" if name.endswith("1") else "local"})
             at = {int(e): v for e, v in zip(ends, curve, strict=True)}
             lines.append(f"| {name} | {agent} | {text} | {at.get(10, float('nan')):.4f} | "
                          f"{at.get(50, float('nan')):.4f} | {curve[-1]:.4f} | {'-' if s is None else f'{s:.0f}'} | "
                          f"{last.min():.4f} |")
     n = summary["runs_per_variant"]
     return lines, found, f"`connrl run {name} --profile {summary['profile']} --runs {n} --seed {summary['base_seed']}`"
+
+
+def trivial_errors(representation: str) -> tuple[float, float, float]:
+    """For scale, on the probes: the errors of predicting r = 0 always, every enemy unit off, and the enemy units
+    unchanged by the move."""
+    probes = probe_experiences(representation, PROBE_SEED, PROBE_SIZE)
+    return (float(np.mean([abs(r) for _, _, r, _ in probes])),
+            float(np.mean([np.mean(y[52:84] > 0) for *_, y in probes])),
+            float(np.mean([np.mean((x[52:84] > 0) != (y[52:84] > 0)) for x, _, _, y in probes])))
+
+
+def _play(p: float | None) -> str:
+    return "-" if p is None else f"{p:.0f}"
+
+
+def _scale_lines(probes: list[dict]) -> list[str]:
+    """The probe errors of trivial predictors beside the learned model's final ones (empty without probes)."""
+    if not probes:
+        return []
+    scale = {rep: trivial_errors(rep) for rep in ("global", "local")}
+    enemy = all(f["final"] < min(scale[f["rep"]][1:]) for f in probes if f["column"] == "model_probe_enemy_bits")
+    reward = all(f["final"] < scale[f["rep"]][0] for f in probes if f["column"] == "model_probe_reward_abs")
+    return ["For scale, on the same probes (Study 1 global / Study 2 local): always predicting r = 0 errs by "
+            f"{scale['global'][0]:.3f} / {scale['local'][0]:.3f}; predicting every enemy unit off errs by "
+            f"{scale['global'][1]:.4f} / {scale['local'][1]:.4f}, and leaving them as they were by "
+            f"{scale['global'][2]:.4f} / {scale['local'][2]:.4f}. After 300 plays the learned enemy nets "
+            + ("beat" if enemy else "do **not** beat") + " both enemy baselines in every study and agent; the "
+            "learned reinforcement nets " + ("beat" if reward else "do **not** beat") + " predicting 0"
+            + ("." if reward else " (why is not measured here; the model's learning rate 0.1, momentum 0.9 and "
+               "queue are reconstructed values, docs/RECONSTRUCTION.md, \"Survival agents\")."), ""]
 
 
 def _draw(panels: dict, file: Path) -> Path:
@@ -115,12 +148,12 @@ def model_accuracy(out: Path, doc: Path) -> list[str]:
         commands += [command] if command else []
     if not rows:
         return []
-    probe = [s for c, s, *_ in found if "probe" in c]
-    near = [s for s in probe if s is not None and s <= 2 * THESIS_SETTLES]
-    never_zero = all(f[2].min() > 0 for f in found)
-    kept = [f[4] for f in found if "probe" in f[0]]  # final probe error as a share of plays 1-10's
-    where = "; ".join(f"{text.split(',')[0]}: " + ", ".join(f"{who} {'-' if s is None else f'{s:.0f}'}"
-                                                          for c, s, _, who, _ in found if c == column)
+    probes = [f for f in found if "probe" in f["column"]]
+    near = [f for f in probes if f["settles"] is not None and f["settles"] <= 2 * THESIS_SETTLES]
+    never_zero = all(f["last"].min() > 0 for f in found)
+    kept = [f["kept"] for f in probes]  # final probe error as a share of plays 1-10's
+    where = "; ".join(f"{text.split(',')[0]}: " + ", ".join(f"{f['who']} {_play(f['settles'])}" for f in probes
+                                                          if f["column"] == column)
                       for column, text in MEASURES if "probe" in column)
     head = ["### 4.4.3: the learned model's prediction accuracy (Studies 1 and 2)", "",
             " and ".join(commands) + ": the -M agents with the learned model, errors per play from the run records.",
@@ -130,9 +163,9 @@ def model_accuracy(out: Path, doc: Path) -> list[str]:
             f"| experiment | agent | error | plays 1-{BLOCK} | plays 41-50 | last {BLOCK} plays | settles at play "
             f"(within {BAND:.0%} or 2 SD of plays {TAIL + 1}+) | lowest last-{BLOCK} error of a run |",
             "|---|---|---|---|---|---|---|---|"]
-    level = ("no probe errors in these runs (they were made before the probes were recorded)" if not probe else
-             f"on the fixed probes {len(near)} of {len(probe)} curves settle by play {2 * THESIS_SETTLES} (within "
-             "twice the thesis's 50 plays) — " + ("reproduced" if len(near) == len(probe) else
+    level = ("no probe errors in these runs (they were made before the probes were recorded)" if not probes else
+             f"on the fixed probes {len(near)} of {len(probes)} curves settle by play {2 * THESIS_SETTLES} (within "
+             "twice the thesis's 50 plays) — " + ("reproduced" if len(near) == len(probes) else
                                                   "**not reproduced**" if not near else "partly")
              + f" (settling plays, {where})")
     verdict = [
@@ -142,5 +175,6 @@ def model_accuracy(out: Path, doc: Path) -> list[str]:
            else "**not reproduced** — some run's error reaches 0")
         + (f"; the last {BLOCK} plays' probe errors are {min(kept):.0%}-{max(kept):.0%} of those of plays "
            f"1-{BLOCK}." if kept else "."), ""]
+    verdict += _scale_lines(probes)
     return head + rows + verdict + [figure(_draw(panels, Path(out) / "survival-model-accuracy.png"), doc,
                                            "survival-model-accuracy"), ""]
