@@ -135,34 +135,43 @@ class PoleHiddenParams(HiddenStateParams):
 
 @dataclass(frozen=True)
 class FrozenModelParams(CupParams):
-    """7.5.2's test: recurrent-model whose action model stops learning after ``freeze_at`` trials."""
+    """7.5.2's test: recurrent-model whose action model stops learning after ``freeze_at`` trials, or once the
+    greedy test has been optimal ``freeze_after_optimal`` times (the thesis fixed it "at some point of learning",
+    after the agent "found the optimal policy many times")."""
 
-    freeze_at: int | None = None  # trials after which the model is fixed (None: it learns throughout)
+    freeze_at: int | None = None  # trials after which the model is fixed (None: not by trials)
+    freeze_after_optimal: int | None = None  # optimal greedy tests after which it is fixed (None: not by tests)
 
     def __post_init__(self):
         super().__post_init__()
-        check_types(self, {"freeze_at": ">=0"})
+        check_types(self, {"freeze_at": ">=0", "freeze_after_optimal": ">=1"})
 
     def check_combination(self):
-        if self.freeze_at is not None and self.arch != "recurrent-model":
-            raise ValueError(f"parameter freeze_at needs arch 'recurrent-model' (only it has a model), "
-                             f"got {self.arch!r}")
+        if (self.freeze_at, self.freeze_after_optimal) != (None, None) and self.arch != "recurrent-model":
+            raise ValueError(f"parameters freeze_at / freeze_after_optimal need arch 'recurrent-model' (only it "
+                             f"has a model), got {self.arch!r}")
+
+    def frozen(self, trials: int, scores: list[float]) -> bool:
+        """Whether the model is fixed for the next trial, after ``trials`` trials with these test scores."""
+        return ((self.freeze_at is not None and trials >= self.freeze_at) or
+                (self.freeze_after_optimal is not None and scores.count(OPTIMAL_SCORE) >= self.freeze_after_optimal))
 
 
 def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
     """7.5.1's protocol: after every training trial, one greedy test episode from each instance. A
     recurrent-model agent's rows also hold its model's error on each new lesson before learning from it
-    (7.5.1); with ``FrozenModelParams`` the model is fixed after ``freeze_at`` trials (7.5.2)."""
+    (7.5.1); with ``FrozenModelParams`` the model is fixed part-way (7.5.2)."""
     train_env, test_env = make_cup_envs(p.task)
     train_env.reset(seed=int(rng.integers(2**31)))
     test_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, train_env.observation_space.shape[0], 3, rng)
     rows, scores, wasted, last = [], [], [], {}
-    freeze_at = getattr(p, "freeze_at", None)
+    frozen_after = []  # trials trained when the model was fixed (7.5.2)
 
     def train(k):
-        if freeze_at is not None:
-            agent.freeze_model = k >= freeze_at
+        if isinstance(p, FrozenModelParams) and not agent.freeze_model and p.frozen(k, scores):
+            agent.freeze_model = True
+            frozen_after.append(k)
         stats = run_trial(train_env, agent, trial=k, learning=True)
         last.update(train_steps=stats.steps, train_done=stats.terminated, **(getattr(agent, "last_model_error", None)
                                                                               or {}))
@@ -176,6 +185,8 @@ def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total:
 
     train_and_test(p.trials, train, test, progress=progress, agent=agent)
     metrics = _cup_metrics(np.array(scores), wasted)
+    if isinstance(p, FrozenModelParams):
+        metrics["frozen_after"] = frozen_after[0] if frozen_after else None
     extra = {}
     if p.probe and scores[-1] == OPTIMAL_SCORE:
         probes = robustness_probe(agent, test_env.unwrapped.random_bits, tuple(p.probe_steps),
@@ -258,11 +269,14 @@ def _frozen_spec() -> ExperimentSpec:
         section="7.5.2", run="connrl.experiments.hidden_state:run_cup",
         params=FrozenModelParams(task=2, arch="recurrent-model", lam=0.8), profiles=_CUP_PROFILES,
         variants=(Variant("model learns throughout (as cup-task2)"),
-                  Variant("model fixed after 200 trials", {"freeze_at": 200}, stuck),
-                  Variant("model fixed after 300 trials", {"freeze_at": 300}, stuck)),
-        quantities=(_CUP_QUANTITIES[2], _CUP_QUANTITIES[3], _CUP_QUANTITIES[0], _CUP_QUANTITIES[1]),
+                  Variant("model fixed after 300 trials", {"freeze_at": 300}, stuck),
+                  Variant("model fixed at the 1st optimal test", {"freeze_after_optimal": 1}, stuck),
+                  Variant("model fixed at the 5th optimal test", {"freeze_after_optimal": 5}, stuck)),
+        quantities=(_CUP_QUANTITIES[2], _CUP_QUANTITIES[3], _CUP_QUANTITIES[0], _CUP_QUANTITIES[1],
+                    Quantity("frozen_after", "training trials after which the model was fixed (none: never)",
+                             "lower", "7.5.2")),
         x_label="trials", y_label="test steps to collect both cups in both instances",
-        y_reference={"optimal": OPTIMAL_SCORE}, x_reference={"fixed (200)": 200, "fixed (300)": 300},
+        y_reference={"optimal": OPTIMAL_SCORE}, x_reference={"fixed (300)": 300},
         description="7.5.2: the model's changing context units destabilise a trained Q-net; fixed, it should not")
 
 

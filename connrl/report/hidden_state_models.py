@@ -89,14 +89,15 @@ def frozen_model(out: Path, doc: Path) -> list[str]:
              "The thesis: without a fix the agent \"could not stabilize on the optimal policy; it oscillated\"; "
              "\"I fixed the model at some point of learning and allowed only changes to the Q-net. In such a "
              "setup, the agent found the optimal policy and indeed stuck to it.\"", "",
-             "| variant | optimal in last 100 tests (per run) | mean | mean steps, last 100 | runs at "
-             f"≥ {STABLE:.0%} optimal |", "|---|---|---|---|---|"]
+             "| variant | model fixed after trials (per run) | optimal in last 100 tests (per run) | mean | "
+             f"mean steps, last 100 | runs at ≥ {STABLE:.0%} optimal |", "|---|---|---|---|---|---|"]
     share = {}
     for label, v in summary["variants"].items():
         q = v["quantities"]
         per = [x for x in q["optimal_last100"]["per_run"] if x is not None]
         share[label] = (np.mean(per) if per else 0.0, sum(x >= STABLE for x in per), len(per))
-        lines.append(f"| {label} | {', '.join(fixed(x, 2) for x in per)} | {fixed(share[label][0], 2)} | "
+        when = ", ".join("never" if x is None else fixed(x, 0) for x in q["frozen_after"]["per_run"])
+        lines.append(f"| {label} | {when} | {', '.join(fixed(x, 2) for x in per)} | {fixed(share[label][0], 2)} | "
                      f"{fixed(q['mean_steps_last100']['mean'], 2)} | {share[label][1]}/{share[label][2]} |")
     free = next(iter(share.values()))
     fixed_runs = list(share.values())[1:]

@@ -64,8 +64,24 @@ def test_frozen_model_stops_learning_at_freeze_at(monkeypatch):
                              probe=False, freeze_at=2)
     hs.run_cup(p, np.random.default_rng(0))
     assert seen == [(False, True), (False, True), (True, False), (True, False)]  # (frozen, weights changed)
-    with pytest.raises(ValueError, match="freeze_at needs arch 'recurrent-model'"):
+    with pytest.raises(ValueError, match="freeze_at / freeze_after_optimal need arch 'recurrent-model'"):
         dataclasses.replace(p, arch="window-Q").check_combination()
+
+
+def test_model_is_fixed_at_the_first_optimal_test(monkeypatch):
+    from connrl.agents.memory import RecurrentModelQ
+    seen = []
+    train = RecurrentModelQ.train_model
+    monkeypatch.setattr(RecurrentModelQ, "train_model", lambda self: seen.append(self.freeze_model) or train(self))
+    def run(p):
+        scores = iter([20, 14, 20, 20])  # greedy test scores after trials 1-4: optimal (14) once, after trial 2
+        monkeypatch.setattr(hs, "test_score", lambda env, agent: next(scores))
+        return hs.run_cup(p, np.random.default_rng(0))
+
+    p = hs.FrozenModelParams(task=2, arch="recurrent-model", trials=4, lessons_per_trial=2, model_lessons_per_trial=2,
+                             probe=False, freeze_after_optimal=1)
+    assert run(p).metrics["frozen_after"] == 2 and seen == [False, False, True, True]
+    assert run(dataclasses.replace(p, freeze_after_optimal=2)).metrics["frozen_after"] is None  # 14 only once
 
 
 def test_unfrozen_variant_is_the_plain_task2_run():

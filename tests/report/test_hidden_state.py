@@ -50,5 +50,5 @@ def test_model_parts_read_the_stored_runs(tmp_path):
     assert len(rows) == 1 and len(rows[0].split("|")) == 8  # one tiny run, six columns
     assert "**Verdict:**" in text and (tmp_path / "docs" / "figures" / "cup-task1-model-error.png").exists()
     text = "\n".join(frozen_model(tmp_path, doc))
-    assert "| model fixed after 300 trials | 0 | 0 |" in text  # tiny: 3 trials, never optimal
+    assert "| model fixed after 300 trials | never | 0 | 0 |" in text  # tiny: 3 trials, never optimal
     assert "**Verdict:** **not reproduced**." in text
