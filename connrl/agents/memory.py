@@ -323,14 +323,22 @@ class RecurrentModelQ(LessonAgent):
         return Lesson(np.hstack([lesson.inputs, cs[:-1]]), lesson.actions, lesson.rewards,
                       terminated=lesson.terminated, truncated=lesson.truncated, taught=lesson.taught)
 
+    def _predictions(self, lesson: Lesson) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(the taken action's model outputs, their targets, which sensation bits are wrong) per step."""
+        ys, _ = self.model.forward_sequence(lesson.inputs[:-1], lesson.actions)
+        pred = ys[np.arange(lesson.actions.size), lesson.actions]
+        target = model_targets(lesson, self.config.payoff_scale)
+        return pred, target, (pred[:, :-1] > 0) != (target[:, :-1] > 0)
+
+    def wrong_steps(self, lesson: Lesson) -> np.ndarray:
+        """Per step, whether the model gets some bit of the next sensation wrong (no training)."""
+        return self._predictions(lesson)[2].any(axis=1)
+
     def model_error(self, lesson: Lesson) -> dict[str, float]:
         """How well the model predicts a lesson (7.5.1), measured without training: the share of steps whose
         next sensation it gets wrong in any bit (sign of the output against the +-0.5 bit), the share of wrong
         bits, and the mean absolute payoff error."""
-        ys, _ = self.model.forward_sequence(lesson.inputs[:-1], lesson.actions)
-        pred = ys[np.arange(lesson.actions.size), lesson.actions]  # the taken action's net
-        target = model_targets(lesson, self.config.payoff_scale)
-        wrong = (pred[:, :-1] > 0) != (target[:, :-1] > 0)
+        pred, target, wrong = self._predictions(lesson)
         return {"model_wrong_steps": float(wrong.any(axis=1).mean()), "model_wrong_bits": float(wrong.mean()),
                 "model_payoff_error": float(np.abs(pred[:, -1] - target[:, -1]).mean() / self.config.payoff_scale)}
 

@@ -62,6 +62,7 @@ from connrl.tasks.hidden_state import (
     OPTIMAL_SCORE,
     make_agent,
     make_cup_envs,
+    model_probe,
     robustness_probe,
     test_score,
 )
@@ -133,6 +134,11 @@ class PoleHiddenParams(HiddenStateParams):
                     arch=ARCHITECTURES, task=(4,))
 
 
+# 7.5.1: recurrent-model's action model on fixed random walks every 50 trials (connrl.tasks.hidden_state.model_probe;
+# measurement, not parameters: runs and run folders stay as they were)
+MODEL_PROBE_SEED, MODEL_PROBE_EVERY = 751, 50
+
+
 @dataclass(frozen=True)
 class FrozenModelParams(CupParams):
     """7.5.2's test: recurrent-model whose action model stops learning after ``freeze_at`` trials, or once the
@@ -182,6 +188,8 @@ def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total:
         scores.append(score)
         wasted.append(test_env.wasted)
         rows.append({"trial": n, **last, "test_steps": score, "test_wasted_pickups": test_env.wasted})
+        if hasattr(agent, "wrong_steps") and n % MODEL_PROBE_EVERY == 0:  # recurrent-model's model, off its path
+            rows[-1].update(model_probe(agent, p.task, MODEL_PROBE_SEED))
 
     train_and_test(p.trials, train, test, progress=progress, agent=agent)
     metrics = _cup_metrics(np.array(scores), wasted)

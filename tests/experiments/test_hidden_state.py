@@ -90,3 +90,10 @@ def test_unfrozen_variant_is_the_plain_task2_run():
     a = hs.run_cup(hs.CupParams(**base), np.random.default_rng(3))
     b = hs.run_cup(hs.FrozenModelParams(**base, freeze_at=None), np.random.default_rng(3))
     assert a.curve_y == b.curve_y and a.rows == b.rows
+
+
+def test_recurrent_model_is_probed_on_random_walks_every_50_trials():
+    p = hs.CupParams(arch="recurrent-model", trials=50, lessons_per_trial=1, model_lessons_per_trial=1, probe=False)
+    rows = hs.run_cup(p, np.random.default_rng(0)).rows
+    assert [r["trial"] for r in rows if "probe_wrong_steps" in r] == [50]
+    assert 0 < rows[-1]["probe_wrong_steps"] < 1 and rows[-1]["probe_cup_after_unseen_n"] > 0
