@@ -262,7 +262,8 @@ class RecurrentModelQ(LessonAgent):
         self.book = LessonBook(config.replay)  # raw lessons; the latest 70 are replayed into the Q-net
         self.history: list[Lesson] = []  # all past lessons: the model trains on them (7.5 fn. 2)
         self.freeze_model = False  # 7.5.2: "I fixed the model at some point of learning"
-        self.last_model_error: dict[str, float] | None = None  # on the latest lesson, before training on it (7.5.1)
+        self.track_model_error = False  # measure the model on each new lesson (7.5.1; off: it costs a pass)
+        self.last_model_error: dict[str, float] | None = None  # on the latest lesson, before training on it
         self.trial, self.learning = 0, True
         self._x: np.ndarray | None = None
         self._xq: np.ndarray | None = None
@@ -343,11 +344,13 @@ class RecurrentModelQ(LessonAgent):
                 "model_payoff_error": float(np.abs(pred[:, -1] - target[:, -1]).mean() / self.config.payoff_scale)}
 
     def learn(self) -> None:
-        """After a trial: train the model, then replay the latest lessons into the Q-net (7.5). The model's error
-        on the new lesson, before it learns from it, is kept in ``last_model_error``."""
+        """After a trial: train the model, then replay the latest lessons into the Q-net (7.5). With
+        ``track_model_error``, the model's error on the new lesson, before it learns from it, is kept in
+        ``last_model_error``."""
         if not self.learning:
             return
-        self.last_model_error = self.model_error(self.history[-1]) if self.history else None
+        if self.track_model_error and self.history:
+            self.last_model_error = self.model_error(self.history[-1])
         self.train_model()
         super().learn()
 

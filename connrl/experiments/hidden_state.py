@@ -171,6 +171,8 @@ def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total:
     train_env.reset(seed=int(rng.integers(2**31)))
     test_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, train_env.observation_space.shape[0], 3, rng)
+    if hasattr(agent, "track_model_error"):  # recurrent-model's rows carry its model's error (7.5.1)
+        agent.track_model_error = True
     rows, scores, wasted, last = [], [], [], {}
     frozen_after = []  # trials trained when the model was fixed (7.5.2)
 
