@@ -262,6 +262,8 @@ class RecurrentModelQ(LessonAgent):
         self.book = LessonBook(config.replay)  # raw lessons; the latest 70 are replayed into the Q-net
         self.history: list[Lesson] = []  # all past lessons: the model trains on them (7.5 fn. 2)
         self.freeze_model = False  # 7.5.2: "I fixed the model at some point of learning"
+        self.track_model_error = False  # measure the model on each new lesson (7.5.1; off: it costs a pass)
+        self.last_model_error: dict[str, float] | None = None  # on the latest lesson, before training on it
         self.trial, self.learning = 0, True
         self._x: np.ndarray | None = None
         self._xq: np.ndarray | None = None
@@ -322,10 +324,33 @@ class RecurrentModelQ(LessonAgent):
         return Lesson(np.hstack([lesson.inputs, cs[:-1]]), lesson.actions, lesson.rewards,
                       terminated=lesson.terminated, truncated=lesson.truncated, taught=lesson.taught)
 
+    def _predictions(self, lesson: Lesson) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(the taken action's model outputs, their targets, which sensation bits are wrong) per step."""
+        ys, _ = self.model.forward_sequence(lesson.inputs[:-1], lesson.actions)
+        pred = ys[np.arange(lesson.actions.size), lesson.actions]
+        target = model_targets(lesson, self.config.payoff_scale)
+        return pred, target, (pred[:, :-1] > 0) != (target[:, :-1] > 0)
+
+    def wrong_steps(self, lesson: Lesson) -> np.ndarray:
+        """Per step, whether the model gets some bit of the next sensation wrong (no training)."""
+        return self._predictions(lesson)[2].any(axis=1)
+
+    def model_error(self, lesson: Lesson) -> dict[str, float]:
+        """How well the model predicts a lesson (7.5.1), measured without training: the share of steps whose
+        next sensation it gets wrong in any bit (sign of the output against the +-0.5 bit), the share of wrong
+        bits, and the mean absolute payoff error."""
+        pred, target, wrong = self._predictions(lesson)
+        return {"model_wrong_steps": float(wrong.any(axis=1).mean()), "model_wrong_bits": float(wrong.mean()),
+                "model_payoff_error": float(np.abs(pred[:, -1] - target[:, -1]).mean() / self.config.payoff_scale)}
+
     def learn(self) -> None:
-        """After a trial: train the model, then replay the latest lessons into the Q-net (7.5)."""
+        """After a trial: train the model, then replay the latest lessons into the Q-net (7.5). With
+        ``track_model_error``, the model's error on the new lesson, before it learns from it, is kept in
+        ``last_model_error``."""
         if not self.learning:
             return
+        if self.track_model_error and self.history:
+            self.last_model_error = self.model_error(self.history[-1])
         self.train_model()
         super().learn()
 

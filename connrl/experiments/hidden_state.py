@@ -62,6 +62,7 @@ from connrl.tasks.hidden_state import (
     OPTIMAL_SCORE,
     make_agent,
     make_cup_envs,
+    model_probe,
     robustness_probe,
     test_score,
 )
@@ -133,17 +134,55 @@ class PoleHiddenParams(HiddenStateParams):
                     arch=ARCHITECTURES, task=(4,))
 
 
+# 7.5.1: recurrent-model's action model on fixed random walks every 50 trials (connrl.tasks.hidden_state.model_probe;
+# measurement, not parameters: runs and run folders stay as they were)
+MODEL_PROBE_SEED, MODEL_PROBE_EVERY = 751, 50
+
+
+@dataclass(frozen=True)
+class FrozenModelParams(CupParams):
+    """7.5.2's test: recurrent-model whose action model stops learning after ``freeze_at`` trials, or once the
+    greedy test has been optimal ``freeze_after_optimal`` times (the thesis fixed it "at some point of learning",
+    after the agent "found the optimal policy many times")."""
+
+    freeze_at: int | None = None  # trials after which the model is fixed (None: not by trials)
+    freeze_after_optimal: int | None = None  # optimal greedy tests after which it is fixed (None: not by tests)
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_types(self, {"freeze_at": ">=0", "freeze_after_optimal": ">=1"})
+
+    def check_combination(self):
+        if (self.freeze_at, self.freeze_after_optimal) != (None, None) and self.arch != "recurrent-model":
+            raise ValueError(f"parameters freeze_at / freeze_after_optimal need arch 'recurrent-model' (only it "
+                             f"has a model), got {self.arch!r}")
+
+    def frozen(self, trials: int, scores: list[float]) -> bool:
+        """Whether the model is fixed for the next trial, after ``trials`` trials with these test scores."""
+        return ((self.freeze_at is not None and trials >= self.freeze_at) or
+                (self.freeze_after_optimal is not None and scores.count(OPTIMAL_SCORE) >= self.freeze_after_optimal))
+
+
 def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
-    """7.5.1's protocol: after every training trial, one greedy test episode from each instance."""
+    """7.5.1's protocol: after every training trial, one greedy test episode from each instance. A
+    recurrent-model agent's rows also hold its model's error on each new lesson before learning from it
+    (7.5.1); with ``FrozenModelParams`` the model is fixed part-way (7.5.2)."""
     train_env, test_env = make_cup_envs(p.task)
     train_env.reset(seed=int(rng.integers(2**31)))
     test_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, train_env.observation_space.shape[0], 3, rng)
+    if hasattr(agent, "track_model_error"):  # recurrent-model's rows carry its model's error (7.5.1)
+        agent.track_model_error = True
     rows, scores, wasted, last = [], [], [], {}
+    frozen_after = []  # trials trained when the model was fixed (7.5.2)
 
     def train(k):
+        if isinstance(p, FrozenModelParams) and not agent.freeze_model and p.frozen(k, scores):
+            agent.freeze_model = True
+            frozen_after.append(k)
         stats = run_trial(train_env, agent, trial=k, learning=True)
-        last.update(train_steps=stats.steps, train_done=stats.terminated)
+        last.update(train_steps=stats.steps, train_done=stats.terminated, **(getattr(agent, "last_model_error", None)
+                                                                              or {}))
 
     def test(n):
         test_env.wasted = 0
@@ -151,9 +190,13 @@ def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total:
         scores.append(score)
         wasted.append(test_env.wasted)
         rows.append({"trial": n, **last, "test_steps": score, "test_wasted_pickups": test_env.wasted})
+        if hasattr(agent, "wrong_steps") and n % MODEL_PROBE_EVERY == 0:  # recurrent-model's model, off its path
+            rows[-1].update(model_probe(agent, p.task, MODEL_PROBE_SEED))
 
     train_and_test(p.trials, train, test, progress=progress, agent=agent)
     metrics = _cup_metrics(np.array(scores), wasted)
+    if isinstance(p, FrozenModelParams):
+        metrics["frozen_after"] = frozen_after[0] if frozen_after else None
     extra = {}
     if p.probe and scores[-1] == OPTIMAL_SCORE:
         probes = robustness_probe(agent, test_env.unwrapped.random_bits, tuple(p.probe_steps),
@@ -228,12 +271,32 @@ def _cup_spec(task: int) -> ExperimentSpec:
         y_label="test steps to collect both cups in both instances", y_reference={"optimal": OPTIMAL_SCORE})
 
 
+def _frozen_spec() -> ExperimentSpec:
+    stuck = {"optimal_last100": 1.0}  # 7.5.2: with the model fixed "the agent found the optimal policy and indeed
+    # stuck to it" (no number: 1.0 is "stuck to it" over the last 100 tests)
+    return ExperimentSpec(
+        name="cup-task2-frozen", title="Task 2 recurrent-model with its action model fixed part-way (7.5.2)",
+        section="7.5.2", run="connrl.experiments.hidden_state:run_cup",
+        params=FrozenModelParams(task=2, arch="recurrent-model", lam=0.8), profiles=_CUP_PROFILES,
+        variants=(Variant("model learns throughout (as cup-task2)"),
+                  Variant("model fixed after 300 trials", {"freeze_at": 300}, stuck),
+                  Variant("model fixed at the 1st optimal test", {"freeze_after_optimal": 1}, stuck),
+                  Variant("model fixed at the 5th optimal test", {"freeze_after_optimal": 5}, stuck)),
+        quantities=(_CUP_QUANTITIES[2], _CUP_QUANTITIES[3], _CUP_QUANTITIES[0], _CUP_QUANTITIES[1],
+                    Quantity("frozen_after", "training trials after which the model was fixed (none: never)",
+                             "lower", "7.5.2")),
+        x_label="trials", y_label="test steps to collect both cups in both instances",
+        y_reference={"optimal": OPTIMAL_SCORE}, x_reference={"fixed (300)": 300},
+        description="7.5.2: the model's changing context units destabilise a trained Q-net; fixed, it should not")
+
+
 _POLE_THESIS = {"window-Q": 206, "recurrent-Q": 552, "recurrent-model": 247}  # Table 7.1
 
 EXPERIMENTS = [
     _cup_spec(1),
     _cup_spec(2),
     _cup_spec(3),
+    _frozen_spec(),
     ExperimentSpec(
         name="cup-robustness",
         title="Robustness probe of 7.5.1: interrupt a trained Task-1 agent, force it the wrong way",

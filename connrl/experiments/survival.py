@@ -40,6 +40,11 @@ from connrl.tasks.survival import (
     make_survival_agent,
 )
 from connrl.tasks.survival import test_plays as _test_plays
+from connrl.tasks.survival_models import probe_experiences
+
+# the learned model's yardstick (4.4.3): fixed experiences, the same for every run of a representation (not
+# parameters: they are measurement, and leave the runs and their folders as they were)
+PROBE_SEED, PROBE_SIZE, PROBE_EVERY = 4403, 1000, 5
 
 
 @dataclass(frozen=True)
@@ -76,6 +81,9 @@ def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda do
     test_env = SurvivalEnv(p.representation)
     agent = make_survival_agent(_agent_params(p), env, rng)
     planner = getattr(agent, "planner", None)
+    # a learned model's accuracy on fixed experiences (4.4.3), from their own seed: the run's values stay as they were
+    probes = (probe_experiences(p.representation, PROBE_SEED, PROBE_SIZE)
+              if hasattr(getattr(planner, "model", None), "probe_errors") else None)
     n_tests = (p.train_plays // p.test_every + 1) if p.test_every else 0
     total = p.train_plays + n_tests * p.test_envs + p.eval_envs
     done = 0
@@ -102,6 +110,8 @@ def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda do
             row["hypothetical_per_step"] = h
             if hasattr(planner.model, "pop_errors"):
                 row.update({f"model_{k2}": v for k2, v in planner.model.pop_errors().items()})
+            if probes is not None and (k == 0 or (k + 1) % PROBE_EVERY == 0):
+                row.update({f"model_{k2}": v for k2, v in planner.model.probe_errors(probes).items()})
         rows.append(row)
         done += 1
         progress(done, total)

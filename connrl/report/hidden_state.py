@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from connrl.experiments.hidden_state import CUP_FIGURES, EXPERIMENTS
+from connrl.report.hidden_state_models import frozen_model, imperfect_model
 from connrl.report.page import fixed, load_summary, note
 
 
@@ -48,6 +49,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
         s = load_summary(out_dir, name)
         if s is not None:
             parts += _cup_table(s, task, fig, section, title)
+    parts += imperfect_model(out_dir, doc) + frozen_model(out_dir, doc)
     s = load_summary(out_dir, "cup-robustness") or load_summary(out_dir, "cup-task1")  # Task 1 probes too (lambda=0.8)
     if s is not None:
         parts += _robustness_table(s)

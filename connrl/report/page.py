@@ -93,7 +93,7 @@ def figure(png: Path, doc: Path, name: str) -> str:
 
 NOTES_DIR = Path(__file__).resolve().parents[2] / "docs" / "notes"
 SECTIONS = ("connrl.report.pole", "connrl.report.survival", "connrl.report.hidden_state", "connrl.report.robot",
-            "connrl.report.recharge", "connrl.report.complexity", "connrl.report.integration")
+            "connrl.report.td_depth", "connrl.report.recharge", "connrl.report.complexity", "connrl.report.integration")
 
 
 def note(name: str) -> str:
@@ -121,16 +121,24 @@ def load_summary(out: Path, name: str) -> dict | None:
         return None
 
 
+def _value(v: str) -> float | str:
+    try:
+        return float(v)
+    except ValueError:
+        return v  # a label column (e.g. survival's kind: train / test)
+
+
 def run_rows(spec, summary: dict, out_dir: Path, label: str) -> list[list[dict]]:
-    """Each stored run's CSV rows (one per test: trials, performance, ...) of one variant, as floats; runs not
-    stored yet are left out."""
+    """Each stored run's CSV rows (one per test: trials, performance, ...) of one variant, numbers as floats (empty
+    cells left out); runs not stored yet are left out."""
     jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], out_dir)
     out = []
     for j in jobs:
         f = Path(f"{j.path}.csv")
         if j.variant == label and f.exists():
-            out.append([{k: float(v) for k, v in row.items() if v not in ("", None)} for row in csv.DictReader(
-                f.open())])
+            with f.open() as fh:
+                out.append([{k: _value(v) for k, v in row.items() if v not in ("", None)}
+                            for row in csv.DictReader(fh)])
     return [r for r in out if r]
 
 

@@ -15,6 +15,7 @@ from connrl.envs.survival import GRID_SIZE, render_rgb
 from connrl.experiments.survival import EXPERIMENTS
 from connrl.report.page import figure, note, stored
 from connrl.report.plots import save_figure
+from connrl.report.survival_accuracy import model_accuracy
 
 _SPECS = {s.name: s for s in EXPERIMENTS}
 
@@ -141,6 +142,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
         parts += _comparisons(studies)
     parts += _speedup(out_dir, doc)
     parts += _planning(out_dir, doc)
+    parts += model_accuracy(out_dir, doc)
     parts += _evaluation(out_dir, doc)
     return "\n".join(parts) if len(parts) > 6 else ""
 

@@ -24,6 +24,7 @@ from connrl.agents.memory import (
 )
 from connrl.agents.qcon import QCONConfig
 from connrl.core.exploration import TemperatureSchedule
+from connrl.core.lessons import Lesson
 from connrl.core.rollout import run_trial
 from connrl.envs.cup import INSTANCES, LEFT, OPTIMAL_STEPS, PICK_UP, RIGHT, CupCollectionEnv
 from connrl.nets import NetConfig
@@ -184,3 +185,38 @@ def make_cup_envs(task: int) -> tuple[CupCollectionEnv, gym.Wrapper]:
         raise ValueError(f"cup task must be 1, 2 or 3, got {task!r}")
     return CupCollectionEnv(**spec), WastedPickUps(CupCollectionEnv(random_bits=spec["random_bits"],
                                                                      control_error=0.0))
+
+
+def model_probe(agent, task: int, seed: int, walks: int = 200, unseen: int = 10) -> dict[str, float | None]:
+    """7.5.1's imperfect model away from the agent's own path: the recurrent model's errors on random walks.
+
+    ``walks`` episodes of random actions (instances A and B in turn, control errors off, 30 steps at most), drawn
+    from ``seed`` alone, so a run's random stream is untouched; the model is not trained on them. Returns the
+    share of steps whose next sensation the model gets wrong in some bit, and the share of steps on which a cup
+    comes into sight after ``unseen`` or more steps without one ("if the agent had not seen a cup for 10 steps or
+    more, the model normally was unable to predict the appearance of the cup") that it gets wrong (None: none).
+    """
+    env = CupCollectionEnv(random_bits=CUP_TASKS[task]["random_bits"])
+    rng = np.random.default_rng(seed)
+    wrong_all, wrong_seen = [], []
+    for w in range(walks):
+        x, _ = env.reset(seed=int(rng.integers(2**31)), options={"instance": INSTANCES[w % 2]})
+        xs, actions, rewards, done = [x], [], [], False
+        while not done:
+            a = int(rng.integers(3))
+            x, r, terminated, truncated, _ = env.step(a)
+            xs.append(x)
+            actions.append(a)
+            rewards.append(r)
+            done = terminated or truncated
+        lesson = Lesson(np.array(xs), np.array(actions), np.array(rewards), terminated=terminated,
+                        truncated=truncated)
+        wrong = agent.wrong_steps(lesson)
+        cup = np.array(xs)[:, :2].max(axis=1) > 0  # a cup in sight in x_0 .. x_n
+        for t in range(unseen - 1, len(actions)):  # the prediction of x_{t+1}
+            if cup[t + 1] and not cup[t + 1 - unseen:t + 1].any():
+                wrong_seen.append(wrong[t])
+        wrong_all.append(wrong)
+    return {"probe_wrong_steps": float(np.concatenate(wrong_all).mean()),
+            "probe_cup_after_unseen_wrong": float(np.mean(wrong_seen)) if wrong_seen else None,
+            "probe_cup_after_unseen_n": len(wrong_seen)}

@@ -12,13 +12,14 @@ Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Learners and pro
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-from connrl.envs.survival import ACTION_ROTATION, N_INPUTS, ROTATION_PERMUTATIONS, SurvivalEnv
+from connrl.envs.survival import ACTION_ROTATION, N_INPUTS, ROTATION_PERMUTATIONS, SurvivalEnv, scripted_teacher_action
 
 
 class PerfectSurvivalModel:
@@ -163,9 +164,9 @@ class LearnedSurvivalModel:
         row = np.empty(2 * n_in + 2)
         row[:n_in], row[n_in:2 * n_in], row[-2], row[-1] = x, y, a, r
         # prediction error before learning (the model's accuracy over time, 4.4.3)
-        pr, enemy = self.predict(x, int(a))
-        self.errors["reward_abs"] += abs(pr - r)
-        self.errors["enemy_bits"] += float(np.mean(enemy != y[self.ENEMY]))
+        reward_abs, enemy_bits = self.prediction_error(x, a, r, y)
+        self.errors["reward_abs"] += reward_abs
+        self.errors["enemy_bits"] += enemy_bits
         self.errors["n"] += 1
         self._train(row)
         cap = self._q.shape[0]
@@ -175,9 +176,37 @@ class LearnedSurvivalModel:
         for i in self.rng.integers(size, size=self.config.replays):
             self._train(self._q[i])
 
+    def prediction_error(self, x, a, r, y) -> tuple[float, float]:
+        """(|predicted r - r|, fraction of the 32 enemy units of y predicted wrong) for one experience."""
+        pr, enemy = self.predict(x, int(a))
+        return abs(pr - r), float(np.mean(enemy != y[self.ENEMY]))
+
+    def probe_errors(self, probes) -> dict[str, float]:
+        """Mean prediction errors on fixed experiences (``probe_experiences``), without learning from them: the
+        model's accuracy on a yardstick that does not move with the agent's behaviour."""
+        errs = np.array([self.prediction_error(x, a, r, y) for x, a, r, y in probes])
+        return {"probe_reward_abs": float(errs[:, 0].mean()), "probe_enemy_bits": float(errs[:, 1].mean())}
+
     def pop_errors(self) -> dict[str, float]:
         """Mean prediction errors since the last call (absolute reward error, fraction of wrong enemy bits)."""
         n = max(self.errors["n"], 1)
         out = {"reward_abs": self.errors["reward_abs"] / n, "enemy_bits": self.errors["enemy_bits"] / n}
         self.errors = {"reward_abs": 0.0, "enemy_bits": 0.0, "n": 0}
         return out
+
+
+@functools.lru_cache(maxsize=4)  # the same yardstick for every run a worker process makes
+def probe_experiences(representation: str, seed: int, n: int, random_share: float = 0.5) -> tuple[tuple, ...]:
+    """``n`` experiences (x, a, r, y) of a fixed policy: the scripted teacher's action, or with probability
+    ``random_share`` a random one (so bad moves and deaths are in it too). Fresh plays on random layouts from
+    ``seed`` alone: a yardstick for a learned model that leaves a run's own random stream untouched."""
+    env = SurvivalEnv(representation)
+    rng = np.random.default_rng(seed)
+    x, _ = env.reset(seed=int(rng.integers(2**31 - 1)))
+    out = []
+    while len(out) < n:
+        a = int(rng.integers(4)) if rng.random() < random_share else scripted_teacher_action(env)
+        y, r, terminated, truncated, _ = env.step(a)
+        out.append((x, a, float(r), y))
+        x = env.reset(seed=int(rng.integers(2**31 - 1)))[0] if terminated or truncated else y
+    return tuple(out)

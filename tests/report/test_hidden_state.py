@@ -36,3 +36,19 @@ def test_results_section_names_the_command_of_each_run(tiny_runs, tmp_path, name
 
 def test_results_section_without_runs(tmp_path):
     assert "No Chapter 7 results stored yet" in hs.results_section(tmp_path, tmp_path / "RESULTS.md")
+
+
+def test_model_parts_read_the_stored_runs(tmp_path):
+    from connrl.report.hidden_state_models import frozen_model, imperfect_model
+    from tests.tiny_runs import run_tiny
+    assert imperfect_model(tmp_path, tmp_path / "R.md") == [] and frozen_model(tmp_path, tmp_path / "R.md") == []
+    for name in ("cup-task1", "cup-task2-frozen"):
+        run_tiny(name, tmp_path)
+    doc = tmp_path / "docs" / "RESULTS.md"
+    text = "\n".join(imperfect_model(tmp_path, doc))
+    rows = [line for line in text.splitlines() if line.startswith("| 0 |")]
+    assert len(rows) == 1 and len(rows[0].split("|")) == 8  # one tiny run, six columns
+    assert "**Verdict:**" in text and (tmp_path / "docs" / "figures" / "cup-task1-model-error.png").exists()
+    text = "\n".join(frozen_model(tmp_path, doc))
+    assert "| model fixed after 300 trials | never | 0 | 0 |" in text  # tiny: 3 trials, never optimal
+    assert "**Verdict:** —. Of the 0 runs" in text  # no run's model was fixed

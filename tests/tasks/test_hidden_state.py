@@ -82,3 +82,29 @@ def test_table_b1_parameters_reach_the_nets():
     assert agent.explore.schedule(0) == pytest.approx(1 / 20) and agent.explore.schedule(999) == pytest.approx(1 / 50)
     with pytest.raises(ValueError, match="arch must be one of"):
         hs.make_agent(CupParams(arch="lstm"), 4, 3, rng)
+
+
+class _Recorder:
+    """A stand-in for recurrent-model: says every step is wrong (or none), and keeps the walks it is shown."""
+
+    def __init__(self, wrong: bool):
+        self.wrong, self.lessons = wrong, []
+
+    def wrong_steps(self, lesson):
+        self.lessons.append(lesson)
+        return np.full(lesson.actions.size, self.wrong)
+
+
+def test_model_probe_counts_cups_that_appear_after_ten_unseen_steps():
+    from connrl.tasks.hidden_state import model_probe
+    always, never = _Recorder(True), _Recorder(False)
+    a, b = model_probe(always, 1, seed=3, walks=40), model_probe(never, 1, seed=3, walks=40)
+    assert (a["probe_wrong_steps"], b["probe_wrong_steps"]) == (1.0, 0.0)
+    assert a["probe_cup_after_unseen_n"] == b["probe_cup_after_unseen_n"] > 0  # same walks from the same seed
+    assert (a["probe_cup_after_unseen_wrong"], b["probe_cup_after_unseen_wrong"]) == (1.0, 0.0)
+    events = 0  # counted here by scanning each walk's sensations: cup bit on, none in the 10 before
+    for lesson in always.lessons:
+        seen = [bool(x[0] > 0 or x[1] > 0) for x in lesson.inputs]
+        events += sum(1 for i in range(10, len(seen)) if seen[i] and not any(seen[i - 10:i]))
+    assert events == a["probe_cup_after_unseen_n"]
+    assert len(always.lessons) == 40 and {len(x.actions) for x in always.lessons} <= set(range(1, 31))

@@ -76,3 +76,51 @@ def test_qcon_plans_while_learning_but_not_at_test():
     assert agent.planner.hypothetical > 0 and agent.planner.steps > 0
     run_trial(env, agent, trial=0, learning=False, seed=1)
     assert agent.planner.hypothetical == 0  # reset at the test play's start and no planning at T = 0
+
+
+def test_probe_experiences_are_fixed_and_real():
+    from connrl.tasks.survival_models import probe_experiences
+    probes = probe_experiences("global", 7, 300)
+    assert len(probes) == 300 and probes == probe_experiences("global", 7, 300)  # one yardstick (cached)
+    rewards = {r for _, _, r, _ in probes}
+    assert rewards <= {0.0, 0.4, -1.0} and {0.4, -1.0} <= rewards  # food and deaths are in it
+    x, a, r, y = probes[0]  # the first is a real step of a fresh play from its seed: the env replays it
+    env = SurvivalEnv("global")
+    x0, _ = env.reset(seed=int(np.random.default_rng(7).integers(2**31 - 1)))
+    np.testing.assert_array_equal(x, x0)
+    y0, r0, *_ = env.step(a)
+    np.testing.assert_array_equal(y, y0)
+    assert r == r0
+    other = probe_experiences("global", 8, 300)
+    assert any(not np.array_equal(p[0], q[0]) for p, q in zip(probes, other, strict=True))
+
+
+def test_probe_errors_of_a_blank_model_by_hand():
+    from connrl.tasks.survival_models import probe_experiences
+    env = SurvivalEnv("local")
+    env.reset(seed=1)
+    model = LearnedSurvivalModel(env, np.random.default_rng(0))
+    model.w_r[:] = 0.0
+    model.w_e[:] = 0.0  # predicts r = 0 and every enemy unit off (-0.5)
+    probes = probe_experiences("local", 3, 200)
+    errs = model.probe_errors(probes)
+    assert errs["probe_reward_abs"] == pytest.approx(np.mean([abs(r) for _, _, r, _ in probes]))
+    assert errs["probe_enemy_bits"] == pytest.approx(np.mean([np.mean(y[52:84] > 0) for _, _, _, y in probes]))
+
+
+def test_probe_errors_fall_as_the_model_learns_and_leave_it_alone():
+    from connrl.tasks.survival_models import probe_experiences
+    env = SurvivalEnv("global")
+    env.reset(seed=1)
+    model = LearnedSurvivalModel(env, np.random.default_rng(0))
+    probes = probe_experiences("global", 5, 300)
+    before = model.probe_errors(probes)
+    w, state = model.w_r.copy(), model.rng.bit_generator.state
+    assert model.probe_errors(probes) == before and np.array_equal(model.w_r, w)  # measuring changes nothing
+    assert model.rng.bit_generator.state == state and model.errors["n"] == 0
+    for _ in range(3):
+        for x, a, r, y in probes:
+            model.learn(x, a, r, y, r == -1.0)
+    after = model.probe_errors(probes)
+    assert after["probe_reward_abs"] < before["probe_reward_abs"]
+    assert after["probe_enemy_bits"] < before["probe_enemy_bits"]
