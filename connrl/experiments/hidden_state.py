@@ -297,6 +297,15 @@ EXPERIMENTS = [
     _cup_spec(2),
     _cup_spec(3),
     _frozen_spec(),
+    ExperimentSpec(  # 7.5.1: "the optimal policy could be learned (but only occasionally) with N = 2"
+        name="cup-window", title="Task 1 window-Q with Table B.1's window N = 5 and with N = 2", section="7.5.1",
+        run="connrl.experiments.hidden_state:run_cup",
+        params=CupParams(task=1, arch="window-Q", lam=0.8, probe=False),
+        profiles={**_CUP_PROFILES, "full": {"runs": 20}},  # 20, not 5: "occasionally" needs a count of runs
+        variants=(Variant("N=5 (Table B.1)"), Variant("N=2", {"table": {"window": 2}})),
+        quantities=(_CUP_QUANTITIES[2], _CUP_QUANTITIES[1], _CUP_QUANTITIES[0], _CUP_QUANTITIES[3]),
+        x_label="trials", y_label="test steps to collect both cups in both instances",
+        y_reference={"optimal": OPTIMAL_SCORE}),
     ExperimentSpec(
         name="cup-robustness",
         title="Robustness probe of 7.5.1: interrupt a trained Task-1 agent, force it the wrong way",

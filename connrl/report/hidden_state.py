@@ -50,6 +50,9 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
         if s is not None:
             parts += _cup_table(s, task, fig, section, title)
     parts += imperfect_model(out_dir, doc) + frozen_model(out_dir, doc)
+    s = load_summary(out_dir, "cup-window")
+    if s is not None:
+        parts += _window_table(s)
     s = load_summary(out_dir, "cup-robustness") or load_summary(out_dir, "cup-task1")  # Task 1 probes too (lambda=0.8)
     if s is not None:
         parts += _robustness_table(s)
@@ -86,6 +89,28 @@ def _cup_table(s: dict, task: int, fig: str, section: str, title: str) -> list[s
     for name in _TASK_NOTES.get(task, []):
         lines += [note(name), ""]
     return lines
+
+
+def _window_table(s: dict) -> list[str]:
+    """7.5.1's N = 2 claim: the optimal policy found "only occasionally"."""
+    lines = ["### Window size N = 2 (7.5.1)", "", f"Command: {_cmd(s)} (profile `{s['profile']}`, "
+             f"{s['runs_per_variant']} runs per variant, seeds from {s['base_seed']}). The thesis: \"the optimal "
+             "policy could be learned (but only occasionally) with N = 2\" (Fig. 7.5a used N = 5).", "",
+             "| window | runs with an optimal test | runs optimal in ≥ 90 % of the last 100 tests "
+             "| optimal in last 100 tests (mean) | mean steps, last 100 |", "|---|---|---|---|---|"]
+    reached, kept = {}, {}
+    for label, v in s["variants"].items():
+        q = v["quantities"]
+        n = len(q["optimal_last100"]["per_run"])
+        reached[label] = q["trials_to_optimal"]["runs_reaching"]
+        kept[label] = sum(x >= 0.9 for x in q["optimal_last100"]["per_run"])
+        lines.append(f"| {label} | {reached[label]}/{n} | {kept[label]}/{n} | "
+                     f"{fixed(q['optimal_last100']['mean'], 2)} | {fixed(q['mean_steps_last100']['mean'], 2)} |")
+    five, two = list(s["variants"])
+    holds = 0 < reached[two] and kept[two] < kept[five]
+    return lines + ["", f"**Verdict:** {'reproduced' if holds else '**not reproduced**'}: with N = 2 the greedy "
+                    f"policy is optimal at some test in {reached[two]} runs and stays optimal (≥ 90 % of the last "
+                    f"100 tests) in {kept[two]}, against {kept[five]} with N = 5.", ""]
 
 
 def _robustness_table(s: dict) -> list[str]:

@@ -97,3 +97,15 @@ def test_recurrent_model_is_probed_on_random_walks_every_50_trials():
     rows = hs.run_cup(p, np.random.default_rng(0)).rows
     assert [r["trial"] for r in rows if "probe_wrong_steps" in r] == [50]
     assert 0 < rows[-1]["probe_wrong_steps"] < 1 and rows[-1]["probe_cup_after_unseen_n"] > 0
+
+
+def test_the_window_size_experiment_changes_only_the_window():
+    from connrl.experiments.hidden_state import CupParams
+    from connrl.experiments.registry import get_experiment
+    from connrl.tasks.hidden_state import table_entry
+    spec = get_experiment("cup-window")
+    n5, n2 = (spec.variant_params(spec.params, v) for v in spec.variants)
+    assert table_entry(n5)["window"] == 5 and table_entry(n2)["window"] == 2  # Table B.1: N = 5 for Task 1
+    t5, t2 = table_entry(n5), table_entry(n2)
+    assert {k: v for k, v in t5.items() if k != "window"} == {k: v for k, v in t2.items() if k != "window"}
+    assert table_entry(CupParams(task=1, arch="window-Q", lam=0.8)) == t5  # N = 5 is cup-task1's window-Q
