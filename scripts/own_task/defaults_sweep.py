@@ -1,6 +1,6 @@
 """How connrl.api's defaults were chosen: QCON-R on CartPole-v1 and Acrobot-v1 with each default varied one at a
-time (the others kept), on development seeds (never the seeds the README reports); prints the greedy return (mean
-of 10 episodes, evaluation seeds 500-509) after ``--steps`` steps, per seed and averaged.
+time (the others kept), on development seeds (100-108; the README's held-out seeds are 0-2 and 200-204); prints
+the greedy return (mean of 10 episodes, evaluation seeds 500-509) after ``--steps`` steps, per seed and averaged.
 
     python scripts/own_task/defaults_sweep.py [--seeds 100 101 102] [--steps 50000] [--workers 2] [--out FILE.json]
         [--tasks CartPole-v1 Acrobot-v1] [--variants defaults "lam 0.9" ...]
