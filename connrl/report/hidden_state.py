@@ -53,6 +53,8 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     s = load_summary(out_dir, "cup-window")
     if s is not None:
         parts += _window_table(s)
+    if load_summary(out_dir, "cup-task1") is not None:
+        parts += [note("cups-compute"), ""]
     s = load_summary(out_dir, "cup-robustness") or load_summary(out_dir, "cup-task1")  # Task 1 probes too (lambda=0.8)
     if s is not None:
         parts += _robustness_table(s)
