@@ -68,9 +68,22 @@ class SurvivalParams:
                     framework=FRAMEWORKS, model=MODELS, representation=("global", "local"), curve=("food", "planning"))
 
 
+@dataclass(frozen=True)
+class SurvivalTuningParams(SurvivalParams):
+    """SurvivalParams with replay's P_t as a parameter (4.2.7's tuning claims; the other experiments keep their run
+    folders)."""
+
+    p_threshold: float = 0.01  # P_t: non-policy actions (probability below it) are not replayed (3.5.1)
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_types(self, {"p_threshold": "0..<1"})
+
+
 def _agent_params(p: SurvivalParams) -> SurvivalAgentParams:
     return SurvivalAgentParams(framework=p.framework, representation=p.representation, model=p.model,
-                               lr_scale=p.lr_scale, plays=p.train_plays if p.train_plays > 1 else 2)
+                               lr_scale=p.lr_scale, plays=p.train_plays if p.train_plays > 1 else 2,
+                               p_threshold=getattr(p, "p_threshold", None))  # SurvivalTuningParams sets it
 
 
 def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
@@ -179,6 +192,8 @@ _PROFILES = {
 }
 _STUDY2 = replace(SurvivalParams(), representation="local", lr_scale=2.0)
 
+_TUNING = ((("AHCON-R", pt) for pt in (0.05, 0.1, 0.2, 0.4)), (("QCON-R", pt) for pt in (0.0, 0.001, 0.01, 0.1)))
+
 EXPERIMENTS = [
     ExperimentSpec(
         name="survival-study1", title="Survival, Study 1: global action representation (Fig. 4.3)",
@@ -218,4 +233,10 @@ EXPERIMENTS = [
                     Quantity("eval_killed_pct", "% of plays killed by an enemy", "lower", "4.3.4"),
                     Quantity("eval_starved_pct", "% of plays that ran out of energy", "lower", "4.3.4")),
         x_label="plays", y_label="food per play"),
+    ExperimentSpec(  # 4.2.7: "For AHCON-R, P_t = 0.2 ... roughly the best"; QCON-R similar at 0.1-0.001, poor at 0
+        name="survival-tuning", title="Survival, Study 1: AHCON-R and QCON-R with replay thresholds P_t around "
+        "4.2.7's", section="4.2.7", run="connrl.experiments.survival:run_survival", params=SurvivalTuningParams(),
+        profiles=_PROFILES, variants=tuple(Variant(f"{fw} P_t={pt:g}", {"framework": fw, "p_threshold": pt})
+                                           for group in _TUNING for fw, pt in group),
+        quantities=_CURVE_QUANTITIES[:2], x_label="plays", y_label="food per test play"),
 ]

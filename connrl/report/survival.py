@@ -143,6 +143,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     parts += _speedup(out_dir, doc)
     parts += _planning(out_dir, doc)
     parts += model_accuracy(out_dir, doc)
+    parts += _tuning(out_dir)
     parts += _evaluation(out_dir, doc)
     return "\n".join(parts) if len(parts) > 6 else ""
 
@@ -307,3 +308,43 @@ def render_play(frames: list[dict], path: Path, representation: str = "global", 
     save_figure(fig, Path(path))
     plt.close(fig)
     return Path(path)
+
+
+def _diff_se(a: list[float], b: list[float]) -> tuple[float, float]:
+    """(mean(a) - mean(b), its standard error, Welch)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return float(a.mean() - b.mean()), float(math.sqrt(a.var(ddof=1) / a.size + b.var(ddof=1) / b.size))
+
+
+def _tuning(out: Path) -> list[str]:
+    """4.2.7's P_t claims beside ours (``survival-tuning``; empty when it was not run)."""
+    summary, _ = stored(_SPECS["survival-tuning"], out)
+    if summary is None:
+        return []
+    final = {label: v["quantities"]["final_food"]["per_run"] for label, v in summary["variants"].items()}
+    lines = ["### 4.2.7: replay thresholds P_t (Study 1)", "",
+             f"`connrl run survival-tuning --profile {summary['profile']}` ({summary['runs_per_variant']} runs per "
+             "variant, seeds from 0). The thesis: \"For AHCON-R, P_t = 0.2 was found to give roughly the best "
+             "performance ... For QCON-R, P_t = 0.1, 0.01 and 0.001 were tried and found to give similar "
+             "performance. (P_t = 0 indeed gave poor performance.)\"", "",
+             "| variant | final food (mean ± SE) | food over all tests |", "|---|---|---|"]
+    for label, v in summary["variants"].items():
+        x = np.asarray(final[label], float)
+        se = x.std(ddof=1) / math.sqrt(x.size) if x.size > 1 else float("nan")
+        lines.append(f"| {label} | {x.mean():.2f} ± {se:.2f} | {v['quantities']['food_auc']['mean']:.2f} |")
+    if min(len(x) for x in final.values()) < 2:
+        return lines + [""]
+    best = max((k for k in final if k.startswith("AHCON-R")), key=lambda k: np.mean(final[k]))
+    d, se = _diff_se(final[best], final["AHCON-R P_t=0.2"])
+    ahc = d <= 2 * se  # 0.2 within 2 SE of the best threshold tried
+    similar = [_diff_se(final[f"QCON-R P_t={a}"], final[f"QCON-R P_t={b}"])
+               for a, b in (("0.1", "0.01"), ("0.01", "0.001"), ("0.1", "0.001"))]
+    alike = all(abs(d) <= 2 * se for d, se in similar)
+    d0, se0 = _diff_se(final["QCON-R P_t=0.01"], final["QCON-R P_t=0"])
+    poor = d0 > 2 * se0
+    word = {True: "holds", False: "**does not hold**"}
+    return lines + ["", f"**Verdicts** (differences against 2 SE, Welch): AHCON-R P_t = 0.2 roughly the best "
+                    f"(the best tried is {best.split()[-1]}, {d:+.2f} ± {se:.2f} above 0.2): {word[ahc]}; QCON-R "
+                    f"alike at 0.1, 0.01 and 0.001: {word[alike]}; QCON-R poor at P_t = 0 (0.01 is {d0:+.2f} ± "
+                    f"{se0:.2f} above it): {word[poor]}. The food-reward claim of 4.2.1 (0.4 best of a few values for "
+                    "AHCON) is not measured: the reward is compiled into the world's step.", ""]

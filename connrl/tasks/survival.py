@@ -71,6 +71,7 @@ class SurvivalAgentParams:
     taught_start: float = 0.5  # probability of replaying each taught lesson, 0.5 -> 0.1 (4.2.7)
     taught_end: float = 0.1
     promising: float = 0.02  # promising actions: P > 2% (4.2.7)
+    p_threshold: float | None = None  # P_t of replay; None: 4.2.7's 0.2 for AHC agents, 0.01 for Q-agents
     model_start: int = 10  # no planning in the first 10 plays with a learned model (4.2.5)
     stuck_window: int = 20  # stuck detection: steps looked at (R)
     stuck_radius: float = 1.5  # ... all within this many cells of their mean (R)
@@ -190,7 +191,8 @@ def make_survival_agent(params: SurvivalAgentParams, env, rng: np.random.Generat
     replay = None
     if ext in ("R", "T"):
         replay = ReplayConfig(capacity=100, lessons_per_trial=LinearSchedule(p.lessons_start, p.lessons_end, p.plays),
-                              p_threshold=0.2 if base == "AHCON" else 0.01,
+                              p_threshold=p.p_threshold if p.p_threshold is not None else (
+                                  0.2 if base == "AHCON" else 0.01),
                               taught_probability=LinearSchedule(p.taught_start, p.taught_end, p.plays),
                               taught_p_threshold=0.0)
     planner = None

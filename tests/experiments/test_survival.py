@@ -10,8 +10,9 @@ from tests.tiny_runs import run_tiny
 NAMES = [s.name for s in EXPERIMENTS]
 
 
-def test_five_experiments_cover_chapter_4():
-    assert NAMES == ["survival-study1", "survival-study2", "survival-planning", "survival-speedup", "survival-eval"]
+def test_six_experiments_cover_chapter_4():
+    assert NAMES == ["survival-study1", "survival-study2", "survival-planning", "survival-speedup", "survival-eval",
+                     "survival-tuning"]
     s1, s2 = EXPERIMENTS[0], EXPERIMENTS[1]
     assert len(s1.variants) == len(s2.variants) == 10  # 8 frameworks, -M with both models
     assert s1.params.representation == "global" and s2.params.representation == "local"
@@ -43,3 +44,25 @@ def test_tiny_runs_are_reproducible(tiny_out, tmp_path):
     a = json.loads((tiny_out / "survival-speedup" / "summary.json").read_text())["variants"]
     b = json.loads((tmp_path / "survival-speedup" / "summary.json").read_text())["variants"]
     assert a == b
+
+
+def test_the_tuning_experiments_default_thresholds_are_study_1s_runs():
+    """Recorded before survival-tuning existed: Study 1's tiny AHCON-R and QCON-R runs (P_t 0.2 and 0.01, 4.2.7)."""
+    import json
+    from pathlib import Path
+    golden = json.loads((Path(__file__).parents[1] / "data" / "tiny_e172482.json").read_text())
+    tuning, study1 = golden["survival-tuning"]["per_run"], golden["survival-study1"]["per_run"]
+    for label, agent in (("AHCON-R P_t=0.2", "AHCON-R"), ("QCON-R P_t=0.01", "QCON-R")):
+        assert tuning[label]["final_food"] == study1[agent]["final_food"]
+
+
+def test_the_tuning_threshold_reaches_replay():
+    import numpy as np
+
+    from connrl.envs.survival import SurvivalEnv
+    from connrl.experiments.survival import SurvivalTuningParams, _agent_params
+    from connrl.tasks.survival import make_survival_agent
+    for fw, pt in (("AHCON-R", 0.4), ("QCON-R", 0.0)):
+        agent = make_survival_agent(_agent_params(SurvivalTuningParams(framework=fw, p_threshold=pt)),
+                                    SurvivalEnv("global"), np.random.default_rng(0))
+        assert agent.config.replay.p_threshold == pt
