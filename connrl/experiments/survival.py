@@ -33,6 +33,7 @@ from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
 from connrl.tasks.survival import (
     FRAMEWORKS,
     MODELS,
+    FoodReward,
     SurvivalAgentParams,
     SurvivalEnv,
     environment_sets,
@@ -80,19 +81,35 @@ class SurvivalTuningParams(SurvivalParams):
         check_types(self, {"p_threshold": "0..<1"})
 
 
+@dataclass(frozen=True)
+class SurvivalFoodParams(SurvivalParams):
+    """SurvivalParams with the food reward as a parameter (4.2.1's tuning claim), in training; tests count food."""
+
+    food_reward: float = 0.4  # 4.2.1
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_types(self, {"food_reward": ">=0"})
+
+
 def _agent_params(p: SurvivalParams) -> SurvivalAgentParams:
     return SurvivalAgentParams(framework=p.framework, representation=p.representation, model=p.model,
                                lr_scale=p.lr_scale, plays=p.train_plays if p.train_plays > 1 else 2,
                                p_threshold=getattr(p, "p_threshold", None))  # SurvivalTuningParams sets it
 
 
+def _training_env(p: SurvivalParams):
+    env = SurvivalEnv(p.representation)
+    return FoodReward(env, p.food_reward) if getattr(p, "food_reward", 0.4) != 0.4 else env  # SurvivalFoodParams
+
+
 def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
     """One run of the 4.3.1 protocol for one agent (and, with ``eval_envs``, the 4.3.4 evaluation)."""
     train, test = environment_sets(int(rng.integers(2**31 - 1)), p.train_plays, p.test_envs)
-    env = SurvivalEnv(p.representation)
+    env = _training_env(p)
     env.reset(seed=int(rng.integers(2**31 - 1)))
     test_env = SurvivalEnv(p.representation)
-    agent = make_survival_agent(_agent_params(p), env, rng)
+    agent = make_survival_agent(_agent_params(p), env.unwrapped, rng)
     planner = getattr(agent, "planner", None)
     # a learned model's accuracy on fixed experiences (4.4.3), from their own seed: the run's values stay as they were
     probes = (probe_experiences(p.representation, PROBE_SEED, PROBE_SIZE)
@@ -238,5 +255,11 @@ EXPERIMENTS = [
         "4.2.7's", section="4.2.7", run="connrl.experiments.survival:run_survival", params=SurvivalTuningParams(),
         profiles=_PROFILES, variants=tuple(Variant(f"{fw} P_t={pt:g}", {"framework": fw, "p_threshold": pt})
                                            for group in _TUNING for fw, pt in group),
+        quantities=_CURVE_QUANTITIES[:2], x_label="plays", y_label="food per test play"),
+    ExperimentSpec(  # 4.2.1: "a few different values were tried for Agent AHCON, and 0.4 gave roughly the best"
+        name="survival-food", title="Survival, Study 1: AHCON with food rewards around 4.2.1's 0.4", section="4.2.1",
+        run="connrl.experiments.survival:run_survival", params=SurvivalFoodParams(framework="AHCON"),
+        profiles=_PROFILES, variants=tuple(Variant(f"food reward {r:g}", {"food_reward": r})
+                                           for r in (0.1, 0.2, 0.4, 0.8)),
         quantities=_CURVE_QUANTITIES[:2], x_label="plays", y_label="food per test play"),
 ]

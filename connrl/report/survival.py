@@ -143,7 +143,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     parts += _speedup(out_dir, doc)
     parts += _planning(out_dir, doc)
     parts += model_accuracy(out_dir, doc)
-    parts += _tuning(out_dir)
+    parts += _tuning(out_dir) + _food(out_dir)
     parts += _evaluation(out_dir, doc)
     return "\n".join(parts) if len(parts) > 6 else ""
 
@@ -348,3 +348,27 @@ def _tuning(out: Path) -> list[str]:
                     f"alike at 0.1, 0.01 and 0.001: {word[alike]}; QCON-R poor at P_t = 0 (0.01 is {d0:+.2f} ± "
                     f"{se0:.2f} above it): {word[poor]}. The food-reward claim of 4.2.1 (0.4 best of a few values for "
                     "AHCON) is not measured: the reward is compiled into the world's step.", ""]
+
+
+def _food(out: Path) -> list[str]:
+    """4.2.1's food-reward claim beside ours (``survival-food``; empty when it was not run)."""
+    summary, _ = stored(_SPECS["survival-food"], out)
+    if summary is None:
+        return []
+    final = {label: v["quantities"]["final_food"]["per_run"] for label, v in summary["variants"].items()}
+    lines = ["### 4.2.1: the food reward (Study 1, AHCON)", "",
+             f"`connrl run survival-food --profile {summary['profile']}` ({summary['runs_per_variant']} runs per "
+             "variant, seeds from 0; the reward for eating changed in training only). The thesis: \"a few different "
+             "values were tried for Agent AHCON, and 0.4 gave roughly the best performance\".", "",
+             "| food reward | final food (mean ± SE) | food over all tests |", "|---|---|---|"]
+    for label, v in summary["variants"].items():
+        x = np.asarray(final[label], float)
+        se = x.std(ddof=1) / math.sqrt(x.size) if x.size > 1 else float("nan")
+        lines.append(f"| {label.split()[-1]} | {x.mean():.2f} ± {se:.2f} | {v['quantities']['food_auc']['mean']:.2f} |")
+    if min(len(x) for x in final.values()) < 2:
+        return lines + [""]
+    best = max(final, key=lambda k: np.mean(final[k]))
+    d, se = _diff_se(final[best], final["food reward 0.4"])
+    return lines + ["", f"**Verdict** (against 2 SE, Welch): 0.4 roughly the best (the best tried is "
+                    f"{best.split()[-1]}, {d:+.2f} ± {se:.2f} above 0.4): "
+                    f"{'holds' if d <= 2 * se else '**does not hold**'}.", ""]

@@ -10,9 +10,9 @@ from tests.tiny_runs import run_tiny
 NAMES = [s.name for s in EXPERIMENTS]
 
 
-def test_six_experiments_cover_chapter_4():
+def test_seven_experiments_cover_chapter_4():
     assert NAMES == ["survival-study1", "survival-study2", "survival-planning", "survival-speedup", "survival-eval",
-                     "survival-tuning"]
+                     "survival-tuning", "survival-food"]
     s1, s2 = EXPERIMENTS[0], EXPERIMENTS[1]
     assert len(s1.variants) == len(s2.variants) == 10  # 8 frameworks, -M with both models
     assert s1.params.representation == "global" and s2.params.representation == "local"
@@ -66,3 +66,30 @@ def test_the_tuning_threshold_reaches_replay():
         agent = make_survival_agent(_agent_params(SurvivalTuningParams(framework=fw, p_threshold=pt)),
                                     SurvivalEnv("global"), np.random.default_rng(0))
         assert agent.config.replay.p_threshold == pt
+
+
+def test_the_food_reward_experiments_04_is_study_1s_ahcon_and_the_wrapper_maps_only_food():
+    import json
+    from pathlib import Path
+
+    import gymnasium as gym
+
+    from connrl.tasks.survival import FoodReward
+    golden = json.loads((Path(__file__).parents[1] / "data" / "tiny_e172482.json").read_text())
+    assert golden["survival-food"]["per_run"]["food reward 0.4"]["final_food"] == \
+        golden["survival-study1"]["per_run"]["AHCON"]["final_food"]
+
+    class Fixed(gym.Env):  # hands out the world's three rewards in turn
+        observation_space, action_space = gym.spaces.Discrete(1), gym.spaces.Discrete(1)
+
+        def reset(self, *, seed=None, options=None):
+            self.k = 0
+            return 0, {}
+
+        def step(self, a):
+            self.k += 1
+            return 0, [0.4, 0.0, -1.0][self.k - 1], self.k == 3, False, {}
+
+    env = FoodReward(Fixed(), 0.8)
+    env.reset()
+    assert [env.step(0)[1] for _ in range(3)] == [0.8, 0.0, -1.0]
