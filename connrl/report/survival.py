@@ -316,22 +316,28 @@ def _diff_se(a: list[float], b: list[float]) -> tuple[float, float]:
     return float(a.mean() - b.mean()), float(math.sqrt(a.var(ddof=1) / a.size + b.var(ddof=1) / b.size))
 
 
+def _final_table(summary: dict, first: str, short=lambda label: label) -> tuple[dict, list[str]]:
+    """(final food per run by variant, a table of its mean ± SE and the mean food over all tests)."""
+    final = {label: v["quantities"]["final_food"]["per_run"] for label, v in summary["variants"].items()}
+    lines = [f"| {first} | final food (mean ± SE) | food over all tests |", "|---|---|---|"]
+    for label, v in summary["variants"].items():
+        x = np.asarray(final[label], float)
+        se = x.std(ddof=1) / math.sqrt(x.size) if x.size > 1 else float("nan")
+        lines.append(f"| {short(label)} | {x.mean():.2f} ± {se:.2f} | {v['quantities']['food_auc']['mean']:.2f} |")
+    return final, lines
+
+
 def _tuning(out: Path) -> list[str]:
     """4.2.7's P_t claims beside ours (``survival-tuning``; empty when it was not run)."""
     summary, _ = stored(_SPECS["survival-tuning"], out)
     if summary is None:
         return []
-    final = {label: v["quantities"]["final_food"]["per_run"] for label, v in summary["variants"].items()}
+    final, table = _final_table(summary, "variant")
     lines = ["### 4.2.7: replay thresholds P_t (Study 1)", "",
              f"`connrl run survival-tuning --profile {summary['profile']}` ({summary['runs_per_variant']} runs per "
              "variant, seeds from 0). The thesis: \"For AHCON-R, P_t = 0.2 was found to give roughly the best "
              "performance ... For QCON-R, P_t = 0.1, 0.01 and 0.001 were tried and found to give similar "
-             "performance. (P_t = 0 indeed gave poor performance.)\"", "",
-             "| variant | final food (mean ± SE) | food over all tests |", "|---|---|---|"]
-    for label, v in summary["variants"].items():
-        x = np.asarray(final[label], float)
-        se = x.std(ddof=1) / math.sqrt(x.size) if x.size > 1 else float("nan")
-        lines.append(f"| {label} | {x.mean():.2f} ± {se:.2f} | {v['quantities']['food_auc']['mean']:.2f} |")
+             "performance. (P_t = 0 indeed gave poor performance.)\"", "", *table]
     if min(len(x) for x in final.values()) < 2:
         return lines + [""]
     best = max((k for k in final if k.startswith("AHCON-R")), key=lambda k: np.mean(final[k]))
@@ -355,16 +361,11 @@ def _food(out: Path) -> list[str]:
     summary, _ = stored(_SPECS["survival-food"], out)
     if summary is None:
         return []
-    final = {label: v["quantities"]["final_food"]["per_run"] for label, v in summary["variants"].items()}
+    final, table = _final_table(summary, "food reward", lambda label: label.split()[-1])
     lines = ["### 4.2.1: the food reward (Study 1, AHCON)", "",
              f"`connrl run survival-food --profile {summary['profile']}` ({summary['runs_per_variant']} runs per "
              "variant, seeds from 0; the reward for eating changed in training only). The thesis: \"a few different "
-             "values were tried for Agent AHCON, and 0.4 gave roughly the best performance\".", "",
-             "| food reward | final food (mean ± SE) | food over all tests |", "|---|---|---|"]
-    for label, v in summary["variants"].items():
-        x = np.asarray(final[label], float)
-        se = x.std(ddof=1) / math.sqrt(x.size) if x.size > 1 else float("nan")
-        lines.append(f"| {label.split()[-1]} | {x.mean():.2f} ± {se:.2f} | {v['quantities']['food_auc']['mean']:.2f} |")
+             "values were tried for Agent AHCON, and 0.4 gave roughly the best performance\".", "", *table]
     if min(len(x) for x in final.values()) < 2:
         return lines + [""]
     best = max(final, key=lambda k: np.mean(final[k]))
