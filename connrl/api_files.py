@@ -28,16 +28,21 @@ def space_json(space) -> dict:
     if isinstance(space, spaces.Discrete):
         return {"type": "Discrete", "n": int(space.n), "start": int(space.start)}
     if isinstance(space, spaces.Box):
-        return {"type": "Box", "shape": list(space.shape), "low": np.asarray(space.low, float).ravel().tolist(),
-                "high": np.asarray(space.high, float).ravel().tolist()}
+        return {"type": "Box", "shape": list(space.shape), "low": _bounds(space.low), "high": _bounds(space.high)}
     return {"type": type(space).__name__}
+
+
+def _bounds(values) -> list:
+    """A Box bound as strict JSON: an infinite bound as the string "inf" / "-inf" (JSON has no Infinity)."""
+    return [v if np.isfinite(v) else ("inf" if v > 0 else "-inf") for v in np.asarray(values, float).ravel().tolist()]
 
 
 def space_from(d: dict):
     if d["type"] == "Discrete":
         return spaces.Discrete(d["n"], start=d.get("start", 0))
     shape = tuple(d["shape"])
-    return spaces.Box(np.asarray(d["low"]).reshape(shape), np.asarray(d["high"]).reshape(shape), dtype=np.float64)
+    return spaces.Box(np.asarray(d["low"], float).reshape(shape), np.asarray(d["high"], float).reshape(shape),
+                      dtype=np.float64)
 
 
 def version() -> str:
@@ -65,7 +70,8 @@ def write_agent(path: Path, record: dict, state: dict, memory: list[Lesson], tau
     ends = {key: [[bool(x.terminated), bool(x.truncated)] for x in lessons]
             for key, lessons in (("lesson_ends", memory), ("taught_ends", taught))}
     atomic_write_text(path / "agent.json", json.dumps(
-        {"format": FORMAT, "kind": "connrl agent", "connrl": version(), **record, **ends}, indent=1) + "\n")
+        {"format": FORMAT, "kind": "connrl agent", "connrl": version(), **record, **ends}, indent=1,
+        allow_nan=False) + "\n")  # strict JSON: any reader can parse it
 
 
 def read_agent(path: Path) -> tuple[dict, dict, list[Lesson], list[Lesson]]:

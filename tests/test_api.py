@@ -285,3 +285,16 @@ def test_cli_train_with_a_lesson_file(tmp_path, capsys):
     with pytest.raises(SystemExit, match="lessons were recorded on 'CartPole-v1', expected 'Acrobot-v1'"):
         cli.main(["train", "Acrobot-v1", "--teach", str(path), "--save", str(tmp_path / "c")])
     assert not (tmp_path / "c").exists()  # refused before any folder or compute
+
+
+def test_agent_files_are_strict_json_with_infinite_bounds_kept(tmp_path):
+    import json
+    env = gym.make("CartPole-v1")  # two of its four bounds are infinite
+    make_agent(env, "QCON", warmup_steps=10).save(tmp_path / "a")
+
+    def refuse(name):
+        raise ValueError(f"non-standard JSON constant {name}")
+    meta = json.loads((tmp_path / "a" / "agent.json").read_text(), parse_constant=refuse)
+    assert meta["observation_space"]["high"][1] == "inf"
+    again = connrl.load(tmp_path / "a", env)  # and the spaces still match the environment's
+    assert np.isinf(again.observation_space.high[1])
