@@ -5,7 +5,8 @@ set to 127) and with both kinds of noise off in training and tests. The simulato
 either way (connrl.envs.robot), so a noise-free run differs from its noisy twin only by the noise.
 
 "Almost the same" is read as: the final performances differ by less than two standard errors of the difference
-(Welch), or by less than 10 % of the noisy world's (R; the thesis gives no number).
+(Welch), or by less than 10 % of the noisy world's (R; the thesis gives no number): ``about_the_same``, the rule
+the whole results page uses.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from connrl.experiments.robot import PROFILES, Q_FINAL, Q_MEAN, RobotParams, run_robot
-from connrl.experiments.spec import ExperimentSpec, RunResult, Variant, override
+from connrl.experiments.spec import ExperimentSpec, RunResult, Variant, about_the_same, override
 
 
 @dataclass(frozen=True)
@@ -43,10 +44,4 @@ EXPERIMENTS = [ExperimentSpec(
     quantities=(Q_FINAL, Q_MEAN), x_label="trials", y_label="reinforcement per step (greedy test, 50 tasks)",
     description=f"the thesis (5.5): '{THESIS}'")]
 
-
-def about_the_same(noisy: list[float], free: list[float]) -> tuple[float, float, bool]:
-    """(difference noise-free - noisy of the means, 2 SE of it (Welch), within 2 SE or 10 % of the noisy mean)."""
-    a, b = np.asarray(noisy, float), np.asarray(free, float)
-    diff = float(b.mean() - a.mean())
-    se = float(np.sqrt(a.var(ddof=1) / a.size + b.var(ddof=1) / b.size)) if min(a.size, b.size) > 1 else float("inf")
-    return diff, 2 * se, abs(diff) < 2 * se or abs(diff) < 0.1 * abs(float(a.mean()))
+__all__ = ["EXPERIMENTS", "RobotNoiseParams", "TASK_LESSONS", "THESIS", "about_the_same", "run_robot_noise"]

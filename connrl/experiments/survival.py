@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from connrl.core.rollout import run_trial
+from connrl.envs.survival.world import REWARD_FOOD
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
 from connrl.tasks.survival import (
@@ -85,11 +86,16 @@ class SurvivalTuningParams(SurvivalParams):
 class SurvivalFoodParams(SurvivalParams):
     """SurvivalParams with the food reward as a parameter (4.2.1's tuning claim), in training; tests count food."""
 
-    food_reward: float = 0.4  # 4.2.1
+    food_reward: float = REWARD_FOOD  # 4.2.1
 
     def __post_init__(self):
         super().__post_init__()
         check_types(self, {"food_reward": ">=0"})
+
+    def check_combination(self):
+        if self.food_reward != REWARD_FOOD and self.framework.endswith(("-M", "-T")):
+            raise ValueError(f"parameter food_reward applies to agents without a model or taught lessons (theirs "
+                             f"hold the world's {REWARD_FOOD}), got framework {self.framework}")
 
 
 def _agent_params(p: SurvivalParams) -> SurvivalAgentParams:
@@ -100,7 +106,8 @@ def _agent_params(p: SurvivalParams) -> SurvivalAgentParams:
 
 def _training_env(p: SurvivalParams):
     env = SurvivalEnv(p.representation)
-    return FoodReward(env, p.food_reward) if getattr(p, "food_reward", 0.4) != 0.4 else env  # SurvivalFoodParams
+    food = getattr(p, "food_reward", REWARD_FOOD)  # SurvivalFoodParams sets it (4.2.1)
+    return FoodReward(env, food) if food != REWARD_FOOD else env
 
 
 def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
@@ -209,7 +216,8 @@ _PROFILES = {
 }
 _STUDY2 = replace(SurvivalParams(), representation="local", lr_scale=2.0)
 
-_TUNING = ((("AHCON-R", pt) for pt in (0.05, 0.1, 0.2, 0.4)), (("QCON-R", pt) for pt in (0.0, 0.001, 0.01, 0.1)))
+_TUNING = (tuple(("AHCON-R", pt) for pt in (0.05, 0.1, 0.2, 0.4)),
+           tuple(("QCON-R", pt) for pt in (0.0, 0.001, 0.01, 0.1)))
 
 EXPERIMENTS = [
     ExperimentSpec(

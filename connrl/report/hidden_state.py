@@ -108,11 +108,16 @@ def _window_table(s: dict) -> list[str]:
         kept[label] = sum(x >= 0.9 for x in q["optimal_last100"]["per_run"])
         lines.append(f"| {label} | {reached[label]}/{n} | {kept[label]}/{n} | "
                      f"{fixed(q['optimal_last100']['mean'], 2)} | {fixed(q['mean_steps_last100']['mean'], 2)} |")
+    if len(reached) < 2:
+        return lines + [""]
     five, two = list(s["variants"])
-    holds = 0 < reached[two] and kept[two] < kept[five]
-    return lines + ["", f"**Verdict:** {'reproduced' if holds else '**not reproduced**'}: with N = 2 the greedy "
-                    f"policy is optimal at some test in {reached[two]} runs and stays optimal (≥ 90 % of the last "
-                    f"100 tests) in {kept[two]}, against {kept[five]} with N = 5.", ""]
+    n = len(s["variants"][two]["quantities"]["optimal_last100"]["per_run"])
+    verdict = ("reproduced" if 0 < kept[two] <= n / 2 else "partly" if kept[two] == 0 and reached[two] > 0
+               else "**not reproduced**")  # "learned, but only occasionally": kept in some runs, a minority
+    return lines + ["", f"**Verdict:** {verdict}: with N = 2 the greedy policy is optimal at some test in "
+                    f"{reached[two]} of {n} runs but stays optimal (≥ 90 % of the last 100 tests) in {kept[two]}, "
+                    f"against {kept[five]} with N = 5: found often, kept {'never' if not kept[two] else 'sometimes'}.",
+                    ""]
 
 
 def _robustness_table(s: dict) -> list[str]:

@@ -42,4 +42,5 @@ def test_about_the_same_by_hand():
     assert diff == pytest.approx(0.5) and two_se == pytest.approx(2 * np.sqrt(2 * var / 4)) and same
     diff, two_se, same = about_the_same([4.0, 4.1, 3.9, 4.0], [5.0, 5.1, 4.9, 5.0])  # +1.0, 25 % and far past 2 SE
     assert diff == pytest.approx(1.0) and not same
-    assert about_the_same([10.0], [10.5])[2]  # one run each: no SE, but within 10 %
+    assert about_the_same([10.0], [10.5])[2]  # one run each: no SE, judged by the 10 % rule alone
+    assert not about_the_same([10.0], [100.0])[2]

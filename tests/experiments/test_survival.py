@@ -93,3 +93,28 @@ def test_the_food_reward_experiments_04_is_study_1s_ahcon_and_the_wrapper_maps_o
     env = FoodReward(Fixed(), 0.8)
     env.reset()
     assert [env.step(0)[1] for _ in range(3)] == [0.8, 0.0, -1.0]
+
+
+def test_the_new_parameters_at_their_defaults_run_exactly_as_study_1():
+    import numpy as np
+
+    from connrl.experiments.survival import SurvivalFoodParams, SurvivalParams, SurvivalTuningParams, run_survival
+    small = {"train_plays": 6, "test_envs": 3, "test_every": 2}
+
+    def rows(p):
+        return run_survival(p, np.random.default_rng(0)).rows
+    assert rows(SurvivalTuningParams(framework="AHCON-R", p_threshold=0.2, **small)) == \
+        rows(SurvivalParams(framework="AHCON-R", **small))
+    assert rows(SurvivalFoodParams(framework="AHCON", food_reward=0.4, **small)) == \
+        rows(SurvivalParams(framework="AHCON", **small))
+    assert rows(SurvivalTuningParams(framework="QCON-R", p_threshold=0.0, **small)) != \
+        rows(SurvivalParams(framework="QCON-R", **small))  # the threshold reaches the runs
+
+
+def test_a_food_reward_for_a_model_or_taught_agent_is_refused():
+    import pytest
+
+    from connrl.experiments.spec import check_combination
+    from connrl.experiments.survival import SurvivalFoodParams
+    with pytest.raises(ValueError, match="food_reward applies to agents without a model or taught lessons"):
+        check_combination(SurvivalFoodParams(framework="AHCON-T", food_reward=0.8))
