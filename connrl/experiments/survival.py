@@ -75,7 +75,7 @@ class SurvivalTuningParams(SurvivalParams):
     """SurvivalParams with replay's P_t as a parameter (4.2.7's tuning claims; the other experiments keep their run
     folders)."""
 
-    p_threshold: float = 0.01  # P_t: non-policy actions (probability below it) are not replayed (3.5.1)
+    p_threshold: float | None = None  # P_t: actions less likely are not replayed (3.5.1); None: 4.2.7's per framework
 
     def __post_init__(self):
         super().__post_init__()

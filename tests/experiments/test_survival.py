@@ -62,10 +62,11 @@ def test_the_tuning_threshold_reaches_replay():
     from connrl.envs.survival import SurvivalEnv
     from connrl.experiments.survival import SurvivalTuningParams, _agent_params
     from connrl.tasks.survival import make_survival_agent
-    for fw, pt in (("AHCON-R", 0.4), ("QCON-R", 0.0)):
+    for fw, pt, expected in (("AHCON-R", 0.4, 0.4), ("QCON-R", 0.0, 0.0), ("AHCON-R", None, 0.2),
+                             ("QCON-R", None, 0.01)):  # None: 4.2.7's value for the framework
         agent = make_survival_agent(_agent_params(SurvivalTuningParams(framework=fw, p_threshold=pt)),
                                     SurvivalEnv("global"), np.random.default_rng(0))
-        assert agent.config.replay.p_threshold == pt
+        assert agent.config.replay.p_threshold == expected
 
 
 def test_the_food_reward_experiments_04_is_study_1s_ahcon_and_the_wrapper_maps_only_food():
