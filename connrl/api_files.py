@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
-from connrl.core.lesson_files import LessonFileError, check_lesson_file, load_lessons, save_lessons
+from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
 from connrl.core.lessons import Lesson
 from connrl.storage import atomic_save_npz, atomic_write_text
 
@@ -143,10 +143,8 @@ def read_taught(path, env) -> list[Lesson]:
     space = env.observation_space
     discrete = isinstance(space, spaces.Discrete)
     width = 1 if discrete else int(np.prod(space.shape))
-    kwargs = _plain(spec.kwargs) if spec is not None else None
-    if spec is not None:
-        check_lesson_file(path, env_id=spec.id, env_kwargs=kwargs, input_dim=width, n_actions=int(env.action_space.n))
-    lessons = load_lessons(path, input_dim=width, n_actions=int(env.action_space.n))
+    lessons = load_lessons(path, input_dim=width, n_actions=int(env.action_space.n),
+                           **({"env_id": spec.id, "env_kwargs": _plain(spec.kwargs)} if spec is not None else {}))
     for k, lesson in enumerate(lessons):
         rows = lesson.inputs[:, 0] if discrete else None
         if discrete and not np.all((rows == np.round(rows)) & (rows >= space.start) & (rows < space.start + space.n)):

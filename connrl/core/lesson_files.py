@@ -218,10 +218,15 @@ def _load(path: Path, env_id: str | None, input_dim: int | None, n_actions: int 
                  for i, raw in enumerate(doc["lessons"])]
 
 
-def load_lessons(path, *, env_id: str | None = None, input_dim: int | None = None,
-                 n_actions: int | None = None) -> list[Lesson]:
-    """Read a lesson file written by ``save_lessons``; any mismatch raises LessonFileError saying what."""
-    return _load(Path(path), env_id, input_dim, n_actions)[1]
+def load_lessons(path, *, env_id: str | None = None, input_dim: int | None = None, n_actions: int | None = None,
+                 env_kwargs: dict | None = None, option_defaults: dict | None = None) -> list[Lesson]:
+    """Read a lesson file written by ``save_lessons``; any mismatch raises LessonFileError saying what. With
+    ``env_kwargs`` the file's world options are checked too, as ``check_lesson_file`` checks them."""
+    path = Path(path)
+    doc, lessons = _load(path, env_id, input_dim, n_actions)
+    if env_kwargs is not None:
+        _check_options(path, doc, env_kwargs, option_defaults or {})
+    return lessons
 
 
 def _option(options: dict, key: str, defaults: dict) -> tuple[bool, object]:
@@ -240,7 +245,14 @@ def check_lesson_file(path, *, env_id: str, env_kwargs: dict | None = None, opti
     """
     path = Path(path)
     doc, _ = _load(path, env_id, input_dim, n_actions)
-    recorded, wanted, defaults = doc.get("env_kwargs", {}), env_kwargs or {}, option_defaults or {}
+    _check_options(path, doc, env_kwargs or {}, option_defaults or {})
+    return doc
+
+
+def _check_options(path: Path, doc: dict, env_kwargs: dict, defaults: dict) -> None:
+    """The file's world options must equal ``env_kwargs``; an option one side leaves out takes its value from
+    ``defaults`` (the environment's)."""
+    recorded, wanted = doc.get("env_kwargs", {}), env_kwargs
     differ = []
     for key in sorted(set(recorded) | set(wanted)):
         (has, have), (wants, want) = _option(recorded, key, defaults), _option(wanted, key, defaults)
@@ -249,4 +261,3 @@ def check_lesson_file(path, *, env_id: str, env_kwargs: dict | None = None, opti
     if differ:
         raise LessonFileError(f"{path}: lessons were recorded with world options {', '.join(differ)}; "
                               f"a lesson file holds lessons of one world, all with the same options")
-    return doc

@@ -13,10 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
-from connrl.experiments.robot import PROFILES, Q_FINAL, Q_MEAN, RobotParams, run_robot
-from connrl.experiments.spec import ExperimentSpec, RunResult, Variant, about_the_same, override
+from connrl.experiments.robot import PROFILES, Q_FINAL, Q_MEAN, RobotParams
+from connrl.experiments.spec import ExperimentSpec, Variant, about_the_same, override
 
 
 @dataclass(frozen=True)
@@ -26,16 +24,12 @@ class RobotNoiseParams(RobotParams):
     noise: bool = True  # sensing and control noise of 5.2.1, in training and in the tests
 
 
-def run_robot_noise(p: RobotNoiseParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
-    return run_robot(p, rng, progress)
-
-
 TASK_LESSONS = (("DP", 10), ("DK", 10), ("WFL", 5))  # Exp. 1's most-taught variants (5.4.1)
 THESIS = "the robot's performance in the noisy world was almost the same as that in a noise-free world"  # 5.5
 
 EXPERIMENTS = [ExperimentSpec(
     name="robot-noise", title="DP, DK and WFL learned with and without sensing and control noise", section="5.5",
-    run="connrl.experiments.robot_noise:run_robot_noise",
+    run="connrl.experiments.robot:run_robot",  # the runner builds RobotNoiseParams (the spec's params class)
     params=override(RobotNoiseParams(), {}, "experiment robot-noise"),
     profiles={k: {key: v for key, v in over.items() if key != "paths"} for k, over in PROFILES.items()},
     variants=tuple(Variant(f"{task}, {'noisy' if noise else 'noise-free'}", {"task": task, "lessons": n,
@@ -44,4 +38,4 @@ EXPERIMENTS = [ExperimentSpec(
     quantities=(Q_FINAL, Q_MEAN), x_label="trials", y_label="reinforcement per step (greedy test, 50 tasks)",
     description=f"the thesis (5.5): '{THESIS}'")]
 
-__all__ = ["EXPERIMENTS", "RobotNoiseParams", "TASK_LESSONS", "THESIS", "about_the_same", "run_robot_noise"]
+__all__ = ["EXPERIMENTS", "RobotNoiseParams", "TASK_LESSONS", "THESIS", "about_the_same"]
