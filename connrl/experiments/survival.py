@@ -216,8 +216,7 @@ _PROFILES = {
 }
 _STUDY2 = replace(SurvivalParams(), representation="local", lr_scale=2.0)
 
-_TUNING = (tuple(("AHCON-R", pt) for pt in (0.05, 0.1, 0.2, 0.4)),
-           tuple(("QCON-R", pt) for pt in (0.0, 0.001, 0.01, 0.1)))
+_TUNING = [("AHCON-R", pt) for pt in (0.05, 0.1, 0.2, 0.4)] + [("QCON-R", pt) for pt in (0.0, 0.001, 0.01, 0.1)]
 
 EXPERIMENTS = [
     ExperimentSpec(
@@ -262,7 +261,7 @@ EXPERIMENTS = [
         name="survival-tuning", title="Survival, Study 1: AHCON-R and QCON-R with replay thresholds P_t around "
         "4.2.7's", section="4.2.7", run="connrl.experiments.survival:run_survival", params=SurvivalTuningParams(),
         profiles=_PROFILES, variants=tuple(Variant(f"{fw} P_t={pt:g}", {"framework": fw, "p_threshold": pt})
-                                           for group in _TUNING for fw, pt in group),
+                                           for fw, pt in _TUNING),
         quantities=_CURVE_QUANTITIES[:2], x_label="plays", y_label="food per test play"),
     ExperimentSpec(  # 4.2.1: "a few different values were tried for Agent AHCON, and 0.4 gave roughly the best"
         name="survival-food", title="Survival, Study 1: AHCON with food rewards around 4.2.1's 0.4", section="4.2.1",
