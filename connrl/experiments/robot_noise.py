@@ -6,7 +6,7 @@ either way (connrl.envs.robot), so a noise-free run differs from its noisy twin 
 
 "Almost the same" is read as: the final performances differ by less than two standard errors of the difference
 (Welch), or by less than 10 % of the noisy world's (R; the thesis gives no number): ``about_the_same``, the rule
-the whole results page uses.
+the whole results page uses (connrl.experiments.spec).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from connrl.experiments.robot import PROFILES, Q_FINAL, Q_MEAN, RobotParams
-from connrl.experiments.spec import ExperimentSpec, Variant, about_the_same, override
+from connrl.experiments.spec import ExperimentSpec, Variant, override
 
 
 @dataclass(frozen=True)
@@ -38,4 +38,3 @@ EXPERIMENTS = [ExperimentSpec(
     quantities=(Q_FINAL, Q_MEAN), x_label="trials", y_label="reinforcement per step (greedy test, 50 tasks)",
     description=f"the thesis (5.5): '{THESIS}'")]
 
-__all__ = ["EXPERIMENTS", "RobotNoiseParams", "TASK_LESSONS", "THESIS", "about_the_same"]

@@ -13,8 +13,8 @@ from connrl.experiments.robot import EXPERIMENTS as SKILLS
 from connrl.experiments.robot import SPEC_DP, THRESHOLDS, first_reaching, quantity_name
 from connrl.experiments.robot_bounds import EXPERIMENTS as BOUNDS
 from connrl.experiments.robot_noise import EXPERIMENTS as NOISE
-from connrl.experiments.robot_noise import TASK_LESSONS, THESIS, about_the_same
-from connrl.experiments.spec import ExperimentSpec
+from connrl.experiments.robot_noise import TASK_LESSONS, THESIS
+from connrl.experiments.spec import ExperimentSpec, about_the_same
 from connrl.report.page import figure, fixed, note, stored
 from connrl.report.plots import save_figure
 from connrl.report.robot_dp import copy_table, dp_notes

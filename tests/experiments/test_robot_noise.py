@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from connrl.experiments.robot_noise import EXPERIMENTS, RobotNoiseParams, about_the_same
+from connrl.experiments.robot_noise import EXPERIMENTS, RobotNoiseParams
+from connrl.experiments.spec import about_the_same
 from connrl.tasks.robot import make_env
 
 GOLDEN = json.loads((Path(__file__).parents[1] / "data" / "tiny_e172482.json").read_text())
