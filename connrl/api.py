@@ -39,16 +39,32 @@ from gymnasium import spaces
 
 from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
 from connrl.agents.memory import RecurrentQ, RecurrentQConfig, WindowQ, window_input_size
-from connrl.api_files import read_agent, read_taught, record_lessons, space_from, space_json, write_agent
+from connrl.api_files import (
+    check_arrays,
+    read_agent,
+    read_taught,
+    record_lessons,
+    space_from,
+    space_json,
+    write_agent,
+)
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import run_trial
 from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
+from connrl.storage import FileError
 
 KINDS = ("QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q", "recurrent-Q")
 MEMORY_KINDS = ("window-Q", "recurrent-Q")  # act on a history: predict() needs one, evaluate() keeps it
 TAUGHT_KINDS = ("QCON-T", "AHCON-T")  # need a lesson file: make_agent(..., lessons=path)
 __all__ = ["Agent", "AgentOptions", "InputScaler", "evaluate", "load", "make_agent", "record_lessons"]
+
+
+# the size-like options' ranges: far beyond any task of the thesis or of Gymnasium's classic control, small enough
+# that no typo asks for gigabytes or centuries before it is noticed
+_SIZES = {"hidden": (0, 1024), "anneal_steps": (1, 10**10), "lessons_per_trial": (0, 10_000),
+          "capacity": (1, 100_000), "warmup_steps": (1, 10**7), "window": (1, 64), "context": (0, 1024)}
+MAX_NET_WEIGHTS = 50_000_000  # inputs x hidden units x actions: 400 MB of float64 per array
 
 
 @dataclass(frozen=True)
@@ -74,11 +90,10 @@ class AgentOptions:
     context: int = 8  # recurrent-Q: context units, at most hidden (7.3-7.4)
 
     def __post_init__(self):
-        for name in ("hidden", "anneal_steps", "lessons_per_trial", "capacity", "warmup_steps", "window", "context"):
+        for name, (low, high) in _SIZES.items():
             v = getattr(self, name)
-            low = 0 if name in ("hidden", "lessons_per_trial", "context") else 1
-            if isinstance(v, bool) or not isinstance(v, int) or v < low:
-                raise ValueError(f"option {name} must be a whole number >= {low}, got {v!r}")
+            if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
+                raise ValueError(f"option {name} must be a whole number from {low} to {high:,}, got {v!r}")
         for name, lo, hi in (("lr", 0, math.inf), ("init_range", 0, math.inf), ("t_start", 0, math.inf),
                              ("t_end", 0, math.inf)):
             v = getattr(self, name)
@@ -213,9 +228,12 @@ class Agent:
         self.steps_done, self.trials_done = 0, 0
         self._env = None  # the environment make_agent / load was given: learn() trains in it by default
         self._range_warned = False
-        o = options
-        self.learner = _learner(kind, o, scaler.n_inputs, int(action_space.n), self.value_range, self.temperature,
-                                self.rng)
+        o, n = options, int(action_space.n)
+        width = window_input_size(scaler.n_inputs, n, o.window) if kind == "window-Q" else scaler.n_inputs
+        if width * (max(o.hidden, 1) + 1) * n > MAX_NET_WEIGHTS:
+            raise ValueError(f"{width} inputs x {o.hidden} hidden units x {n} actions is more than "
+                             f"{MAX_NET_WEIGHTS:,} weights; use fewer hidden units or a smaller observation")
+        self.learner = _learner(kind, o, scaler.n_inputs, n, self.value_range, self.temperature, self.rng)
 
     @property
     def nets(self):
@@ -368,28 +386,42 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options
 
 def load(path, env=None) -> Agent:
     """An agent written by ``Agent.save`` (weights, replay memory, taught lessons, random state: learning goes on as it
-    would have); with ``env``, its spaces must be the saved ones. ValueError in one line."""
+    would have); with ``env``, its spaces must be the saved ones. Every field and array is checked before anything
+    is built from it (connrl.api_files); a damaged or foreign file is a ValueError in one line naming it."""
     path = Path(path)
-    m, state, memory, taught = read_agent(path)
+    m, arrays = read_agent(path, KINDS)
+    meta = path / "agent.json"
     try:
-        agent = Agent(m["agent"], options_from(m["options"]), space_from(m["observation_space"]),
-                      space_from(m["action_space"]), InputScaler.from_json(m["scaler"]), m["value_range"],
-                      m["seed"], m.get("env_id"))
-        agent.nets.load_state_dict(state)
-        for lesson in memory:
-            agent.learner.book.memory.add(lesson)
-        agent.learner.add_taught_lessons(taught)
+        options = options_from(m["options"])
+    except (ValueError, TypeError) as exc:
+        raise FileError(meta, str(exc), "options") from None
+    agent = Agent(m["agent"], options, space_from(m["observation_space"]), space_from(m["action_space"]),
+                  InputScaler.from_json(m["scaler"]), m["value_range"], m["seed"], m.get("env_id"))
+    state, memory, taught = check_arrays(path, arrays, agent.nets.state_dict(), m, _input_width(agent),
+                                         int(agent.action_space.n))
+    agent.nets.load_state_dict(state)
+    for lesson in memory:
+        agent.learner.book.memory.add(lesson)
+    agent.learner.add_taught_lessons(taught)
+    try:
         agent.rng.bit_generator.state = m["rng"]
-        agent.steps_done, agent.trials_done = int(m["steps_done"]), int(m["trials_done"])
-    except Exception as exc:  # any damage (missing keys, wrong shapes) is one clear line
-        raise ValueError(f"{path}: not a readable connrl agent ({type(exc).__name__}: {exc})") from None
+    except (ValueError, TypeError, KeyError, OverflowError) as exc:
+        raise FileError(meta, f"is not a NumPy {type(agent.rng.bit_generator).__name__} state ({exc})", "rng") from None
+    agent.steps_done, agent.trials_done = int(m["steps_done"]), int(m["trials_done"])
     if env is not None:
         try:
             agent.check_env(env)
         except ValueError as exc:
-            raise ValueError(f"{path / 'agent.json'}: {exc}") from None
+            raise ValueError(f"{meta}: {exc}") from None
     agent._env = env
     return agent
+
+
+def _input_width(agent: Agent) -> int:
+    """The width of the rows an agent's lessons hold: its (Q- or V-) net's inputs."""
+    learner = agent.learner
+    net = learner.net if agent.kind == "recurrent-Q" else learner.v if agent.kind.startswith("AHCON") else learner.q
+    return int(net.config.n_inputs)
 
 
 def evaluate(agent: Agent, env, episodes: int = 10, seed: int = 0) -> list[float]:

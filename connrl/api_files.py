@@ -18,7 +18,7 @@ from gymnasium import spaces
 
 from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
 from connrl.core.lessons import Lesson
-from connrl.storage import atomic_save_npz, atomic_write_text
+from connrl.storage import FileError, atomic_save_npz, atomic_write_text, check_array, check_number, read_json, read_npz
 
 FORMAT = 1
 _FIELDS = ("inputs", "actions", "rewards")
@@ -58,11 +58,6 @@ def _lesson_arrays(prefix: str, lessons) -> dict:
     return {f"{prefix}{k}_{name}": getattr(lesson, name) for k, lesson in enumerate(lessons) for name in _FIELDS}
 
 
-def _lessons(prefix: str, arrays: dict, ends: list, taught: bool) -> list[Lesson]:
-    return [Lesson(*(arrays[f"{prefix}{k}_{name}"] for name in _FIELDS), terminated=bool(terminated),
-                   truncated=bool(truncated), taught=taught) for k, (terminated, truncated) in enumerate(ends)]
-
-
 def write_agent(path: Path, record: dict, state: dict, memory: list[Lesson], taught: list[Lesson]) -> None:
     """``path/agent.npz`` (``state`` plus the lessons) then ``path/agent.json`` (``record`` plus the format and the
     lessons' ends), each written atomically."""
@@ -74,26 +69,135 @@ def write_agent(path: Path, record: dict, state: dict, memory: list[Lesson], tau
         allow_nan=False) + "\n")  # strict JSON: any reader can parse it
 
 
-def read_agent(path: Path) -> tuple[dict, dict, list[Lesson], list[Lesson]]:
-    """(record, net state, replay memory, taught lessons) of an agent folder; ValueError in one line when it is not
-    a connrl agent of this format or is damaged."""
+def read_agent(path: Path, kinds: tuple[str, ...]) -> tuple[dict, dict[str, np.ndarray]]:
+    """(record, arrays) of an agent folder, the record's every field checked (``check_record``); FileError (one
+    line naming the file and field) when it is not a connrl agent of this format or is damaged. The arrays are
+    checked against the agent they belong to by ``check_arrays``."""
     meta = path / "agent.json"
-    try:
-        m = json.loads(meta.read_text())
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{meta}: not a readable connrl agent file ({type(exc).__name__})") from None
+    m = read_json(meta, "connrl agent file", max_bytes=MAX_RECORD_BYTES, constants=True)  # old files: Infinity
     if not isinstance(m, dict) or m.get("kind") != "connrl agent":
-        raise ValueError(f"{meta}: not a connrl agent file")
-    if m.get("format") != FORMAT:
-        raise ValueError(f"{meta}: agent file format {m.get('format')!r}; this connrl reads format {FORMAT}")
-    try:
-        with np.load(path / "agent.npz", allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-        state = {k: v for k, v in arrays.items() if not k.startswith(("lesson", "taught"))}
-        return (m, state, _lessons("lesson", arrays, m.get("lesson_ends", []), False),
-                _lessons("taught", arrays, m.get("taught_ends", []), True))
-    except Exception as exc:  # a truncated or foreign archive, a missing lesson: one clear line
-        raise ValueError(f"{path}: not a readable connrl agent ({type(exc).__name__}: {exc})") from None
+        raise FileError(meta, "is not a connrl agent file (its 'kind' must be \"connrl agent\")")
+    if m.get("format") != FORMAT or isinstance(m.get("format"), bool):
+        raise FileError(meta, f"agent file format {m.get('format')!r}; this connrl reads format {FORMAT}")
+    check_record(meta, m, kinds)
+    return m, read_npz(path / "agent.npz", "connrl agent weight file")
+
+
+MAX_RECORD_BYTES = 16 * 2**20
+MAX_LESSONS = 100_000
+MAX_INPUTS, MAX_ACTIONS = 100_000, 10_000  # observation width and actions an agent file may declare
+KINDS_OF_SCALER = ("onehot", "affine")
+
+
+def _field(meta: Path, m: dict, key: str, types: tuple, allowed: str):
+    if key not in m:
+        raise FileError(meta, f"is missing; it must be {allowed}", key)
+    v = m[key]
+    if not isinstance(v, types) or (isinstance(v, bool) and bool not in types):
+        raise FileError(meta, f"is {type(v).__name__}; it must be {allowed}", key)
+    return v
+
+
+def _check_space(meta: Path, d, key: str) -> int:
+    """A space as ``space_json`` writes it; returns its width as the nets see it (Discrete: n, Box: size)."""
+    if not isinstance(d, dict) or d.get("type") not in ("Discrete", "Box"):
+        raise FileError(meta, "must be an object with 'type' \"Discrete\" or \"Box\"", key)
+    if d["type"] == "Discrete":
+        n = check_number(meta, f"{key}.n", d.get("n"), 1, MAX_INPUTS, integer=True)
+        check_number(meta, f"{key}.start", d.get("start", 0), -2**62, 2**62, integer=True)
+        return n
+    shape = d.get("shape")
+    if not isinstance(shape, list) or len(shape) > 1:
+        raise FileError(meta, f"is {shape!r}; a flat Box's shape is [] or [n]", f"{key}.shape")
+    size = check_number(meta, f"{key}.shape", shape[0], 1, MAX_INPUTS, integer=True) if shape else 1
+    for bound in ("low", "high"):
+        values = d.get(bound)
+        if not isinstance(values, list) or len(values) != size or not all(
+                v in ("inf", "-inf") or isinstance(v, int | float) and not isinstance(v, bool) and not v != v
+                for v in values):
+            raise FileError(meta, f"must be a list of {size} numbers (\"inf\" / \"-inf\" for no bound)",
+                            f"{key}.{bound}")
+    return size
+
+
+def check_record(meta: Path, m: dict, kinds: tuple[str, ...]) -> None:
+    """Every field of an agent.json that loading reads: types, finite numbers, sizes inside their bounds, the scaler
+    matching the observation space; ``kinds`` are the agents allowed. FileError naming the field otherwise."""
+    kind = _field(meta, m, "agent", (str,), f"one of {', '.join(kinds)}")
+    if kind not in kinds:
+        raise FileError(meta, f"is {kind!r}; it must be one of {', '.join(kinds)}", "agent")
+    width = _check_space(meta, m.get("observation_space"), "observation_space")
+    a = m.get("action_space")
+    if not isinstance(a, dict) or a.get("type") != "Discrete" or a.get("start", 0) != 0:
+        raise FileError(meta, "must be a Discrete space that starts at 0", "action_space")
+    check_number(meta, "action_space.n", a.get("n"), 1, MAX_ACTIONS, integer=True)
+    _field(meta, m, "options", (dict,), "an object of AgentOptions fields")
+    sc = _field(meta, m, "scaler", (dict,), "an object with kind, n, offset and scale")
+    if sc.get("kind") not in KINDS_OF_SCALER:
+        raise FileError(meta, f"is {sc.get('kind')!r}; it must be one of {KINDS_OF_SCALER}", "scaler.kind")
+    if sc.get("n") != width or isinstance(sc.get("n"), bool):
+        raise FileError(meta, f"is {sc.get('n')!r}; it must be {width}, the observation space's width", "scaler.n")
+    for key in ("offset", "scale"):
+        values = sc.get(key)
+        if not isinstance(values, list) or len(values) != width:
+            raise FileError(meta, f"must be a list of {width} finite numbers", f"scaler.{key}")
+        for v in values:
+            check_number(meta, f"scaler.{key}", v)
+            if key == "scale" and not abs(v) > 1e-12:
+                raise FileError(meta, f"holds {v!r}; a scale must be a non-zero finite number", "scaler.scale")
+    check_number(meta, "value_range", m.get("value_range"), 0, 1e12, low_open=True)
+    check_number(meta, "seed", m.get("seed"), 0, 2**63 - 1, integer=True)
+    for key in ("steps_done", "trials_done"):
+        check_number(meta, key, m.get(key), 0, 2**53, integer=True)
+    env_id = m.get("env_id")
+    if env_id is not None and (not isinstance(env_id, str) or not 0 < len(env_id) <= 200):
+        raise FileError(meta, "must be null or an environment id of at most 200 characters", "env_id")
+    _field(meta, m, "rng", (dict,), "a NumPy bit generator state")
+    for key in ("lesson_ends", "taught_ends"):
+        ends = m.get(key, [])
+        if not isinstance(ends, list) or len(ends) > MAX_LESSONS or not all(
+                isinstance(e, list) and len(e) == 2 and all(isinstance(b, bool) for b in e) for e in ends):
+            raise FileError(meta, f"must be a list of at most {MAX_LESSONS} [terminated, truncated] pairs of "
+                            "booleans", key)
+
+
+def check_arrays(path: Path, arrays: dict[str, np.ndarray], expected: dict[str, np.ndarray], m: dict,
+                 n_inputs: int, n_actions: int) -> tuple[dict, list[Lesson], list[Lesson]]:
+    """The agent.npz's arrays against the agent built from its record: exactly the nets' arrays (``expected``, a
+    state dict) in their shapes and finite, and every lesson with ``n_inputs``-wide finite inputs, one more row than
+    actions, actions in 0..n_actions-1 and finite rewards. Returns (net state, replay memory, taught lessons)."""
+    npz = path / "agent.npz"
+    lesson_keys = {f"{p}{k}_{f}" for p, key in (("lesson", "lesson_ends"), ("taught", "taught_ends"))
+                   for k in range(len(m.get(key, []))) for f in _FIELDS}
+    unknown = sorted(set(arrays) - set(expected) - lesson_keys)
+    if unknown:
+        raise FileError(npz, f"holds arrays {', '.join(unknown[:3])} that this agent does not have")
+    state = {}
+    for key, want in expected.items():
+        if key not in arrays:
+            raise FileError(npz, f"has no array {key!r}; a {m['agent']} agent needs {', '.join(expected)}")
+        state[key] = check_array(npz, key, arrays[key], want.shape)
+    found = [_lessons(npz, prefix, arrays, m.get(key, []), prefix == "taught", n_inputs, n_actions)
+             for prefix, key in (("lesson", "lesson_ends"), ("taught", "taught_ends"))]
+    return state, found[0], found[1]
+
+
+def _lessons(npz: Path, prefix: str, arrays: dict, ends: list, taught: bool, n_inputs: int,
+             n_actions: int) -> list[Lesson]:
+    out = []
+    for k, (terminated, truncated) in enumerate(ends):
+        for name in _FIELDS:
+            if f"{prefix}{k}_{name}" not in arrays:
+                raise FileError(npz, f"has no array {prefix}{k}_{name}; agent.json lists {len(ends)} {prefix}s")
+        actions = check_array(npz, f"{prefix}{k}_actions", arrays[f"{prefix}{k}_actions"], (-1,), low=0,
+                              high=n_actions - 1, integer=True)
+        n = len(actions)
+        inputs = check_array(npz, f"{prefix}{k}_inputs", arrays[f"{prefix}{k}_inputs"], (n + 1, n_inputs))
+        rewards = check_array(npz, f"{prefix}{k}_rewards", arrays[f"{prefix}{k}_rewards"], (n,))
+        if n < 1:
+            raise FileError(npz, "holds no actions; a lesson has at least one", f"{prefix}{k}_actions")
+        out.append(Lesson(inputs, actions, rewards, terminated=terminated, truncated=truncated, taught=taught))
+    return out
 
 
 def observation_row(space, obs) -> list[float]:

@@ -382,11 +382,12 @@ def _add_tool_commands(sub) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     from connrl.core.lesson_files import LessonFileError
+    from connrl.storage import FileError
 
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except LessonFileError as exc:
+    except (LessonFileError, FileError) as exc:  # a file connrl read and refused: one line naming it
         raise SystemExit(f"connrl: {exc}") from None
     except BrokenPipeError:  # e.g. `connrl show NAME | head`: the reader left, nothing is wrong
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

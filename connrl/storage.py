@@ -1,35 +1,86 @@
-"""Atomic writes of plain formats (JSON, CSV, NPZ without pickle): a reader never sees half a file."""
+"""Files connrl writes and reads: atomic writes of plain formats (JSON, CSV, NPZ without pickle) and the checked
+readers every file format builds on.
+
+Writing: a reader never sees half a file. The temporary file is created exclusively under an unpredictable name
+(``tempfile.mkstemp``: ``O_CREAT | O_EXCL``, so a link planted beside the target is never followed), and it is
+removed when the write fails (a full disk leaves nothing behind).
+
+Reading never trusts a file: ``read_json`` bounds its size and nesting and refuses what is not JSON, the
+``check_*`` helpers bound every number, index and shape, and all of them raise ``FileError``, a ``ValueError``
+whose message is one line naming the file, the field and what is allowed. Code that hands arrays to compiled
+kernels checks them here first.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import io
+import json
+import math
 import os
+import re
+import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
+MAX_JSON_BYTES = 256 * 2**20  # far beyond any file connrl writes (the largest lesson file is a few MiB)
+MAX_NPZ_BYTES = 1 * 2**30
+MAX_NESTING = 32  # connrl's JSON files nest at most ~6 levels
 
-def _tmp_for(path: Path) -> Path:
-    return path.with_name(f".{path.name}.{os.getpid()}.tmp")
 
+class FileError(ValueError):
+    """A file connrl cannot use; ``str()`` is one line: ``PATH: [FIELD: ]what is wrong; what is allowed``."""
+
+    def __init__(self, path, problem: str, field: str | None = None):
+        self.path, self.field, self.problem = Path(path), field, problem
+        super().__init__(f"{path}: {field + ': ' if field else ''}{problem}")
+
+
+# --------------------------------------------------------------------------------------------------- writing
 
 def atomic_write_bytes(path, data: bytes) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = _tmp_for(path)
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:  # a full disk, Ctrl-C mid-write: the old file stays, no temp file is left
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
 
 def atomic_write_text(path, text: str) -> None:
     atomic_write_bytes(path, text.encode())
 
 
+def strict_json(doc, **kwargs) -> str:
+    """``json.dumps`` that any JSON parser reads: a non-finite float becomes null (never a bare NaN)."""
+    return json.dumps(_finite_or_none(doc), allow_nan=False, **kwargs)
+
+
+def _finite_or_none(v):
+    if isinstance(v, float):
+        return v if math.isfinite(v) else None
+    if isinstance(v, np.floating):
+        return float(v) if np.isfinite(v) else None
+    if isinstance(v, dict):
+        return {k: _finite_or_none(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_finite_or_none(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return _finite_or_none(v.tolist())
+    return v
+
+
 def atomic_save_npz(path, **arrays: np.ndarray) -> None:
-    """NPZ holding numeric arrays only; read it back with ``np.load(path, allow_pickle=False)``."""
+    """NPZ holding numeric arrays only; read it back with ``read_npz`` (never pickle)."""
     buf = io.BytesIO()
     np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
     atomic_write_bytes(path, buf.getvalue())
@@ -42,8 +93,115 @@ def check_writable_dir(path) -> None:
     if path.exists() and not path.is_dir():
         raise NotADirectoryError(f"{path} is a file, not a folder")
     path.mkdir(parents=True, exist_ok=True)
-    probe = path / f".connrl-write-test-{os.getpid()}"
+    fd, probe = tempfile.mkstemp(prefix=".connrl-write-test-", dir=path)
+    os.close(fd)
+    os.unlink(probe)
+
+
+# --------------------------------------------------------------------------------------------------- reading
+
+def _reject_constant(name: str):
+    raise ValueError(f"{name} is not JSON (JSON has no NaN or Infinity)")
+
+
+def _finite_float(text: str) -> float:
+    v = float(text)
+    if not math.isfinite(v):  # 1e400 parses as inf
+        raise ValueError(f"the number {text[:40]} is too large for a float")
+    return v
+
+
+def read_json(path, what: str = "file", max_bytes: int = MAX_JSON_BYTES, constants: bool = False):
+    """The JSON document in ``path``; FileError (one line) when it is missing, a folder, too large, not UTF-8,
+    not JSON, nested more than MAX_NESTING deep, or (unless ``constants``) holds NaN / Infinity literals."""
+    path = Path(path)
     try:
-        probe.write_bytes(b"")
-    finally:
-        probe.unlink(missing_ok=True)
+        if path.is_dir():
+            raise FileError(path, f"is a folder; a {what} was expected")
+        if path.stat().st_size > max_bytes:
+            raise FileError(path, f"is {path.stat().st_size} bytes; a {what} is at most {max_bytes}")
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise FileError(path, f"no such {what}") from None
+    except OSError as exc:
+        raise FileError(path, f"cannot read the {what} ({exc.strerror or exc})") from None
+    if not raw.strip():
+        raise FileError(path, f"is empty; a {what} holds JSON")
+    depth = max_depth(raw)
+    if depth > MAX_NESTING:
+        raise FileError(path, f"nests {depth} levels deep; a {what} nests at most {MAX_NESTING}")
+    try:
+        return json.loads(raw.decode("utf-8"), parse_constant=None if constants else _reject_constant,
+                          parse_float=_finite_float)
+    except UnicodeDecodeError:
+        raise FileError(path, f"is not text; a {what} holds JSON") from None
+    except json.JSONDecodeError as exc:
+        raise FileError(path, f"is not JSON ({exc.msg} at line {exc.lineno}); a {what} holds JSON") from None
+    except (ValueError, RecursionError) as exc:
+        raise FileError(path, f"{exc}") from None
+
+
+def max_depth(raw: bytes) -> int:
+    """How deep brackets nest outside strings (a bound checked before parsing: the parser recurses)."""
+    text = raw.decode("latin-1")
+    # strings can hold brackets: drop them first (escaped quotes inside them included)
+    stripped = re.sub(r'"(?:[^"\\]|\\.)*"', "", text)
+    depth = best = 0
+    for m in re.finditer(r"[\[\]{}]", stripped):
+        depth += 1 if m.group() in "[{" else -1
+        best = max(best, depth)
+    return best
+
+
+def read_npz(path, what: str = "array file", max_bytes: int = MAX_NPZ_BYTES) -> dict[str, np.ndarray]:
+    """Every array of an NPZ archive (no pickle: loading never runs code); FileError (one line) otherwise."""
+    path = Path(path)
+    try:
+        if path.stat().st_size > max_bytes:
+            raise FileError(path, f"is {path.stat().st_size} bytes; a {what} is at most {max_bytes}")
+        z = np.load(path, allow_pickle=False)
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise FileError(path, f"is a single .npy array; a {what} is an .npz archive")
+        with z:
+            return {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise FileError(path, f"no such {what}") from None
+    except FileError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as exc:
+        raise FileError(path, f"is not a readable {what} ({type(exc).__name__}: {exc})") from None
+
+
+def check_number(path, field: str, v, low: float = -math.inf, high: float = math.inf, *, integer: bool = False,
+                 low_open: bool = False) -> float | int:
+    """A JSON number (not a bool) that is finite, whole if ``integer``, and in [low, high] (or (low, high])."""
+    kind = "a whole number" if integer else "a finite number"
+    ok = isinstance(v, int | float) and not isinstance(v, bool) and (not integer or isinstance(v, int))
+    if ok and isinstance(v, float):
+        ok = math.isfinite(v)
+    in_range = ok and (low < v if low_open else low <= v) and v <= high
+    if not in_range:
+        bounds = f"{'>' if low_open else '>='} {low:g}" + (f" and <= {high:g}" if high < math.inf else "")
+        shown = repr(v) if len(repr(v)) <= 40 else repr(v)[:37] + "..."
+        raise FileError(path, f"is {shown}; it must be {kind} {bounds}", field)
+    return v
+
+
+def check_array(path, field: str, a, shape: tuple | None = None, *, low: float = -math.inf, high: float = math.inf,
+                integer: bool = False) -> np.ndarray:
+    """A numeric array of ``shape`` (None: any; -1 in it: any length there) whose entries are finite and in
+    [low, high] (whole numbers if ``integer``), as float64 (int64 if ``integer``)."""
+    a = np.asarray(a)
+    if a.dtype.kind not in ("i", "u", "f", "b") or (integer and a.dtype.kind == "f"):
+        raise FileError(path, f"holds {a.dtype} data; it must hold {'integers' if integer else 'numbers'}", field)
+    if shape is not None and (len(a.shape) != len(shape) or any(s != -1 and s != n for s, n in zip(shape, a.shape,
+                                                                                                   strict=True))):
+        want = "(" + ", ".join("any" if s == -1 else str(s) for s in shape) + ")"
+        raise FileError(path, f"has shape {a.shape}; it must have shape {want}", field)
+    if a.size:
+        if a.dtype.kind == "f" and not np.isfinite(a).all():
+            raise FileError(path, "holds NaN or infinite values; it must hold finite numbers", field)
+        lo, hi = a.min(), a.max()
+        if lo < low or hi > high:
+            raise FileError(path, f"holds values in [{lo:g}, {hi:g}]; they must lie in [{low:g}, {high:g}]", field)
+    return a.astype(np.int64 if integer else np.float64)

@@ -76,7 +76,7 @@ def test_a_file_for_another_environment_or_format_is_refused(tmp_path):
     meta.write_text(meta.read_text().replace('"format": 1', '"format": 99'))
     with pytest.raises(ValueError, match="agent file format 99; this connrl reads format 1"):
         connrl.load(tmp_path / "agent")
-    with pytest.raises(ValueError, match="not a readable connrl agent file"):
+    with pytest.raises(ValueError, match="no such connrl agent file"):
         connrl.load(tmp_path / "nowhere")
 
 

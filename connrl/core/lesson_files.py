@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from connrl.core.lessons import Lesson
-from connrl.storage import atomic_write_text
+from connrl.storage import MAX_JSON_BYTES, MAX_NESTING, atomic_write_text, max_depth
 
 LESSON_FORMAT = "connrl-lesson"
 LESSON_VERSION = 1
@@ -184,13 +184,20 @@ def _check_lesson(raw, where: str, input_dim: int | None, n_actions: int | None)
 def _read_doc(path: Path) -> dict:
     """The file's JSON with its format, version and top-level fields checked."""
     try:
-        doc = json.loads(path.read_text())
+        if path.stat().st_size > MAX_JSON_BYTES:
+            raise LessonFileError(f"{path}: {path.stat().st_size} bytes; a lesson file is at most {MAX_JSON_BYTES}")
+        raw = path.read_bytes()
     except FileNotFoundError:
         raise LessonFileError(f"{path}: no such lesson file") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise LessonFileError(f"{path}: not a JSON lesson file ({exc})") from None
     except OSError as exc:
         raise LessonFileError(f"{path}: cannot read the lesson file ({exc.strerror or exc})") from None
+    depth = max_depth(raw)
+    if depth > MAX_NESTING:  # the parser recurses: bound the nesting before parsing
+        raise LessonFileError(f"{path}: nests {depth} levels deep; a lesson file nests at most {MAX_NESTING}")
+    try:
+        doc = json.loads(raw.decode("utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise LessonFileError(f"{path}: not a JSON lesson file ({exc})") from None
     if not isinstance(doc, dict) or doc.get("format") != LESSON_FORMAT:
         raise LessonFileError(f"{path}: 'format' must be {LESSON_FORMAT!r}")
     if doc.get("version") != LESSON_VERSION or isinstance(doc.get("version"), bool):  # true == 1 in Python

@@ -208,7 +208,17 @@ def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "
     if repair not in REPAIRS:
         raise ValueError(f"repair must be one of {REPAIRS}, got {repair!r}")
     _check_step_arrays(lesson, weights, allowed, discounts)
+    check_lesson_fits(lesson, q.n_nets, q.config.n_inputs)
     return fn(q, lesson, params, REPAIRS.index(repair), weights, allowed, discounts)
+
+
+def check_lesson_fits(lesson: Lesson, n_actions: int, n_inputs: int) -> None:
+    """Refuse a lesson whose actions or input width do not fit the nets: the compiled kernels index without bounds
+    (a loaded file is checked before it gets here; this keeps a lesson built by hand from corrupting memory)."""
+    a = lesson.actions
+    if len(a) and (a.min() < 0 or a.max() >= n_actions) or lesson.inputs.shape[1] != n_inputs:
+        raise ValueError(f"a lesson with actions in [{a.min()}, {a.max()}] and {lesson.inputs.shape[1]} inputs does "
+                         f"not fit nets of actions 0..{n_actions - 1} on {n_inputs} inputs")
 
 
 def replay_ahc(v_net, policy_net, lesson: Lesson, params: ReplayParams) -> int:

@@ -182,7 +182,7 @@ class OAON:
 
     def values(self, x: np.ndarray) -> np.ndarray:
         q = np.empty(self.n_nets)
-        x = np.ascontiguousarray(x, dtype=np.float64)
+        x = self._checked(x, 0)
         if self.config.n_hidden > 0:
             _mlp_values(self.w1, self.w2, x, self._h, self.scale, q)
         else:
@@ -190,7 +190,7 @@ class OAON:
         return q
 
     def value(self, x: np.ndarray, a: int) -> float:
-        x = np.ascontiguousarray(x, dtype=np.float64)
+        x = self._checked(x, a)
         if self.config.n_hidden > 0:
             return self.scale * _mlp_forward(self.w1, self.w2, a, x, self._h)
         return self.scale * _perceptron_forward(self.w2, a, x, self.config.linear_output)
@@ -203,8 +203,16 @@ class OAON:
         """Back-propagate a given error through net a (AHCON's policy net, Fig. 3.2 step 6)."""
         return self._step(x, a, float(error), True)
 
-    def _step(self, x, a, value, is_error):
+    def _checked(self, x, a) -> np.ndarray:
+        """``x`` as the kernels read it, after the checks they do not make (they index without bounds)."""
         x = np.ascontiguousarray(x, dtype=np.float64)
+        if not 0 <= a < self.n_nets or x.shape != (self.config.n_inputs,):
+            raise ValueError(f"net {a} of {self.n_nets} on an input of shape {x.shape}: the nets are 0.."
+                             f"{self.n_nets - 1} on {self.config.n_inputs} inputs")
+        return x
+
+    def _step(self, x, a, value, is_error):
+        x = self._checked(x, a)
         c = self.config
         if c.n_hidden > 0:
             return _mlp_update(self.w1, self.w2, self.d1, self.d2, a, x, self._h, value, is_error,

@@ -23,7 +23,7 @@ import numpy as np
 from connrl.envs.robot import OBS_SIZE, Layout, RobotSim
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, task_observations
 from connrl.nets import OAON, NetConfig
-from connrl.storage import atomic_save_npz, atomic_write_text
+from connrl.storage import FileError, atomic_save_npz, atomic_write_text, check_array, check_number, read_json, read_npz
 
 FORMAT = 1
 APPLICABLE_ABOVE = {"DP": 30.0, "DK": 25.0, "WFL": -math.inf, "WFR": -math.inf}  # 6.4.3
@@ -73,40 +73,33 @@ def save_behaviour(b: Behaviour, path) -> tuple[Path, Path]:
 
 
 def load_behaviour(path, task: str | None = None) -> Behaviour:
-    """Read a behaviour written by ``save_behaviour``; ``task`` (if given) must match. ValueError on any mismatch."""
+    """Read a behaviour written by ``save_behaviour``; ``task`` (if given) must match. FileError (a ValueError, one
+    line naming the file and field) on anything else: every field and weight is checked before the nets see it."""
     path = Path(path)
     npz, meta = path.with_suffix(".npz"), path.with_suffix(".json")
-    try:
-        m = json.loads(meta.read_text())
-    except (OSError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{meta}: not a readable behaviour file ({exc})") from None
+    m = read_json(meta, "behaviour file", max_bytes=2**20)
     if not isinstance(m, dict) or m.get("kind") != "connrl behaviour" or m.get("format") != FORMAT:
-        raise ValueError(f"{meta}: not a connrl behaviour file of format {FORMAT}")
+        raise FileError(meta, f"is not a connrl behaviour file of format {FORMAT}")
     if m.get("task") not in BEHAVIOUR_TASKS or (task is not None and m["task"] != task):
         wanted = task or f"one of {', '.join(BEHAVIOUR_TASKS)}"
-        raise ValueError(f"{meta}: holds behaviour {m.get('task')!r}, expected {wanted}")
-    n_in, n_hid, n_act = m.get("n_inputs"), m.get("n_hidden"), m.get("n_actions")
-    if (n_in, n_act) != (OBS_SIZE[m["task"]], 6) or not isinstance(n_hid, int) or n_hid < 1:
-        raise ValueError(f"{meta}: task {m['task']} needs {OBS_SIZE[m['task']]} inputs, 6 actions and >= 1 hidden "
-                         f"unit, the file says {n_in} inputs, {n_act} actions, {n_hid} hidden")
-    vr, low, prov = m.get("value_range"), m.get("binary_low", -0.5), m.get("provenance", {})
-    if not (isinstance(vr, (int, float)) and not isinstance(vr, bool) and 0 < vr < math.inf) or low not in (-0.5, 0.0) \
-            or not isinstance(prov, dict):
-        raise ValueError(f"{meta}: value_range must be a number > 0, binary_low -0.5 or 0 and provenance an object; "
-                         f"got {vr!r}, {low!r}, {type(prov).__name__}")
-    try:
-        z = np.load(npz, allow_pickle=False)
-        if not isinstance(z, np.lib.npyio.NpzFile):
-            raise ValueError("an .npy array, not an .npz archive")
-        with z:
-            w1, w2 = np.asarray(z["w1"], dtype=np.float64), np.asarray(z["w2"], dtype=np.float64)
-    except Exception as exc:  # any unreadable archive (missing, truncated, pickled, wrong keys) is one clear line
-        raise ValueError(f"{npz}: not a readable weight file ({type(exc).__name__}: {exc})") from None
-    if w1.shape != (n_act, n_hid, n_in + 1) or w2.shape != (n_act, n_hid + 1) or not (
-            np.isfinite(w1).all() and np.isfinite(w2).all()):
-        raise ValueError(f"{npz}: weights of shape {w1.shape} / {w2.shape} do not match the {n_in}-{n_hid}-1 nets of "
-                         f"{meta.name}, or are not finite")
-    q = OAON(NetConfig(n_in, n_hid, value_range=float(vr)), n_act, np.random.default_rng(0))
+        raise FileError(meta, f"is {m.get('task')!r}; this file must hold behaviour {wanted}", "task")
+    n_in = OBS_SIZE[m["task"]]
+    check_number(meta, "n_inputs", m.get("n_inputs"), n_in, n_in, integer=True)
+    check_number(meta, "n_actions", m.get("n_actions"), 6, 6, integer=True)
+    n_hid = check_number(meta, "n_hidden", m.get("n_hidden"), 1, 1024, integer=True)
+    vr = check_number(meta, "value_range", m.get("value_range"), 0, 1e6, low_open=True)
+    low, prov = m.get("binary_low", -0.5), m.get("provenance", {})
+    if low not in (-0.5, 0.0) or isinstance(low, bool):
+        raise FileError(meta, f"is {low!r}; it must be -0.5 or 0", "binary_low")
+    if not isinstance(prov, dict):
+        raise FileError(meta, f"is {type(prov).__name__}; it must be an object", "provenance")
+    z = read_npz(npz, "behaviour weight file")
+    for key in ("w1", "w2"):
+        if key not in z:
+            raise FileError(npz, f"has no array {key!r}; a behaviour's weights are w1 and w2")
+    w1 = check_array(npz, "w1", z["w1"], (6, n_hid, n_in + 1))
+    w2 = check_array(npz, "w2", z["w2"], (6, n_hid + 1))
+    q = OAON(NetConfig(n_in, n_hid, value_range=float(vr)), 6, np.random.default_rng(0))
     q.w1, q.w2 = w1, w2
     return Behaviour(m["task"], q, float(low), dict(prov))
 

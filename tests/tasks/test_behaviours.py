@@ -38,22 +38,22 @@ def test_round_trip_is_exact(tmp_path):
 
 def test_wrong_files_are_refused_with_one_line(tmp_path):
     save_behaviour(random_behaviour(), tmp_path / "dp")
-    with pytest.raises(ValueError, match="holds behaviour 'DP', expected DK"):
+    with pytest.raises(ValueError, match="task: is 'DP'; this file must hold behaviour DK"):
         load_behaviour(tmp_path / "dp", "DK")
-    with pytest.raises(ValueError, match="not a readable behaviour file"):
+    with pytest.raises(ValueError, match="no such behaviour file"):
         load_behaviour(tmp_path / "missing")
     meta = json.loads((tmp_path / "dp.json").read_text())
     (tmp_path / "bad.json").write_text(json.dumps({**meta, "n_inputs": 36}))
     (tmp_path / "bad.npz").write_bytes((tmp_path / "dp.npz").read_bytes())
-    with pytest.raises(ValueError, match="task DP needs 52 inputs"):
+    with pytest.raises(ValueError, match="n_inputs: is 36; it must be a whole number >= 52 and <= 52"):
         load_behaviour(tmp_path / "bad")
     (tmp_path / "short.json").write_text(json.dumps(meta))
     np.savez(tmp_path / "short.npz", w1=np.zeros((6, 16, 10)), w2=np.zeros((6, 17)))
-    with pytest.raises(ValueError, match="do not match"):
+    with pytest.raises(ValueError, match=r"w1: has shape \(6, 16, 10\); it must have shape \(6, 16, 53\)"):
         load_behaviour(tmp_path / "short")
     (tmp_path / "obj.json").write_text(json.dumps(meta))
     np.savez(tmp_path / "obj.npz", w1=np.array([{"a": 1}], dtype=object), w2=np.zeros((6, 17)))
-    with pytest.raises(ValueError, match="not a readable weight file"):  # pickled objects are never loaded
+    with pytest.raises(ValueError, match="not a readable behaviour weight file"):  # pickled objects are never loaded
         load_behaviour(tmp_path / "obj")
     (tmp_path / "other.json").write_text(json.dumps({**meta, "kind": "something else"}))
     with pytest.raises(ValueError, match="not a connrl behaviour file"):
@@ -127,8 +127,9 @@ def test_q_value_map_is_the_max_over_headings_and_nan_where_the_robot_does_not_f
 
 
 @pytest.mark.parametrize("change, message", [
-    ({"value_range": None}, "value_range must be a number > 0"), ({"value_range": "x"}, "value_range must be"),
-    ({"binary_low": 5}, "binary_low -0.5 or 0"), ({"provenance": [1]}, "provenance an object")])
+    ({"value_range": None}, "value_range: is None; it must be a finite number > 0"),
+    ({"value_range": "x"}, "value_range: is 'x'; it must be"), ({"binary_low": 5}, "binary_low: is 5; it must be -0.5"),
+    ({"provenance": [1]}, "provenance: is list; it must be an object")])
 def test_bad_fields_are_one_line(tmp_path, change, message):
     save_behaviour(random_behaviour(), tmp_path / "dp")
     meta = json.loads((tmp_path / "dp.json").read_text())
@@ -145,7 +146,7 @@ def test_unreadable_weight_files_are_one_line(tmp_path, content):
         (tmp_path / "dp.npz").write_bytes((tmp_path / "x.npy").read_bytes())
     else:
         (tmp_path / "dp.npz").write_bytes(content)
-    with pytest.raises(ValueError, match="not a readable weight file"):
+    with pytest.raises(ValueError, match="not a readable behaviour weight file|is a single .npy array"):
         load_behaviour(tmp_path / "dp")
 
 

@@ -5,7 +5,6 @@ See the package docstring and docs/RECONSTRUCTION.md, "HEROINE robot world".
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,6 +13,7 @@ import numpy as np
 
 from connrl.envs.robot.constants import LIGHT_RANGE, ROBOT_RADIUS, SEG_CHARGER, SEG_OBSTACLE, SEG_WALL
 from connrl.envs.robot.geometry import _point_segments_distance, _segment_blocked
+from connrl.storage import FileError, read_json
 
 LAYOUT_DIR = Path(__file__).resolve().parent.parent.parent / "data" / "layouts"
 
@@ -123,8 +123,18 @@ class Layout:
 
     @classmethod
     def from_json(cls, path) -> Layout:
-        with open(path) as f:
-            return cls.from_dict(json.load(f))
+        """A layout file; FileError (a ValueError, one line naming the file) when it is not a layout."""
+        d = read_json(path, "layout file", max_bytes=2**20)
+        if not isinstance(d, dict):
+            raise FileError(path, f"is a JSON {type(d).__name__}; a layout file holds one object")
+        try:
+            layout = cls.from_dict(d)
+        except (ValueError, TypeError, KeyError, IndexError, AttributeError) as exc:
+            raise FileError(path, f"is not a valid layout ({type(exc).__name__}: {exc})") from None
+        if not all(math.isfinite(v) and abs(v) < 1e6 for v in np.concatenate([
+                np.ravel(layout.size), layout.segments.ravel(), np.ravel(layout.charger), np.ravel(layout.light)])):
+            raise FileError(path, "holds a coordinate beyond +-1e6 cm; layouts are a few metres across")
+        return layout
 
     @classmethod
     def load(cls, name: str) -> Layout:
@@ -137,7 +147,7 @@ class Layout:
         if not f.is_file():
             known = sorted(x.name[:-5] for x in base.iterdir() if x.name.endswith(".json"))
             raise ValueError(f"unknown layout {name!r}; shipped layouts are {known} (or pass a .json path)")
-        return cls.from_dict(json.loads(f.read_text()))
+        return cls.from_json(f)
 
     def to_dict(self) -> dict:
         return {
