@@ -48,6 +48,7 @@ from connrl.api_files import (
     space_json,
     write_agent,
 )
+from connrl.core.divergence import network_problem
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import run_trial
 from connrl.nets import NetConfig
@@ -301,9 +302,19 @@ class Agent:
         merits = self.learner.policy.values(x) if self.kind.startswith("AHCON") else self.learner.q.values(x)
         return int(np.argmax(merits))
 
+    def divergence(self) -> str | None:
+        """What shows that learning diverged (non-finite weights, or weights beyond connrl.core.divergence's limit,
+        where every unit is saturated: a learning rate too large for the task), or None. A diverged agent is never
+        saved as a good one."""
+        return network_problem(self.learner)
+
     def save(self, path) -> Path:
-        """``path/agent.json`` and ``path/agent.npz`` (no pickle; connrl.api_files), each written atomically;
-        returns ``path``."""
+        """``path/agent.json`` and ``path/agent.npz`` (no pickle; connrl.api_files), written as one (a failed save
+        leaves the old pair); returns ``path``. A diverged agent (``divergence()``) is refused with a ValueError."""
+        problem = self.divergence()
+        if problem:
+            raise ValueError(f"the agent diverged after {self.steps_done} steps ({problem}); it is not saved: a "
+                             "smaller learning rate (option lr) keeps its weights bounded")
         path = Path(path)
         memory = self.learner.book.memory
         write_agent(path, {

@@ -10,6 +10,7 @@ exactly as the saved one would have.
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
@@ -18,7 +19,15 @@ from gymnasium import spaces
 
 from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
 from connrl.core.lessons import Lesson
-from connrl.storage import FileError, atomic_save_npz, atomic_write_text, check_array, check_number, read_json, read_npz
+from connrl.storage import (
+    FileError,
+    atomic_write_files,
+    check_array,
+    check_number,
+    npz_bytes,
+    read_json,
+    read_npz,
+)
 
 FORMAT = 1
 _FIELDS = ("inputs", "actions", "rewards")
@@ -59,14 +68,15 @@ def _lesson_arrays(prefix: str, lessons) -> dict:
 
 
 def write_agent(path: Path, record: dict, state: dict, memory: list[Lesson], taught: list[Lesson]) -> None:
-    """``path/agent.npz`` (``state`` plus the lessons) then ``path/agent.json`` (``record`` plus the format and the
-    lessons' ends), each written atomically."""
-    atomic_save_npz(path / "agent.npz", **state, **_lesson_arrays("lesson", memory), **_lesson_arrays("taught", taught))
+    """``path/agent.npz`` (``state`` plus the lessons) and ``path/agent.json`` (``record`` plus the format, the
+    lessons' ends and the NPZ's SHA-256), written as one: a failed save leaves the old pair as it was."""
+    arrays = npz_bytes(**state, **_lesson_arrays("lesson", memory), **_lesson_arrays("taught", taught))
     ends = {key: [[bool(x.terminated), bool(x.truncated)] for x in lessons]
             for key, lessons in (("lesson_ends", memory), ("taught_ends", taught))}
-    atomic_write_text(path / "agent.json", json.dumps(
-        {"format": FORMAT, "kind": "connrl agent", "connrl": version(), **record, **ends}, indent=1,
-        allow_nan=False) + "\n")  # strict JSON: any reader can parse it
+    text = json.dumps({"format": FORMAT, "kind": "connrl agent", "connrl": version(), **record, **ends,
+                       "npz_sha256": hashlib.sha256(arrays).hexdigest()}, indent=1,
+                      allow_nan=False) + "\n"  # strict JSON: any reader can parse it
+    atomic_write_files({path / "agent.npz": arrays, path / "agent.json": text.encode()})
 
 
 def read_agent(path: Path, kinds: tuple[str, ...]) -> tuple[dict, dict[str, np.ndarray]]:
@@ -80,7 +90,17 @@ def read_agent(path: Path, kinds: tuple[str, ...]) -> tuple[dict, dict[str, np.n
     if m.get("format") != FORMAT or isinstance(m.get("format"), bool):
         raise FileError(meta, f"agent file format {m.get('format')!r}; this connrl reads format {FORMAT}")
     check_record(meta, m, kinds)
-    return m, read_npz(path / "agent.npz", "connrl agent weight file")
+    npz = path / "agent.npz"
+    digest = m.get("npz_sha256")  # files written before it was recorded have none
+    if digest is not None:
+        try:
+            same = hashlib.sha256(npz.read_bytes()).hexdigest() == digest
+        except OSError as exc:
+            raise FileError(npz, f"cannot be read ({exc.strerror or exc})") from None
+        if not same:
+            raise FileError(npz, "is not the file agent.json was saved with (its SHA-256 differs): it was changed "
+                            "or damaged after the save")
+    return m, read_npz(npz, "connrl agent weight file")
 
 
 MAX_RECORD_BYTES = 16 * 2**20

@@ -30,6 +30,15 @@ MAX_NPZ_BYTES = 1 * 2**30
 MAX_NESTING = 32  # connrl's JSON files nest at most ~6 levels
 
 
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+_FILE_MODE = 0o666 & ~_umask()  # what open() would have given a new file
+
+
 class FileError(ValueError):
     """A file connrl cannot use; ``str()`` is one line: ``PATH: [FIELD: ]what is wrong; what is allowed``."""
 
@@ -41,19 +50,37 @@ class FileError(ValueError):
 # --------------------------------------------------------------------------------------------------- writing
 
 def atomic_write_bytes(path, data: bytes) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    atomic_write_files({path: data})
+
+
+def atomic_write_files(files: dict) -> None:
+    """Write several files as one: every temporary file is written first, then each is moved into place, so a
+    failure while writing (a full disk, Ctrl-C) leaves every old file as it was and no temporary file behind."""
+    temps = []
     try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:  # a full disk, Ctrl-C mid-write: the old file stays, no temp file is left
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        for path, data in files.items():
+            path = Path(path)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+            temps.append((tmp, path))
+            os.fchmod(fd, _FILE_MODE)  # mkstemp's 0600 would hide results from the user's group
+            with os.fdopen(fd, "wb") as f:
+                f.write(data)
+                f.flush()
+                os.fsync(f.fileno())
+        for tmp, path in temps:
+            os.replace(tmp, path)
+    except BaseException:
+        for tmp, _ in temps:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
         raise
+
+
+def npz_bytes(**arrays: np.ndarray) -> bytes:
+    buf = io.BytesIO()
+    np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
+    return buf.getvalue()
 
 
 def atomic_write_text(path, text: str) -> None:
@@ -81,9 +108,7 @@ def _finite_or_none(v):
 
 def atomic_save_npz(path, **arrays: np.ndarray) -> None:
     """NPZ holding numeric arrays only; read it back with ``read_npz`` (never pickle)."""
-    buf = io.BytesIO()
-    np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
-    atomic_write_bytes(path, buf.getvalue())
+    atomic_write_bytes(path, npz_bytes(**arrays))
 
 
 def check_writable_dir(path) -> None:
@@ -181,9 +206,10 @@ def check_number(path, field: str, v, low: float = -math.inf, high: float = math
         ok = math.isfinite(v)
     in_range = ok and (low < v if low_open else low <= v) and v <= high
     if not in_range:
-        bounds = f"{'>' if low_open else '>='} {low:g}" + (f" and <= {high:g}" if high < math.inf else "")
+        bounds = " and ".join(([f"{'>' if low_open else '>='} {low:g}"] if low > -math.inf else [])
+                              + ([f"<= {high:g}"] if high < math.inf else []))
         shown = repr(v) if len(repr(v)) <= 40 else repr(v)[:37] + "..."
-        raise FileError(path, f"is {shown}; it must be {kind} {bounds}", field)
+        raise FileError(path, f"is {shown}; it must be {kind}{' ' + bounds if bounds else ''}", field)
     return v
 
 
