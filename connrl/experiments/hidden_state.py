@@ -49,6 +49,7 @@ Choices where the thesis is silent (R; docs/RECONSTRUCTION.md, "Learners and pro
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -56,7 +57,16 @@ import numpy as np
 from connrl.core.rollout import run_trial
 from connrl.experiments.pole import train_until_satisfactory
 from connrl.experiments.protocol import train_and_test
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
+from connrl.experiments.spec import (
+    MAX_UNITS,
+    MAX_WINDOW,
+    ExperimentSpec,
+    Quantity,
+    RunResult,
+    Variant,
+    check_sequence,
+    check_types,
+)
 from connrl.tasks.hidden_state import (
     ARCHITECTURES,
     OPTIMAL_SCORE,
@@ -71,6 +81,45 @@ from connrl.tasks.pole import make_envs as make_pole_envs
 HIDDEN_RANGES = {"lam": "0..1", "gamma": "0..1", "init_range": ">0", "momentum": "0..<1", "feedback": ">=0",
                  "decay": "0..1", "capacity": ">=1", "anneal_trials": ">=1", "trials": ">=1",
                  "lessons_per_trial": ">=0", "p_threshold": "0..<1", "p_threshold_oldest": ">0"}
+# the Table B.1 entries ``table`` may override: sizes (window N, hidden and context units) with their bounds
+TABLE_SIZES = {"window": (1, MAX_WINDOW), **dict.fromkeys(("hq", "cq", "hm", "cm"), (0, MAX_UNITS))}
+TABLE_KEYS = (*TABLE_SIZES, "lam", "lr_q", "lr_m", "inv_t")
+PROBE_MAX = 1000  # forced steps of one robustness probe (the probe's world ends a trial at 200 steps)
+
+
+def _number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def check_table(table: dict) -> None:
+    """Refuse a ``table`` override that Table B.1 has no entry for, or whose value is out of range: window N and
+    the units are whole numbers within TABLE_SIZES, lam in [0, 1], the learning rates > 0, inv_t two 1/T > 0."""
+    for key, v in table.items():
+        if key in TABLE_SIZES:
+            low, high = TABLE_SIZES[key]
+            ok, want = isinstance(v, int) and not isinstance(v, bool) and low <= v <= high, f"in [{low}, {high}]"
+        elif key == "lam":
+            ok, want = _number(v) and 0 <= v <= 1, "in [0, 1]"
+        elif key in ("lr_q", "lr_m"):
+            ok, want = _number(v) and v > 0, "> 0"
+        elif key == "inv_t":
+            ok = isinstance(v, (tuple, list)) and len(v) == 2 and all(_number(x) and x > 0 for x in v)
+            want = "two numbers > 0 (1/T: a -> b)"
+        else:
+            raise ValueError(f"parameter table: unknown entry {key!r}; allowed: {', '.join(TABLE_KEYS)}")
+        if not ok:
+            raise ValueError(f"parameter table entry {key!r} must be {want}, got {v!r}")
+
+
+def check_hidden_state(p) -> None:
+    """The checks the cup and pole parameter classes share beyond ``check_types``: ``table``'s entries and the
+    tuples' lengths and values."""
+    check_table(p.table)
+    if getattr(p, "probe_steps", None) is not None:
+        check_sequence("probe_steps", p.probe_steps, int, 0, PROBE_MAX, 100)
+    if getattr(p, "window_q_inv_t", None) is not None and not (
+            len(p.window_q_inv_t) == 2 and all(_number(x) and x > 0 for x in p.window_q_inv_t)):
+        raise ValueError(f"parameter window_q_inv_t must be two numbers > 0 (1/T: a -> b), got {p.window_q_inv_t!r}")
 
 
 @dataclass(frozen=True)
@@ -110,6 +159,7 @@ class CupParams(HiddenStateParams):
     def __post_init__(self):
         check_types(self, {**HIDDEN_RANGES, "model_range": ">0", "model_lessons_per_trial": ">=0"},
                     arch=ARCHITECTURES, task=(1, 2, 3))
+        check_hidden_state(self)
 
 
 @dataclass(frozen=True)
@@ -132,6 +182,7 @@ class PoleHiddenParams(HiddenStateParams):
         check_types(self, {**HIDDEN_RANGES, "model_range": ">0", "model_lessons_per_trial": ">=0",
                            "train_max_steps": ">=1", "start_x": ">=0", "start_theta": ">=0", "test_steps": ">=1"},
                     arch=ARCHITECTURES, task=(4,))
+        check_hidden_state(self)
 
 
 # 7.5.1: recurrent-model's action model on fixed random walks every 50 trials (connrl.tasks.hidden_state.model_probe;

@@ -23,6 +23,7 @@ from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
 
 LAMS = (0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9,
         0.91, 0.92, 0.93, 0.94, 0.95, 0.96, 0.97, 0.98, 0.99)
+MAX_LAMS = 1000  # lambda values measured in one run (Fig. 5.2's: 27), each a lesson of ``steps`` steps
 MARKS = (0.7, 0.9, 0.99)  # D reported as quantities: the thesis's lambda for Ch. 5-6 (0.7), and both sides of 0.9
 
 
@@ -34,6 +35,8 @@ class DepthParams:
 
     def __post_init__(self):
         check_types(self, {"steps": ">=1", "gamma": "0..1"})
+        if len(self.lams) > MAX_LAMS:
+            raise ValueError(f"parameter lams must have at most {MAX_LAMS} entries, got {len(self.lams)}")
         if not self.lams or not all(isinstance(x, float) and 0 < x < 1 for x in self.lams):
             raise ValueError(f"parameter lams must be numbers in (0, 1), got {self.lams!r}")
 
