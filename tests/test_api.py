@@ -100,7 +100,7 @@ def test_cli_train_then_evaluate(tmp_path, capsys):
     (["train", "Nope-v9", "--steps", "10"], "cannot make environment 'Nope-v9'"),
     (["train", "CartPole-v1", "--steps", "10", "--option", "lr"], "--option expects key=value, got 'lr'"),
     (["train", "CartPole-v1", "--steps", "10", "--option", "lr2=1"], "unknown option(s) 'lr2'"),
-    (["evaluate", "nowhere"], "holds no readable agent"),
+    (["evaluate", "nowhere"], "nowhere/agent.json: no such connrl agent file"),
 ])
 def test_cli_refuses_bad_input_in_one_line(args, message, tmp_path):
     from connrl import cli
@@ -173,7 +173,7 @@ def test_a_loaded_agent_learns_on_exactly_as_the_saved_one_would(kind, tmp_path)
 def test_a_damaged_agent_file_and_the_wrong_environment_are_one_line(tmp_path):
     agent = make_agent(Toy(), "QCON-R", warmup_steps=10).save(tmp_path / "a")
     (agent / "agent.npz").write_bytes(b"")
-    with pytest.raises(ValueError, match="not a readable connrl agent"):
+    with pytest.raises(ValueError, match="agent.npz: is not the file agent.json was saved with"):
         connrl.load(agent)
     (agent / "agent.json").write_text("[1]")
     with pytest.raises(ValueError, match="not a connrl agent file"):

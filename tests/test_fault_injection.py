@@ -102,10 +102,12 @@ NPZ_ARRAYS = {  # case id -> change(arrays) on agent.npz
 }
 
 
-def _npz_bytes(transform):
+def _npz_bytes(transform, resign: bool = True):
     def mutate(folder: Path) -> Path:
         p = folder / "agent.npz"
         p.write_bytes(transform(p.read_bytes()))
+        if resign:
+            ft.resign_agent(folder)
         return p
     return mutate
 
@@ -113,6 +115,7 @@ def _npz_bytes(transform):
 def _npz_arrays(change):
     def mutate(folder: Path) -> Path:
         ft.rewrite_npz(folder / "agent.npz", change)
+        ft.resign_agent(folder)
         return folder / "agent.npz"
     return mutate
 
@@ -126,6 +129,7 @@ def _npz_object_array(folder: Path) -> Path:
     buf = io.BytesIO()
     np.savez(buf, **arrays)  # pickled member
     (folder / "agent.npz").write_bytes(buf.getvalue())
+    ft.resign_agent(folder)
     return folder / "agent.npz"
 
 
@@ -181,6 +185,7 @@ AGENT_CASES = {  # case id -> mutate(folder) -> the damaged file
     **{f"npz-truncate-{f}": _npz_bytes(lambda b, f=f: ft.truncate(b, f)) for f in (0.0, 0.5, 0.99)},
     **{f"npz-flip-seed{s}": _npz_bytes(lambda b, s=s: ft.flip_npz(b, SEED + s)) for s in range(3)},
     "npz-object-array": _npz_object_array,
+    "npz-changed-after-save": _npz_bytes(lambda b: ft.flip_npz(b, SEED), resign=False),  # the digest tells it
     **{f"npz-{name}": _npz_arrays(change) for name, change in NPZ_ARRAYS.items()},
     **{f"json-truncate-{f}": _json_text(lambda b, f=f: ft.truncate(b, f)) for f in (0.0, 0.5)},
     **{f"json-flip-seed{s}": _json_text(lambda b, s=s: ft.flip_text(b, SEED + s)) for s in range(2)},

@@ -96,7 +96,7 @@ def test_train_on_a_full_disk_says_the_agent_was_not_saved(tiny_disk, tmp_path):
     assert proc.returncode in (1, 2), ft.describe(proc)
     lines = proc.stderr.splitlines()
     assert len(lines) == 1 and lines[0].startswith("connrl: "), f"not one 'connrl: ' line: {ft.describe(proc)}"
-    assert "not saved" in lines[0] and ("space" in lines[0].lower() or "full" in lines[0].lower()), \
+    assert "not saved" in lines[0].lower() and ("space" in lines[0].lower() or "full" in lines[0].lower()), \
         f"the line does not say that the agent was not saved and why: {ft.describe(proc)}"
     left = [p.name for p in tiny_disk.rglob("*") if p.name.endswith(".tmp")]
     assert not left, f"temporary files left behind: {left}"
