@@ -122,7 +122,7 @@ def _run_and_report(spec, args, *, profile: str, runs: int | None, seed: int, me
     _print_summary(outcome.summary)
     curves = [r["curve_y"] for r in sorted(outcome.records, key=lambda r: r["seed"])]
     if mean_curve and curves and len({len(c) for c in curves}) == 1 and curves[0]:
-        xs, mean = outcome.records[0]["curve_x"], np.mean(curves, axis=0)
+        xs, mean = outcome.records[0]["curve_x"], np.mean(np.array(curves, dtype=float), axis=0)
         idx = np.unique(np.linspace(0, len(xs) - 1, min(11, len(xs))).round().astype(int))
         print("mean curve: " + ", ".join(f"{xs[i]:g}: {mean[i]:.3g}" for i in idx))
     print(f"\n{outcome.ran} run(s) executed, {outcome.reused} reused from earlier; "

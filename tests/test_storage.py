@@ -169,3 +169,35 @@ def test_check_array_bounds_shape_type_and_values():
         with pytest.raises(FileError) as e:
             check_array("f.npz", "a", a, **kwargs)
         assert str(e.value) == f"f.npz: a: {message}" or message in str(e.value)
+
+
+# ------------------------------------------------------------------ run records (connrl.experiments.store)
+
+def _record(**change) -> dict:
+    rec = {"experiment": "e", "variant": "v", "seed": 0, "params": {}, "metrics": {"m": None},
+           "curve_x": [0, 10], "curve_y": [0.5, None], "wall_time_s": 1.0}
+    return {**rec, **change}
+
+
+def test_a_record_is_written_as_strict_json_and_a_missing_test_value_reads_back_as_null(tmp_path):
+    from connrl.experiments.store import load_record, write_run_records
+
+    write_run_records(tmp_path / "seed-0", _record(curve_y=[0.5, float("nan")], metrics={"m": float("inf")}), [])
+    text = (tmp_path / "seed-0.json").read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    rec, damage = load_record(tmp_path / "seed-0")
+    assert damage is None and rec["curve_y"] == [0.5, None] and rec["metrics"] == {"m": None}
+
+
+@pytest.mark.parametrize("old, new", [('"m": null', '"m": NaN'), ('"m": null', '"m": 1e400'),
+                                      ("0.5", "Infinity"), ('"curve_x": [', '"curve_x": [null, ')])
+def test_a_record_with_a_non_finite_or_missing_number_is_damaged(tmp_path, old, new):
+    from connrl.experiments.store import load_record, write_run_records
+
+    write_run_records(tmp_path / "seed-0", _record(), [])
+    path = tmp_path / "seed-0.json"
+    text = path.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+    rec, damage = load_record(tmp_path / "seed-0")
+    assert rec is None and damage

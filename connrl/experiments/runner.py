@@ -41,7 +41,7 @@ from connrl.experiments.store import (
     load_summary,
     write_run_records,
 )
-from connrl.storage import atomic_write_text
+from connrl.storage import atomic_write_text, strict_json
 
 
 @dataclass(frozen=True)
@@ -372,7 +372,7 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     wall = time.perf_counter() - t0
     summary = summarize(spec, profile, seed, records, wall)
     summary_path = out / spec.name / "summary.json"
-    atomic_write_text(summary_path, json.dumps(summary, indent=1, default=json_default))
+    atomic_write_text(summary_path, strict_json(summary, indent=1, default=json_default))
     return RunOutcome(summary, summary_path, records, len(todo), reused)
 
 
@@ -455,15 +455,17 @@ def prepare_outputs(folder: Path, jobs: list[Job]) -> None:
             where.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise OSError(exc.errno, f"cannot write to {where}: {exc.strerror or exc}") from None
-    for name in ("summary.json", "curve.png", "curve.svg"):
-        if (folder / name).is_dir():
-            raise IsADirectoryError(f"cannot write to {folder / name}: a folder is in the way")
+    in_the_way = [folder / name for name in ("summary.json", "curve.png", "curve.svg")]
+    in_the_way += [Path(f"{j.path}{ext}") for j in jobs for ext in (".json", ".csv")]
+    for p in in_the_way:
+        if p.is_dir():
+            raise IsADirectoryError(f"cannot write to {p}: a folder is in the way (move it and run again)")
 
 
-def stored_runs(spec: ExperimentSpec, out: Path) -> tuple[dict | None, list[dict]]:
+def stored_runs(spec: ExperimentSpec, out: Path, on_damaged=None) -> tuple[dict | None, list[dict]]:
     """The summary of the latest ``connrl run`` of ``spec`` under ``out`` and the readable run records it
-    names (damaged or missing ones are left out: compare with ``expected_runs``). A damaged summary raises
-    ``DamagedFile``."""
+    names (damaged or missing ones are left out: compare with ``expected_runs``; ``on_damaged(path, reason)``
+    hears of each damaged one). A damaged summary raises ``DamagedFile``."""
     p = Path(out) / spec.name / "summary.json"
     if not p.exists():
         return None, []
@@ -472,7 +474,14 @@ def stored_runs(spec: ExperimentSpec, out: Path) -> tuple[dict | None, list[dict
         jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], Path(out))
     except ValueError as exc:
         raise DamagedFile(p, f"it does not fit experiment {spec.name}: {exc}") from None
-    return summary, [r for r in (load_record(j.path, j)[0] for j in jobs) if r is not None]
+    records = []
+    for j in jobs:
+        rec, damage = load_record(j.path, j)
+        if damage and on_damaged is not None:
+            on_damaged(Path(j.path).with_suffix(".json"), damage)
+        if rec is not None:
+            records.append(rec)
+    return summary, records
 
 
 def missing_runs(spec_name: str, summary: dict, records: list[dict]) -> str | None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import os
 import platform
 import subprocess
@@ -18,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.storage import atomic_write_text
+from connrl.storage import MAX_NESTING, atomic_write_text, max_depth, strict_json
 
 # run record key -> allowed JSON types
 RECORD_KEYS = {"experiment": (str,), "variant": (str,), "seed": (int,), "params": (dict,), "metrics": (dict,),
@@ -35,13 +36,32 @@ class DamagedFile(ValueError):
         super().__init__(f"{path} is damaged ({reason})" + (f"; {fix}" if fix else ""))
 
 
+class _NotStrict(ValueError):
+    pass
+
+
+def _no_constant(token: str):
+    raise _NotStrict(f"holds {token}; connrl writes strict JSON, with null for a missing value")
+
+
+def _finite_float(text: str) -> float:
+    v = float(text)
+    if not math.isfinite(v):
+        raise _NotStrict(f"holds {text}, beyond a 64-bit float")
+    return v
+
+
 def read_json(path) -> object:
     """The JSON in ``path``; ``DamagedFile`` when it is empty, binary or not JSON."""
     raw = Path(path).read_bytes()
     if not raw.strip():
         raise DamagedFile(path, "empty")
+    if max_depth(raw) > MAX_NESTING:
+        raise DamagedFile(path, "nested too deeply to be ours")
     try:
-        return json.loads(raw.decode("utf-8"))
+        return json.loads(raw.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite_float)
+    except _NotStrict as exc:
+        raise DamagedFile(path, str(exc)) from None
     except UnicodeDecodeError:
         raise DamagedFile(path, "not text") from None
     except json.JSONDecodeError as exc:
@@ -66,7 +86,7 @@ MAX_RUNS = 10_000  # per variant: far beyond any protocol; a larger count is a t
 
 
 def _number(v) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool)
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
 
 
 def check_record(rec: object, job=None) -> str | None:
@@ -76,8 +96,8 @@ def check_record(rec: object, job=None) -> str | None:
         return problem
     if len(rec["curve_x"]) != len(rec["curve_y"]):
         return "curve_x and curve_y differ in length"
-    if not all(_number(v) for v in rec["curve_x"] + rec["curve_y"]):
-        return "its curve holds something other than numbers"
+    if not all(_number(v) for v in rec["curve_x"]) or not all(v is None or _number(v) for v in rec["curve_y"]):
+        return "its curve holds something other than numbers (null marks a test with no value)"
     if not all(v is None or _number(v) for v in rec["metrics"].values()):
         return "a metric is neither a number nor null"
     if rec.get("diverged") is not None and not isinstance(rec["diverged"], dict):
@@ -180,7 +200,7 @@ def write_run_records(path: Path, record: dict, rows: list[dict]) -> None:
         w.writerows(zip(record["curve_x"], record["curve_y"], strict=True))
     atomic_write_text(path.with_suffix(".csv"), buf.getvalue())
     # the .json is written last: its presence marks the run as finished
-    atomic_write_text(path.with_suffix(".json"), json.dumps(record, indent=1, default=json_default))
+    atomic_write_text(path.with_suffix(".json"), strict_json(record, indent=1, default=json_default))
 
 
 def json_default(o):

@@ -146,7 +146,7 @@ def stored(spec, out: Path) -> tuple[dict | None, list[dict]]:
     """``connrl.experiments.runner.stored_runs`` for a results section: a damaged summary is left out (and said),
     and a section drawn from fewer runs than its summary lists says so."""
     try:
-        summary, records = stored_runs(spec, Path(out))
+        summary, records = stored_runs(spec, Path(out), lambda p, why: warn(f"{p} is damaged ({why}); left out"))
     except DamagedFile as exc:
         warn(f"{exc}; left out of the page")
         return None, []

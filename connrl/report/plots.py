@@ -68,7 +68,8 @@ def plot_experiment(spec: ExperimentSpec, records: list[dict], out_dir: Path) ->
     ax.set_ylabel(spec.y_label)
     ax.set_title(f"{spec.name}: {spec.title}\n(thesis {spec.section}; shaded: min-max over runs)", fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
+    if ax.get_legend_handles_labels()[0]:  # no runs drawn: no legend (matplotlib would warn)
+        ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
     paths = [save_figure(fig, out_dir / f"curve.{ext}") for ext in ("png", "svg")]
     plt.close(fig)
@@ -77,7 +78,10 @@ def plot_experiment(spec: ExperimentSpec, records: list[dict], out_dir: Path) ->
 
 def plot_from_disk(spec: ExperimentSpec, out: Path) -> list[Path]:
     """Redraw the plot of the latest ``connrl run`` from the run records named in summary.json."""
-    summary, records = stored_runs(spec, out)  # a damaged summary raises DamagedFile
+    def left_out(path: Path, reason: str) -> None:
+        print(f"connrl: warning: {path} is damaged ({reason}); left out of the plot", file=sys.stderr)
+
+    summary, records = stored_runs(spec, out, left_out)  # a damaged summary raises DamagedFile
     if summary is None:
         raise FileNotFoundError(f"{out / spec.name / 'summary.json'} not found: run `connrl run {spec.name}` first")
     missing = missing_runs(spec.name, summary, records)

@@ -5,7 +5,6 @@ shipped library (``connrl train-behaviours``) -- then the claims of 6.6 / 6.7 be
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -18,6 +17,7 @@ from connrl.experiments import recharge, recharge_flat
 from connrl.report.page import figure, load_summary, note, run_rows, stored, summary_table
 from connrl.report.plots import save_figure
 from connrl.report.recharge_claims import EXP1, EXP3, accounting, claims_table, draw_paths
+from connrl.storage import FileError, check_number, read_json
 from connrl.tasks.behaviours import APPLICABLE_ABOVE, LIBRARY_DIR, load_library, q_value_map
 from connrl.tasks.recharge import chg_lessons
 from connrl.tasks.robot import TAUGHT_COUNTS, taught_lessons
@@ -85,12 +85,30 @@ def draw_room_curves(spec, summary: dict, out_dir: Path, file: Path) -> Path | N
     return file if drawn else None
 
 
+def read_library_index(path: Path) -> dict:
+    """library.json (written by ``connrl train-behaviours``) checked field by field; a damaged index raises
+    FileError (one line naming the file and the field) rather than a traceback in the middle of the page."""
+    doc = read_json(path, "behaviour library index")
+    index = doc.get("behaviours") if isinstance(doc, dict) else None
+    if not isinstance(index, dict) or set(index) - set(WHERE_USED):
+        raise FileError(path, "must be an object whose 'behaviours' maps behaviour names "
+                        f"({', '.join(sorted(WHERE_USED))}) to their records", "behaviours")
+    for name, m in index.items():
+        if not isinstance(m, dict):
+            raise FileError(path, "must be an object", f"behaviours.{name}")
+        for key, low, high, integer in (("trials", 0, 10**7, True), ("lessons", 0, 10**7, True),
+                                        ("far_share", 0, 1, False), ("final_test_performance", -1e6, 1e6, False),
+                                        ("serve_rate", 0, 1, False)):
+            check_number(path, f"behaviours.{name}.{key}", m.get(key), low, high, integer=integer)
+    return index
+
+
 def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
     out_dir, doc = Path(out_dir), Path(doc)
     index_file = LIBRARY_DIR / "library.json"
     if not index_file.exists():
         return ""
-    index = json.loads(index_file.read_text())["behaviours"]
+    index = read_library_index(index_file)
     lines = ["## Chapter 6: hierarchical learning (Exps 1-5, Figs. 6.3-6.7)", "",
              "The behaviours the high level coordinates are Ch. 5's QCON-T skills, trained by `connrl "
              "train-behaviours` and shipped in `connrl/data/behaviours/` (one seed each; docs/RECONSTRUCTION.md, "

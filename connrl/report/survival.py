@@ -92,7 +92,7 @@ def crossing(xs, ys, level: float) -> float | None:
 
 def _mean_curve(recs: list[dict]) -> tuple[list[float], list[float]]:
     n = min(len(r["curve_x"]) for r in recs)
-    return recs[0]["curve_x"][:n], list(np.mean([r["curve_y"][:n] for r in recs], axis=0))
+    return recs[0]["curve_x"][:n], list(np.mean(np.array([r["curve_y"][:n] for r in recs], dtype=float), axis=0))
 
 
 def _command(summary: dict) -> str:
