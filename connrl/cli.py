@@ -82,6 +82,10 @@ def cmd_reproduce(args) -> int:
         except ValueError as exc:
             raise SystemExit(f"connrl: {exc}") from None
     _writable(args.out)
+    doc = Path(args.doc) if args.doc else Path(args.out) / "RESULTS.md"
+    if doc.is_dir():
+        raise SystemExit(f"connrl: --doc {doc} is a folder; it must name the results page's file (e.g. RESULTS.md)")
+    _writable(doc.parent)  # before the runs: a page that cannot be written must not cost an hour of compute
     start = time.time()
     for k, spec in enumerate(specs, 1):
         runs = spec.full_runs if args.profile == "full" else None
@@ -90,8 +94,6 @@ def cmd_reproduce(args) -> int:
         code = _run_and_report(spec, args, profile=args.profile, runs=runs, seed=spec.seed)
         if code:
             return code
-    doc = Path(args.doc) if args.doc else Path(args.out) / "RESULTS.md"
-    _writable(doc.parent)
     print(f"results: {write_results(Path(args.out), doc)}; chapters {', '.join(map(str, chapters))}, "
           f"{len(specs)} experiments, {time.time() - start:.0f} s")
     return 0
@@ -222,13 +224,16 @@ def cmd_train_behaviours(args) -> int:
     from connrl.experiments.behaviours import train_library
     from connrl.tasks.behaviours import LIBRARY_DIR
 
-    out = Path(args.out) if args.out else LIBRARY_DIR
+    if args.out and args.replace_shipped:
+        raise SystemExit("connrl: give either --out DIR or --replace-shipped, not both")
+    out = LIBRARY_DIR if args.replace_shipped else Path(args.out or "runs/behaviours")
     _writable(out)
     index = train_library(out, seed=args.seed, trials=args.trials, workers=args.workers or 2)
     for task, m in index.items():
         print(f"{task}: {m['trials']} trials, final test {m['final_test_performance']:.2f} reinforcement/step, "
               f"where Ch. 6 uses it {m['serve_rate']:.2f}")
-    print(f"library: {out}")
+    print(f"library: {out}" + ("" if args.replace_shipped else " (the Ch. 6 runs use the shipped library, "
+                                "connrl/data/behaviours/; --replace-shipped writes there)"))
     return 0
 
 
@@ -270,7 +275,7 @@ def _executor_options(s) -> None:
 
 
 def _check_executor(args) -> None:
-    from connrl.experiments.runner import check_executor
+    from connrl.experiments.runner import ExecutorError, check_executor, check_reachable
 
     try:
         check_executor(args.executor)
@@ -278,6 +283,11 @@ def _check_executor(args) -> None:
         raise SystemExit(f"connrl: {exc}") from None
     if args.address and args.executor != "ray":
         raise SystemExit("connrl: --address is for --executor ray")
+    if args.address:
+        try:  # before any run: Ray itself would retry a dead address for minutes without a word
+            check_reachable(args.address)
+        except ExecutorError as exc:
+            raise SystemExit(f"connrl: {exc}") from None
 
 
 def _add_experiment_commands(sub) -> None:
@@ -362,8 +372,12 @@ def _add_tool_commands(sub) -> None:
     s = sub.add_parser("train-behaviours", help="train the Ch. 6 behaviour library (DK, DP, WFL, WFR)",
                        description="Train Ch. 5's QCON-T for each behaviour (deterministic given --seed) and store "
                        "it as NPZ + JSON with its provenance, plus library.json with each one's rate where Ch. 6 "
-                       "uses it. Without --out this rewrites the shipped library, connrl/data/behaviours/.")
-    s.add_argument("--out", default=None, help="library folder (default: the shipped connrl/data/behaviours)")
+                       "uses it. It writes under runs/behaviours unless told otherwise; --replace-shipped "
+                       "rewrites the library the Ch. 6 runs use, connrl/data/behaviours/ (its digest is in "
+                       "their run folders: stored Ch. 6 runs are then redone).")
+    s.add_argument("--out", default=None, help="library folder (default: runs/behaviours)")
+    s.add_argument("--replace-shipped", action="store_true",
+                   help="write into the shipped library, connrl/data/behaviours/, which the Ch. 6 runs use")
     s.add_argument("--seed", type=_seed, default=0, help="seed of the first behaviour (default 0, the shipped one)")
     s.add_argument("--trials", type=_positive_int, default=None,
                    help="trials per behaviour (default: the plan's 1500)")

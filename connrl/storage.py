@@ -46,6 +46,9 @@ class FileError(ValueError):
         self.path, self.field, self.problem = Path(path), field, problem
         super().__init__(f"{path}: {field + ': ' if field else ''}{problem}")
 
+    def __reduce__(self):  # raised in a worker process, it reaches the CLI as the same one line
+        return type(self), (self.path, self.problem, self.field)
+
 
 # --------------------------------------------------------------------------------------------------- writing
 

@@ -473,3 +473,76 @@ def test_out_of_range_settings_are_refused_before_any_run(name, setting, message
         cli.main(["sweep", name, "--set", setting, "--seeds", "0:1", "--out", str(tmp_path), "--workers", "1"])
     assert message in _one_line(e.value)
     assert not any(tmp_path.iterdir())
+
+
+# ------------------------------------------------------------------------- second run, Ray, pages, library
+
+def test_a_second_run_into_the_same_folder_is_refused_at_once(tmp_path, monkeypatch):
+    import connrl.experiments.runner as runner
+
+    monkeypatch.setattr(runner, "execute_job", lambda job: pytest.fail("a run started"))
+    folder = tmp_path / "pole-full"
+    folder.mkdir()
+    with runner.run_lock(folder):  # as another connrl run holds it
+        with pytest.raises(SystemExit) as exc:
+            cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(tmp_path), "--quiet", "--workers", "1"])
+    assert "another connrl run is writing to" in _one_line(exc.value)
+
+
+@pytest.mark.parametrize("address, says", [("127.0.0.1:1", "no Ray cluster answers at 127.0.0.1:1"),
+                                           ("nonsense", "--address must be HOST:PORT")])
+def test_a_ray_address_that_does_not_answer_is_refused_before_any_run(address, says, tmp_path, monkeypatch):
+    pytest.importorskip("ray")
+    import connrl.experiments.runner as runner
+
+    monkeypatch.setattr(runner, "run_experiment", lambda *a, **k: pytest.fail("a run started"))
+    t0 = time.monotonic()
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(tmp_path), "--executor", "ray",
+                  "--address", address])
+    assert says in _one_line(exc.value) and time.monotonic() - t0 < 15
+
+
+def test_reproduce_refuses_a_doc_it_cannot_write_before_any_run(tmp_path, monkeypatch):
+    import connrl.experiments.runner as runner
+
+    monkeypatch.setattr(runner, "run_experiment", lambda *a, **k: pytest.fail("a run started"))
+    (tmp_path / "page").mkdir()
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["reproduce", "--chapters", "4", "--profile", "tiny", "--out", str(tmp_path / "out"),
+                  "--doc", str(tmp_path / "page")])
+    assert "is a folder" in _one_line(exc.value)
+    (tmp_path / "file").write_text("keep me")
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["reproduce", "--chapters", "4", "--profile", "tiny", "--out", str(tmp_path / "out"),
+                  "--doc", str(tmp_path / "file" / "RESULTS.md")])
+    assert "cannot write to" in _one_line(exc.value)
+    assert (tmp_path / "file").read_text() == "keep me"
+
+
+def test_train_behaviours_writes_under_runs_unless_told_to_replace_the_shipped_library(tmp_path, monkeypatch):
+    import connrl.experiments.behaviours as behaviours
+
+    written = []
+    monkeypatch.setattr(behaviours, "train_library", lambda out, **kw: written.append(Path(out)) or {})
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["train-behaviours", "--trials", "2"]) == 0
+    assert written == [Path("runs/behaviours")]
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["train-behaviours", "--out", "x", "--replace-shipped"])
+    assert "not both" in _one_line(exc.value)
+
+
+def test_a_plot_is_never_written_through_a_planted_link(tmp_path):
+    import matplotlib.pyplot as plt
+
+    from connrl.report.plots import save_figure
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me")
+    (tmp_path / "curve.png").symlink_to(victim)
+    fig, _ = plt.subplots()
+    save_figure(fig, tmp_path / "curve.png")
+    plt.close(fig)
+    assert victim.read_text() == "keep me" and not (tmp_path / "curve.png").is_symlink()
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []

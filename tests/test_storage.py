@@ -201,3 +201,13 @@ def test_a_record_with_a_non_finite_or_missing_number_is_damaged(tmp_path, old, 
     path.write_text(text.replace(old, new, 1))
     rec, damage = load_record(tmp_path / "seed-0")
     assert rec is None and damage
+
+
+def test_a_file_error_raised_in_a_worker_reaches_the_parent_as_the_same_line():
+    import pickle
+
+    from connrl.experiments.store import DamagedFile
+
+    for exc in (FileError("a/b.json", "is 3; it must be <= 2", "x"), DamagedFile("a/s.json", "empty", "run again")):
+        back = pickle.loads(pickle.dumps(exc))
+        assert type(back) is type(exc) and str(back) == str(exc)

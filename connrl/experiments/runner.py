@@ -14,12 +14,15 @@ same jobs elsewhere.
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import hashlib
 import json
 import multiprocessing as mp
 import os
 import queue
 import re
+import socket
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
@@ -243,6 +246,8 @@ class RayExecutor:
         import ray
 
         started = not ray.is_initialized()
+        if started and self.address:
+            check_reachable(self.address)
         if started:  # "local": a fresh instance here, whatever RAY_ADDRESS says; else the cluster at address
             try:
                 ray.init(address=self.address or "local", num_cpus=None if self.address else self.workers,
@@ -269,6 +274,23 @@ class RayExecutor:
 
 
 EXECUTORS = ("process", "ray")
+CONNECT_TIMEOUT_S = 10.0
+
+
+def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
+    """A Ray address of the form [ray://]HOST:PORT must accept a TCP connection within ``timeout`` seconds (Ray
+    itself retries a dead address for minutes, silently); ``ExecutorError`` in one line otherwise."""
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not port.isdigit() or not host:
+        if address == "auto":
+            return  # Ray finds the local cluster itself
+        raise ExecutorError(f"--address must be HOST:PORT (e.g. 10.0.0.5:6379) or auto, got {address!r}")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise ExecutorError(f"no Ray cluster answers at {address} within {timeout:g} s "
+                            f"({exc.strerror or type(exc).__name__}); start one with `ray start --head` there, "
+                            "or leave out --address to run on a local instance") from None
 
 
 class ExecutorError(RuntimeError):
@@ -358,22 +380,45 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     out = Path(out)
     jobs = make_jobs(spec, profile, runs, seed, out)
     prepare_outputs(out / spec.name, jobs)
-    records, todo = [], []
-    for job in jobs:
-        rec, damage = load_record(job.path, job)
-        if damage:
-            on_damaged(Path(job.path).with_suffix(".json"), damage)
-        (records.append(rec) if rec is not None else todo.append(job))
-    reused = len(records)
-    workers = workers or os.cpu_count() or 1
-    t0 = time.perf_counter()
-    if todo:
-        records.extend(_execute(todo, min(workers, len(todo)), show_progress, spec.name, executor, address))
-    wall = time.perf_counter() - t0
-    summary = summarize(spec, profile, seed, records, wall)
-    summary_path = out / spec.name / "summary.json"
-    atomic_write_text(summary_path, strict_json(summary, indent=1, default=json_default))
+    with run_lock(out / spec.name):
+        records, todo = [], []
+        for job in jobs:
+            rec, damage = load_record(job.path, job)
+            if damage:
+                on_damaged(Path(job.path).with_suffix(".json"), damage)
+            (records.append(rec) if rec is not None else todo.append(job))
+        reused = len(records)
+        workers = workers or os.cpu_count() or 1
+        t0 = time.perf_counter()
+        if todo:
+            records.extend(_execute(todo, min(workers, len(todo)), show_progress, spec.name, executor, address))
+        wall = time.perf_counter() - t0
+        summary = summarize(spec, profile, seed, records, wall)
+        summary_path = out / spec.name / "summary.json"
+        atomic_write_text(summary_path, strict_json(summary, indent=1, default=json_default))
     return RunOutcome(summary, summary_path, records, len(todo), reused)
+
+
+@contextlib.contextmanager
+def run_lock(folder: Path):
+    """Hold ``FOLDER/.connrl-run.lock`` while a run writes there: a second ``connrl run`` of the same experiment into
+    the same folder is refused at once (``BlockingIOError`` in one line) instead of computing everything twice. The
+    lock is the OS's (released even when the holder is killed); where ``fcntl`` is missing (Windows) there is none."""
+    try:
+        import fcntl
+    except ImportError:
+        yield
+        return
+    fd = os.open(folder / ".connrl-run.lock", os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise BlockingIOError(errno.EWOULDBLOCK, f"another connrl run is writing to {folder}; wait for it to "
+                                  "finish (its finished runs are then reused) or give another --out") from None
+        yield
+    finally:
+        os.close(fd)
 
 
 def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind: str = "process",

@@ -33,7 +33,11 @@ class DamagedFile(ValueError):
 
     def __init__(self, path, reason: str, fix: str = ""):
         self.path, self.reason = Path(path), reason
+        self.fix = fix
         super().__init__(f"{path} is damaged ({reason})" + (f"; {fix}" if fix else ""))
+
+    def __reduce__(self):  # raised in a worker process, it reaches the CLI as the same one line
+        return type(self), (self.path, self.reason, self.fix)
 
 
 class _NotStrict(ValueError):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import os
+import io
 import sys
 from pathlib import Path
 
@@ -14,6 +14,7 @@ import numpy as np  # noqa: E402
 
 from connrl.experiments.runner import missing_runs, stored_runs  # noqa: E402
 from connrl.experiments.spec import ExperimentSpec  # noqa: E402
+from connrl.storage import atomic_write_bytes  # noqa: E402
 
 
 def curves_on_grid(records: list[dict]) -> tuple[np.ndarray, np.ndarray]:
@@ -29,9 +30,9 @@ def curves_on_grid(records: list[dict]) -> tuple[np.ndarray, np.ndarray]:
 def save_figure(fig, file: Path) -> Path:
     """Write ``fig`` to ``file`` (format from its suffix) atomically: a reader never sees half a plot."""
     file.parent.mkdir(parents=True, exist_ok=True)
-    tmp = file.with_name(f".{file.stem}.{os.getpid()}.tmp{file.suffix}")  # two writers never share one
-    fig.savefig(tmp, format=file.suffix[1:])
-    tmp.replace(file)
+    buf = io.BytesIO()
+    fig.savefig(buf, format=file.suffix[1:])
+    atomic_write_bytes(file, buf.getvalue())  # a fresh temp name of its own (never through a planted link)
     return file
 
 
