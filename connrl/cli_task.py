@@ -88,13 +88,19 @@ def _stop_signals():
 
 
 @contextlib.contextmanager
-def _uninterrupted():
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN), signal.signal(signal.SIGTERM, signal.SIG_IGN)
+def _uninterrupted(deliver: bool):
+    """SIGINT / SIGTERM wait until the block (a save) is done; with ``deliver`` one that came meanwhile then stops
+    the training as it would have (a signal that met a checkpoint is not lost)."""
+    pending: list[int] = []
+    old = (signal.signal(signal.SIGINT, lambda signum, frame: pending.append(signum)),
+           signal.signal(signal.SIGTERM, lambda signum, frame: pending.append(signum)))
     try:
         yield
     finally:
         signal.signal(signal.SIGINT, old[0])
         signal.signal(signal.SIGTERM, old[1])
+    if deliver and pending:
+        raise KeyboardInterrupt if pending[0] == signal.SIGINT else _Terminated
 
 
 def cmd_train(args) -> int:
@@ -121,11 +127,11 @@ def cmd_train(args) -> int:
     returns: list[tuple[int, float]] = []
     saved: list[int] = []  # the steps of the latest good save
 
-    def save(agent) -> None:
-        with _uninterrupted():
+    def save(agent, deliver: bool = False) -> None:
+        with _uninterrupted(deliver):
             agent.save(out)
             _write_curve(out, returns, args)
-        saved.append(agent.steps_done)
+            saved.append(agent.steps_done)
 
     def checkpoint(agent, r) -> bool:
         returns.append((agent.steps_done, r))
@@ -133,7 +139,7 @@ def cmd_train(args) -> int:
             return False
         if args.checkpoint_every and agent.steps_done - (saved[-1] if saved else 0) >= args.checkpoint_every:
             try:
-                save(agent)
+                save(agent, deliver=True)
             except OSError:  # a full disk: stop here; the last save below says what was not saved
                 return False
         return True

@@ -100,3 +100,17 @@ def test_train_on_a_full_disk_says_the_agent_was_not_saved(tiny_disk, tmp_path):
         f"the line does not say that the agent was not saved and why: {ft.describe(proc)}"
     left = [p.name for p in tiny_disk.rglob("*") if p.name.endswith(".tmp")]
     assert not left, f"temporary files left behind: {left}"
+
+
+def test_a_signal_that_meets_a_checkpoint_waits_for_the_save_and_then_stops_training():
+    from connrl.cli_task import _uninterrupted
+
+    done = []
+    with pytest.raises(KeyboardInterrupt):
+        with _uninterrupted(deliver=True):
+            os.kill(os.getpid(), signal.SIGINT)  # arrives mid-save
+            done.append("saved")
+    assert done == ["saved"]
+    with _uninterrupted(deliver=False):  # the final save: already stopping, nothing more to do
+        os.kill(os.getpid(), signal.SIGTERM)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
+from connrl.agents.base import LessonAgent, ReplayConfig
 from connrl.core.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
 from connrl.core.lessons import Lesson
-from connrl.core.replay import ReplayParams, replay_ahc
+from connrl.core.replay import replay_ahc
 from connrl.nets import OAON, NetConfig
 
 
@@ -40,18 +40,10 @@ class AHCON(LessonAgent):
     """Adaptive heuristic critic (Fig. 3.2) with optional backward replay (Fig. 5.1b) and teaching."""
 
     def __init__(self, config: AHCONConfig, n_actions: int, rng: np.random.Generator, policy=None, planner=None):
-        self.config = config
-        self.n_actions = n_actions
-        self.rng = rng
+        super().__init__(config, n_actions, rng, stuck=config.stuck)
         self.v = OAON(config.v_net, 1, rng)
         # any object with values/update_error works as the policy net (Ch. 4's rotated global net, 4.2.4)
         self.policy = policy if policy is not None else OAON(config.policy_net, n_actions, rng)
-        self.explore = Exploration(config.temperature, config.stuck)
-        self.book = LessonBook(config.replay)
-        self.trial = 0
-        self.learning = True
-        self._x: np.ndarray | None = None
-        self.last_probabilities: np.ndarray | None = None
         # relaxation planning with an action model (AHCON-M, 3.6.1): connrl.core.planning.RelaxationPlanner
         self.planner = planner
 
@@ -65,7 +57,7 @@ class AHCON(LessonAgent):
             # test trials never call observe(), so the input must come from obs, not the cached _x
             self._x = self.encode(obs)
         x = self._x
-        t = 0.0 if greedy else self.explore.temperature(info)
+        t = self.temperature(info, greedy)
         merits = self.policy.values(x)
         if self.planner is not None and self.learning and not greedy and self.planner.plan(self, x, merits, t):
             merits = self.policy.values(x)  # plan before choosing (3.6.1)
@@ -75,10 +67,7 @@ class AHCON(LessonAgent):
     def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
         x, y = self._x, self.encode(next_obs)
         if self.config.online:
-            u = 0.0 if terminated else self.v.value(y, 0)
-            target = reward + self.config.gamma * u  # Fig. 3.2 step 4
-            if self.config.target_clip is not None:
-                target = min(target, self.config.target_clip)
+            target = self.online_target(reward, 0.0 if terminated else self.v.value(y, 0))  # Fig. 3.2 step 4
             e = self.v.update(x, 0, target)  # step 5
             self.policy.update_error(x, action, target - e)  # step 6
         if self.planner is not None:
@@ -88,8 +77,5 @@ class AHCON(LessonAgent):
         self._x = y
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
-        r = self.config.replay
-        params = ReplayParams(gamma=self.config.gamma, lam=self.config.lam, temperature=self.explore.base,
-                              p_threshold=p_threshold, batch=r.batch, clip=self.config.target_clip)
-        replay_ahc(self.v, self.policy, lesson, params)
+        replay_ahc(self.v, self.policy, lesson, self.replay_params(p_threshold))
 

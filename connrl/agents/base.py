@@ -16,6 +16,7 @@ A run drives an agent like this (``connrl.core.rollout.run_trial``)::
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Protocol
@@ -25,6 +26,7 @@ import numpy as np
 from connrl.core.exploration import StuckConfig, StuckDetector
 from connrl.core.grouping import check_mu_range
 from connrl.core.lessons import Lesson, LessonMemory, LessonRecorder
+from connrl.core.replay import ReplayParams
 
 
 class Agent(Protocol):
@@ -148,20 +150,63 @@ class Exploration:
         return self.base * (self.detector.factor(pos) if pos is not None else 1.0)
 
 
-class LessonAgent:
-    """What QCON and AHCON share: input encoding, lesson filing, and the replay schedule of ``learn``.
+class LearnerConfig(Protocol):
+    """What every learner's config holds (QCONConfig, AHCONConfig, RecurrentQConfig, RecurrentModelConfig)."""
 
-    Subclasses set ``config`` (with ``replay``), ``rng``, ``explore`` and ``book`` and implement
-    ``replay_lesson(lesson, p_threshold)``.
+    temperature: object  # Boltzmann temperature over trials: a callable trial -> T
+    gamma: float
+    lam: float
+    replay: ReplayConfig | None
+    target_clip: float | None
+
+
+class LessonAgent:
+    """The shared base of the thesis's learners (QCON, AHCON, their -R/-T/-M forms, the memory agents, the
+    behaviour-level learners): the constructor, input encoding, the temperature, the on-line target, the replay
+    settings (built once), lesson filing and the replay schedule of ``learn``. Subclasses make their nets and
+    implement ``act``, ``observe`` and ``replay_lesson(lesson, p_threshold)``.
+
+    ``merit_scale``: the Boltzmann choice, on-line and in replay's non-policy test, sees merits / ``merit_scale``
+    (Ch. 5 and 6: Q in +-100, temperatures on the +-1 scale). ``batch`` overrides ``config.replay.batch`` for
+    learners that replay only in batch mode (recurrent-Q, 7.5).
     """
 
-    config: object
-    rng: np.random.Generator
-    explore: Exploration
-    book: LessonBook
     # replay no more experienced lessons than are stored: "fewer lessons were replayed in the beginning"
     # (5.3.5, footnote 1); Ch. 4 samples n lessons with replacement from the start (App. A.2)
     replay_at_most_stored: bool = False
+
+    def __init__(self, config: LearnerConfig, n_actions: int, rng: np.random.Generator, *,
+                 stuck: StuckConfig | None = None, merit_scale: float = 1.0, batch: bool | None = None):
+        if not merit_scale > 0:
+            raise ValueError(f"merit_scale must be > 0, got {merit_scale}")
+        self.config, self.n_actions, self.rng = config, n_actions, rng
+        self.merit_scale = float(merit_scale)
+        self.explore = Exploration(config.temperature, stuck)
+        self.book = LessonBook(config.replay)
+        self.trial, self.learning = 0, True
+        self._x: np.ndarray | None = None
+        self.last_probabilities: np.ndarray | None = None
+        r = config.replay
+        self._replay = ReplayParams(gamma=config.gamma, lam=config.lam, clip=config.target_clip,
+                                    batch=(r is not None and r.batch) if batch is None else batch)
+
+    def temperature(self, info: dict | None, greedy: bool) -> float:
+        """T of this step's Boltzmann choice on the raw merits: 0 when greedy, else the trial's (raised when stuck)
+        times ``merit_scale``."""
+        return 0.0 if greedy else self.explore.temperature(info) * self.merit_scale
+
+    def online_target(self, reward: float, next_value: float) -> float:
+        """Fig. 3.2 / 3.4 step 4: r + gamma * next_value, truncated at ``target_clip`` (4.2.4). The caller passes
+        next_value 0 at a terminal state only: a time limit is not one, and the target bootstraps through it."""
+        target = reward + self.config.gamma * next_value
+        clip = self.config.target_clip
+        return target if clip is None else min(target, clip)
+
+    def replay_params(self, p_threshold: float) -> ReplayParams:
+        """How the next lesson is replayed (Fig. 5.1): the non-policy test at this trial's temperature (on the
+        ``merit_scale`` the choice used) with threshold ``p_threshold``."""
+        return dataclasses.replace(self._replay, temperature=self.explore.base * self.merit_scale,
+                                   p_threshold=p_threshold)
 
     def encode(self, obs) -> np.ndarray:
         """Network input for an observation; memoryless agents feed the observation as it is."""

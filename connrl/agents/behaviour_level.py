@@ -12,6 +12,9 @@ Temperatures act on Q / ``merit_scale`` (Q in +-100 with the reward of 100), as 
 ``BehaviourRecurrentQ`` is Ch. 8's learner (8.3): the same choice over behaviours, with recurrent Q-nets (7.3's
 recurrent-Q: context units reset each trial, advanced by the chosen behaviour's net) learning only by batch replay,
 one BPTT step per replayed lesson, with the same W-weighted non-policy test and applicable-only target max.
+
+Both learners are handed a ``BehaviourChoice``: the rule that makes W, the choice it weights, and what each lesson
+keeps of it (W per step, applicability per state).
 """
 
 from __future__ import annotations
@@ -22,132 +25,159 @@ from connrl.agents.memory import RecurrentQ, RecurrentQConfig, replay_recurrent_
 from connrl.agents.qcon import QCON, QCONConfig
 from connrl.core.exploration import persistence_weights, weighted_boltzmann_probabilities
 from connrl.core.lessons import Lesson
-from connrl.core.replay import ReplayParams
-
-
-class _BehaviourChoice:
-    """Eq. 6.6's weighted choice among behaviours and what replay keeps of it; the memoryless and the recurrent
-    learner share it (placed first among the bases: its methods wrap the learner's own)."""
-
-    replay_at_most_stored = True  # "approximately 60 lessons" (6.6): fewer while fewer are stored, as in 5.3.5
-
-    def __init__(self, config: QCONConfig | RecurrentQConfig, n_behaviours: int, rng: np.random.Generator, *,
-                 persistence: bool = False, persist_weight: float = 100.0, merit_scale: float = 100.0,
-                 target_max: str = "all"):
-        super().__init__(config, n_behaviours, rng)
-        if not merit_scale > 0 or not persist_weight > 0:
-            raise ValueError(f"merit_scale and persist_weight must be > 0, got {merit_scale}, {persist_weight}")
-        if target_max not in TARGET_MAX:
-            raise ValueError(f"target_max must be one of {TARGET_MAX}, got {target_max!r}")
-        self.target_max = target_max
-        self.persistence, self.persist_weight, self.merit_scale = bool(persistence), float(persist_weight), merit_scale
-        self._begin_choice(None)
-
-    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
-        super().begin_trial(obs, info, trial=trial, learning=learning)
-        self._begin_choice(info)
-
-    def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
-        if self.target_max == "applicable" and (info is None or "applicable" not in info):
-            raise ValueError("target_max='applicable' needs info['applicable'] of the next state from a "
-                             "behaviour-level environment (connrl.tasks.recharge.BehaviourEnv)")
-        super().observe(action, reward, next_obs, terminated, truncated, info)
-        self._trial_weights.append(self._w)
-        if info is not None and "applicable" in info:
-            self._trial_applicable.append(_applicable(info))
-
-    def end_trial(self) -> None:
-        if not self.learning:
-            self.book.recorder.finish(False, False)
-            return
-        lesson = self.book.close_trial()
-        if lesson is not None:
-            lesson.meta["weights"] = np.array(self._trial_weights)  # W of each step, for the non-policy test
-            if len(self._trial_applicable) == len(lesson) + 1:
-                lesson.meta["applicable"] = np.array(self._trial_applicable)  # each state's, for the target's max
-
-    def _begin_choice(self, info) -> None:
-        self._active, self._was_applicable, self._w = None, None, None
-        self._trial_weights: list[np.ndarray] = []
-        self._trial_applicable = [_applicable(info)] if info is not None and "applicable" in info else []
-
-    def weights(self, info: dict) -> np.ndarray:
-        """W(b) for the state of ``info`` (applicability, and the persistence rule when on)."""
-        applicable = np.asarray(info["applicable"], dtype=bool)
-        if not self.persistence:
-            return applicable.astype(np.float64)
-        return persistence_weights(applicable, self._was_applicable, self._active,
-                                   bool(info.get("behaviour_goal", False)), self.persist_weight)
-
-    def _choose(self, q: np.ndarray, info, greedy: bool) -> int:
-        if info is None or "applicable" not in info:
-            raise ValueError(f"{type(self).__name__} needs info['applicable'] from a behaviour-level environment "
-                             "(connrl.tasks.recharge.BehaviourEnv)")
-        w = self.weights(info)
-        t = 0.0 if greedy else self.explore.temperature(info) * self.merit_scale
-        p = weighted_boltzmann_probabilities(q, w, t)
-        # greedy tests take the first best without drawing, so testing never moves the learner's random stream
-        b = int(np.argmax(p)) if t == 0 else int(self.rng.choice(p.size, p=p))
-        self._active, self._was_applicable, self._w = b, np.asarray(info["applicable"], dtype=bool), w
-        self.last_probabilities, self.last_q = p, q
-        return b
-
-    def _replay_options(self, lesson: Lesson, weights, allowed):
-        if weights is not None or allowed is not None:
-            raise ValueError("behaviour-level learners replay the weights and applicability kept with each lesson")
-        allowed = lesson.meta.get("applicable") if self.target_max == "applicable" else None
-        return lesson.meta.get("weights"), allowed
-
-
-class BehaviourQCON(_BehaviourChoice, QCON):
-    """QCON over behaviours with W(b) of Eq. 6.6 (see the module docstring)."""
-
-    def act(self, obs, info=None, *, greedy: bool = False) -> int:
-        if not self.learning or self._x is None:
-            self._x = self.encode(obs)
-        return self._choose(self.q.values(self._x), info, greedy)
-
-    def next_value(self, y: np.ndarray, info: dict | None) -> float:
-        """With ``target_max="applicable"``: the max over the next state's applicable behaviours (all of them when
-        none is), the rule replay's ``allowed`` mask applies too."""
-        v = self.q.values(y)
-        if self.target_max == "all":
-            return float(v.max())
-        ok = _applicable(info)
-        return float(v[ok].max() if ok.any() else v.max())
-
-    def replay_params(self, p_threshold: float) -> ReplayParams:
-        r = self.config.replay
-        return ReplayParams(gamma=self.config.gamma, lam=self.config.lam,
-                            temperature=self.explore.base * self.merit_scale, p_threshold=p_threshold, batch=r.batch)
-
-    def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
-        """Replay with the W each step was chosen under and (``target_max="applicable"``) each state's applicable
-        behaviours, both kept with the lesson; ``weights`` and ``allowed`` come from the lesson, never the caller."""
-        super().replay_lesson(lesson, p_threshold, *self._replay_options(lesson, weights, allowed))
-
-
-class BehaviourRecurrentQ(_BehaviourChoice, RecurrentQ):
-    """Recurrent-Q over behaviours (Ch. 8, 8.3; see the module docstring): no on-line learning, batch replay."""
-
-    def act(self, obs, info=None, *, greedy: bool = False) -> int:
-        self._x = np.asarray(obs, dtype=np.float64).ravel()
-        b = self._choose(self.net.values(self._x), info, greedy)
-        self.net.advance(b)  # the chosen behaviour's net makes the next context (7.4)
-        return b
-
-    def replay_params(self, p_threshold: float) -> ReplayParams:
-        return ReplayParams(gamma=self.config.gamma, lam=self.config.lam,
-                            temperature=self.explore.base * self.merit_scale, p_threshold=p_threshold, batch=True,
-                            clip=self.config.target_clip)
-
-    def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
-        w, ok = self._replay_options(lesson, weights, allowed)
-        replay_recurrent_q(self.net, lesson, self.replay_params(p_threshold), w, ok)
-
 
 TARGET_MAX = ("all", "applicable")
 
 
 def _applicable(info: dict) -> np.ndarray:
     return np.asarray(info["applicable"], dtype=bool)
+
+
+class BehaviourChoice:
+    """Eq. 6.6's weighted choice among behaviours, and what replay keeps of it.
+
+    ``persistence``: Experiment 3's W of ``persist_weight`` for the behaviour being followed (6.5.1).
+    ``target_max``: "applicable" takes the Q target's max over the next state's applicable behaviours (on-line and in
+    replay), "all" over every behaviour.
+    """
+
+    def __init__(self, *, persistence: bool = False, persist_weight: float = 100.0, target_max: str = "all"):
+        if not persist_weight > 0:
+            raise ValueError(f"persist_weight must be > 0, got {persist_weight}")
+        if target_max not in TARGET_MAX:
+            raise ValueError(f"target_max must be one of {TARGET_MAX}, got {target_max!r}")
+        self.persistence, self.persist_weight, self.target_max = bool(persistence), float(persist_weight), target_max
+        self.begin_trial(None)
+
+    def begin_trial(self, info: dict | None) -> None:
+        self._active, self._was_applicable, self._w = None, None, None
+        self._trial_weights: list[np.ndarray] = []
+        self._trial_applicable = [_applicable(info)] if info is not None and "applicable" in info else []
+
+    def weights(self, info: dict) -> np.ndarray:
+        """W(b) for the state of ``info`` (applicability, and the persistence rule when on)."""
+        applicable = _applicable(info)
+        if not self.persistence:
+            return applicable.astype(np.float64)
+        return persistence_weights(applicable, self._was_applicable, self._active,
+                                   bool(info.get("behaviour_goal", False)), self.persist_weight)
+
+    def choose(self, q: np.ndarray, info: dict | None, t: float, rng: np.random.Generator) -> tuple[int, np.ndarray]:
+        """(behaviour, Eq. 6.6's probabilities) at temperature ``t`` on the raw Q-values; t = 0 takes the first
+        best without a draw, so greedy tests never move the learner's random stream."""
+        if info is None or "applicable" not in info:
+            raise ValueError("a behaviour-level learner needs info['applicable'] from a behaviour-level environment "
+                             "(connrl.tasks.recharge.BehaviourEnv)")
+        w = self.weights(info)
+        p = weighted_boltzmann_probabilities(q, w, t)
+        b = int(np.argmax(p)) if t == 0 else int(rng.choice(p.size, p=p))
+        self._active, self._was_applicable, self._w = b, _applicable(info), w
+        return b, p
+
+    def observed(self, info: dict | None) -> None:
+        """A learning step ended in the state of ``info``: keep the step's W and the new state's applicability."""
+        if self.target_max == "applicable" and (info is None or "applicable" not in info):
+            raise ValueError("target_max='applicable' needs info['applicable'] of the next state from a "
+                             "behaviour-level environment (connrl.tasks.recharge.BehaviourEnv)")
+        self._trial_weights.append(self._w)
+        if info is not None and "applicable" in info:
+            self._trial_applicable.append(_applicable(info))
+
+    def file(self, lesson: Lesson | None) -> None:
+        """Keep with the trial's lesson the W of each step (the non-policy test) and each state's applicability
+        (the target's max)."""
+        if lesson is None:
+            return
+        lesson.meta["weights"] = np.array(self._trial_weights)
+        if len(self._trial_applicable) == len(lesson) + 1:
+            lesson.meta["applicable"] = np.array(self._trial_applicable)
+
+    def next_value(self, q_next: np.ndarray, info: dict | None) -> float:
+        """The target's max over the next state's Q-values: over its applicable behaviours with
+        ``target_max="applicable"`` (all of them when none is), the rule replay's ``allowed`` mask applies too."""
+        if self.target_max == "all":
+            return float(q_next.max())
+        ok = _applicable(info)
+        return float(q_next[ok].max() if ok.any() else q_next.max())
+
+    def replay_options(self, lesson: Lesson, weights, allowed) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """(W per step, allowed behaviours per state) kept with ``lesson``; never the caller's."""
+        if weights is not None or allowed is not None:
+            raise ValueError("behaviour-level learners replay the weights and applicability kept with each lesson")
+        return lesson.meta.get("weights"), lesson.meta.get("applicable") if self.target_max == "applicable" else None
+
+
+class BehaviourQCON(QCON):
+    """QCON over behaviours with W(b) of Eq. 6.6 (see the module docstring)."""
+
+    replay_at_most_stored = True  # "approximately 60 lessons" (6.6): fewer while fewer are stored, as in 5.3.5
+
+    def __init__(self, config: QCONConfig, n_behaviours: int, rng: np.random.Generator,
+                 choice: BehaviourChoice | None = None, *, merit_scale: float = 100.0):
+        super().__init__(config, n_behaviours, rng, merit_scale=merit_scale)
+        self.choice = choice if choice is not None else BehaviourChoice()
+
+    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
+        super().begin_trial(obs, info, trial=trial, learning=learning)
+        self.choice.begin_trial(info)
+
+    def act(self, obs, info=None, *, greedy: bool = False) -> int:
+        if not self.learning or self._x is None:
+            self._x = self.encode(obs)
+        self.last_q = self.q.values(self._x)
+        b, self.last_probabilities = self.choice.choose(self.last_q, info, self.temperature(info, greedy), self.rng)
+        return b
+
+    def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
+        self.choice.observed(info)  # first: a missing info['applicable'] is refused before the step is learned from
+        super().observe(action, reward, next_obs, terminated, truncated, info)
+
+    def next_value(self, y: np.ndarray, info: dict | None) -> float:
+        return self.choice.next_value(self.q.values(y), info)
+
+    def end_trial(self) -> None:
+        if not self.learning:
+            self.book.recorder.finish(False, False)
+            return
+        self.choice.file(self.book.close_trial())
+
+    def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
+        """Replay with the W each step was chosen under and (``target_max="applicable"``) each state's applicable
+        behaviours, both kept with the lesson."""
+        super().replay_lesson(lesson, p_threshold, *self.choice.replay_options(lesson, weights, allowed))
+
+
+class BehaviourRecurrentQ(RecurrentQ):
+    """Recurrent-Q over behaviours (Ch. 8, 8.3; see the module docstring): no on-line learning, batch replay."""
+
+    replay_at_most_stored = True
+
+    def __init__(self, config: RecurrentQConfig, n_behaviours: int, rng: np.random.Generator,
+                 choice: BehaviourChoice | None = None, *, merit_scale: float = 100.0):
+        super().__init__(config, n_behaviours, rng, merit_scale=merit_scale)
+        self.choice = choice if choice is not None else BehaviourChoice()
+
+    def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
+        super().begin_trial(obs, info, trial=trial, learning=learning)
+        self.choice.begin_trial(info)
+
+    def act(self, obs, info=None, *, greedy: bool = False) -> int:
+        self._x = np.asarray(obs, dtype=np.float64).ravel()
+        self.last_q = self.net.values(self._x)  # the probe of Exp. 8 reads it
+        b, self.last_probabilities = self.choice.choose(self.last_q, info, self.temperature(info, greedy), self.rng)
+        self.net.advance(b)  # the chosen behaviour's net makes the next context (7.4)
+        return b
+
+    def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
+        self.choice.observed(info)
+        super().observe(action, reward, next_obs, terminated, truncated, info)
+
+    def end_trial(self) -> None:
+        if not self.learning:
+            self.book.recorder.finish(False, False)
+            return
+        self.choice.file(self.book.close_trial())
+
+    def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
+        w, ok = self.choice.replay_options(lesson, weights, allowed)
+        replay_recurrent_q(self.net, lesson, self.replay_params(p_threshold), w, ok)

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
+from connrl.agents.base import LessonAgent, ReplayConfig
 from connrl.agents.qcon import QCON, QCONConfig
 from connrl.core.exploration import TemperatureSchedule, boltzmann_select
 from connrl.core.lessons import Lesson
@@ -46,8 +46,7 @@ ON, OFF = 0.5, -0.5  # binary input encoding (5.3.2)
 
 def _select(agent, merits: np.ndarray, info, greedy: bool, force: int | None) -> int:
     """Boltzmann choice (3.4); ``force`` overrides the choice (robustness probe) after the same draw."""
-    t = 0.0 if greedy else agent.explore.temperature(info)
-    a, agent.last_probabilities = boltzmann_select(merits, t, agent.rng)
+    a, agent.last_probabilities = boltzmann_select(merits, agent.temperature(info, greedy), agent.rng)
     if force is not None:
         if not 0 <= int(force) < agent.n_actions:
             raise ValueError(f"force must be an action in [0, {agent.n_actions}), got {force!r}")
@@ -126,9 +125,7 @@ class WindowQ(QCON):
             if self._last_action is not None:
                 self.memory.push(self._last_obs, self._last_action)
             self._x = self.encode(obs)
-        q = self.q.values(self._x)
-        self._q_x = q
-        a = _select(self, q, info, greedy, force)
+        a = _select(self, self.q.values(self._x), info, greedy, force)
         self._last_obs, self._last_action = _raw(obs), a
         return a
 
@@ -177,16 +174,10 @@ class RecurrentQConfig:
 class RecurrentQ(LessonAgent):
     """Recurrent-Q: the Q-function is a recurrent OAON; learning is batch replay after each trial (7.5)."""
 
-    def __init__(self, config: RecurrentQConfig, n_actions: int, rng: np.random.Generator):
-        self.config = config
-        self.n_actions = n_actions
-        self.rng = rng
+    def __init__(self, config: RecurrentQConfig, n_actions: int, rng: np.random.Generator, *,
+                 merit_scale: float = 1.0):
+        super().__init__(config, n_actions, rng, merit_scale=merit_scale, batch=True)  # batch replay only (7.5)
         self.net = RecurrentOAON(config.net, n_actions, rng)
-        self.explore = Exploration(config.temperature, None)
-        self.book = LessonBook(config.replay)
-        self.trial, self.learning = 0, True
-        self._x: np.ndarray | None = None
-        self.last_probabilities: np.ndarray | None = None
 
     def begin_trial(self, obs, info=None, *, trial: int = 0, learning: bool = True) -> None:
         self.net.reset()
@@ -202,10 +193,6 @@ class RecurrentQ(LessonAgent):
     def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
         self.book.recorder.add(self._x, int(action), float(reward), _raw(next_obs))
         self.book.ended = (bool(terminated), bool(truncated))
-
-    def replay_params(self, p_threshold: float) -> ReplayParams:
-        return ReplayParams(gamma=self.config.gamma, lam=self.config.lam, temperature=self.explore.base,
-                            p_threshold=p_threshold, batch=True, clip=self.config.target_clip)
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
         replay_recurrent_q(self.net, lesson, self.replay_params(p_threshold))
@@ -253,21 +240,14 @@ class RecurrentModelQ(LessonAgent):
     """Recurrent-model: a recurrent action model supplies history features to a feed-forward Q-net."""
 
     def __init__(self, config: RecurrentModelConfig, n_actions: int, rng: np.random.Generator):
-        self.config = config
-        self.n_actions = n_actions
-        self.rng = rng
+        super().__init__(config, n_actions, rng)  # the book keeps raw lessons; the latest 70 go to the Q-net
         self.model = RecurrentOAON(config.model, n_actions, rng)
         self.q = OAON(config.q_net, n_actions, rng)
-        self.explore = Exploration(config.temperature, None)
-        self.book = LessonBook(config.replay)  # raw lessons; the latest 70 are replayed into the Q-net
         self.history: list[Lesson] = []  # all past lessons: the model trains on them (7.5 fn. 2)
         self.freeze_model = False  # 7.5.2: "I fixed the model at some point of learning"
         self.track_model_error = False  # measure the model on each new lesson (7.5.1; off: it costs a pass)
         self.last_model_error: dict[str, float] | None = None  # on the latest lesson, before training on it
-        self.trial, self.learning = 0, True
-        self._x: np.ndarray | None = None
         self._xq: np.ndarray | None = None
-        self.last_probabilities: np.ndarray | None = None
 
     def q_input(self, sensation: np.ndarray) -> np.ndarray:
         """Q-net input: the current sensation and the model's context units (Fig. 7.1c)."""
@@ -287,13 +267,9 @@ class RecurrentModelQ(LessonAgent):
 
     def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
         y = _raw(next_obs)
-        if self.config.online:
-            yq = self.q_input(y)
-            u = 0.0 if terminated else float(self.q.values(yq).max())
-            target = reward + self.config.gamma * u  # Fig. 3.4 step 4
-            if self.config.target_clip is not None:
-                target = min(target, self.config.target_clip)
-            self.q.update(self._xq, int(action), target)
+        if self.config.online:  # Fig. 3.4 steps 4-5
+            u = 0.0 if terminated else float(self.q.values(self.q_input(y)).max())
+            self.q.update(self._xq, int(action), self.online_target(reward, u))
         self.book.recorder.add(self._x, int(action), float(reward), y)
         self.book.ended = (bool(terminated), bool(truncated))
 
@@ -353,10 +329,6 @@ class RecurrentModelQ(LessonAgent):
             self.last_model_error = self.model_error(self.history[-1])
         self.train_model()
         super().learn()
-
-    def replay_params(self, p_threshold: float) -> ReplayParams:
-        return ReplayParams(gamma=self.config.gamma, lam=self.config.lam, temperature=self.explore.base,
-                            p_threshold=p_threshold, batch=self.config.replay.batch, clip=self.config.target_clip)
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
         replay_q(self.q, self.q_lesson(lesson), self.replay_params(p_threshold))

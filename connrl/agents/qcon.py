@@ -6,15 +6,15 @@ by default one network per action (OAON, 3.4). Ch. 4's "global" agents pass a si
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from connrl.agents.base import Exploration, LessonAgent, LessonBook, ReplayConfig
+from connrl.agents.base import LessonAgent, ReplayConfig
 from connrl.core.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
 from connrl.core.grouping import group_lesson
 from connrl.core.lessons import Lesson
-from connrl.core.replay import QFunction, ReplayParams, replay_q
+from connrl.core.replay import QFunction, replay_q
 from connrl.nets import OAON, NetConfig
 
 
@@ -30,7 +30,6 @@ class QCONConfig:
     replay: ReplayConfig | None = None  # experience replay after each trial (3.5); None = plain QCON
     target_clip: float | None = None  # truncate Q targets above this value (4.2.4: 1)
     stuck: StuckConfig | None = None  # raise T when stuck (4.2.6, 5.3.4)
-    extra: dict = field(default_factory=dict, compare=False)  # free-form notes recorded with results
 
     def __post_init__(self):
         if not 0 <= self.gamma <= 1:
@@ -43,18 +42,9 @@ class QCON(LessonAgent):
     """Connectionist Q-learning (Fig. 3.4), optionally with backward TD(lambda) replay and teaching."""
 
     def __init__(self, config: QCONConfig, n_actions: int, rng: np.random.Generator,
-                 q: QFunction | None = None, planner=None):
-        self.config = config
-        self.n_actions = n_actions
-        self.rng = rng
+                 q: QFunction | None = None, planner=None, *, merit_scale: float = 1.0):
+        super().__init__(config, n_actions, rng, stuck=config.stuck, merit_scale=merit_scale)
         self.q = q if q is not None else OAON(config.net, n_actions, rng)
-        self.explore = Exploration(config.temperature, config.stuck)
-        self.book = LessonBook(config.replay)
-        self.trial = 0
-        self.learning = True
-        self._x: np.ndarray | None = None
-        self._q_x: np.ndarray | None = None
-        self.last_probabilities: np.ndarray | None = None
         # relaxation planning with an action model (QCON-M, 3.6.2): connrl.core.planning.RelaxationPlanner
         self.planner = planner
         self.grouped_steps = self.groups = 0  # state grouping's tally: mean group size = grouped_steps / groups
@@ -70,22 +60,16 @@ class QCON(LessonAgent):
             self._x = self.encode(obs)
         x = self._x
         q = self.q.values(x)
-        self._q_x = q
-        t = 0.0 if greedy else self.explore.temperature(info)
+        t = self.temperature(info, greedy)
         if self.planner is not None and self.learning and not greedy and self.planner.plan(self, x, q, t):
             q = self.q.values(x)  # plan before choosing (3.6.1), so the choice benefits from the look-ahead
-            self._q_x = q
         a, self.last_probabilities = boltzmann_select(q, t, self.rng)
         return a
 
     def observe(self, action, reward, next_obs, terminated, truncated, info=None) -> None:
         x, y = self._x, self.encode(next_obs)
-        if self.config.online:
-            u = 0.0 if terminated else self.next_value(y, info)
-            target = reward + self.config.gamma * u  # Fig. 3.4 step 4
-            if self.config.target_clip is not None:
-                target = min(target, self.config.target_clip)
-            self.q.update(x, action, target)
+        if self.config.online:  # Fig. 3.4 steps 4-5
+            self.q.update(x, action, self.online_target(reward, 0.0 if terminated else self.next_value(y, info)))
         if self.planner is not None:
             self.planner.observe(x, action, reward, y, terminated)  # a learned model trains on-line (4.2.5)
         self.book.recorder.add(x, action, reward, y)
@@ -95,11 +79,6 @@ class QCON(LessonAgent):
     def next_value(self, y: np.ndarray, info: dict | None) -> float:
         """The on-line target's max_a Q(y, a) (Fig. 3.4 step 4); a subclass may restrict the actions it ranges over."""
         return float(self.q.values(y).max())
-
-    def replay_params(self, p_threshold: float) -> ReplayParams:
-        r = self.config.replay
-        return ReplayParams(gamma=self.config.gamma, lam=self.config.lam, temperature=self.explore.base,
-                            p_threshold=p_threshold, batch=r.batch, clip=self.config.target_clip)
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
         """Replay one lesson (Fig. 5.1), over its groups of similar states when ``replay.grouping`` is set (6.6.4);

@@ -29,9 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from connrl.agents.qcon import QCON, QCONConfig
-from connrl.core.exploration import boltzmann_select
 from connrl.core.lessons import Lesson
-from connrl.core.replay import REPAIRS, ReplayParams, replay_q
+from connrl.core.replay import REPAIRS, replay_q
 
 # ------------------------------------------------------------------------------------------- the agent
 
@@ -58,22 +57,8 @@ class TeachingQCON(QCON):
 
     def __init__(self, config: QCONConfig, n_actions: int, rng: np.random.Generator,
                  teaching: TeachingConfig | None = None, q=None):
-        super().__init__(config, n_actions, rng, q=q)
         self.teaching = teaching or TeachingConfig()
-
-    def act(self, obs, info=None, *, greedy: bool = False) -> int:
-        if not self.learning or self._x is None:
-            self._x = self.encode(obs)
-        q = self.q.values(self._x)
-        self._q_x = q
-        t = 0.0 if greedy else self.explore.temperature(info) * self.teaching.merit_scale
-        a, self.last_probabilities = boltzmann_select(q, t, self.rng)
-        return a
-
-    def replay_params(self, p_threshold: float) -> ReplayParams:
-        p = super().replay_params(p_threshold)
-        return ReplayParams(gamma=p.gamma, lam=p.lam, temperature=p.temperature * self.teaching.merit_scale,
-                            p_threshold=p.p_threshold, batch=p.batch, clip=p.clip)
+        super().__init__(config, n_actions, rng, q=q, merit_scale=self.teaching.merit_scale)
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
         params = self.replay_params(p_threshold)

@@ -14,15 +14,12 @@ same jobs elsewhere.
 
 from __future__ import annotations
 
-import contextlib
-import errno
 import hashlib
 import json
 import multiprocessing as mp
 import os
 import queue
 import re
-import socket
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
@@ -35,6 +32,7 @@ import numpy as np
 from numba.core import event as numba_event
 
 from connrl.core.divergence import Diverged
+from connrl.experiments.guards import ExecutorError, check_reachable, run_lock  # noqa: F401
 from connrl.experiments.spec import ExperimentSpec, RunResult, as_dict, load_callable, qualified_name
 from connrl.experiments.store import (
     DamagedFile,
@@ -274,29 +272,6 @@ class RayExecutor:
 
 
 EXECUTORS = ("process", "ray")
-CONNECT_TIMEOUT_S = 10.0
-
-
-def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
-    """A Ray address of the form [ray://]HOST:PORT must accept a TCP connection within ``timeout`` seconds (Ray
-    itself retries a dead address for minutes, silently); ``ExecutorError`` in one line otherwise."""
-    host, sep, port = address.removeprefix("ray://").rpartition(":")
-    if not sep or not port.isdigit() or not host:
-        if address == "auto":
-            return  # Ray finds the local cluster itself
-        raise ExecutorError(f"--address must be HOST:PORT (e.g. 10.0.0.5:6379) or auto, got {address!r}")
-    try:
-        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
-    except OSError as exc:
-        raise ExecutorError(f"no Ray cluster answers at {address} within {timeout:g} s "
-                            f"({exc.strerror or type(exc).__name__}); start one with `ray start --head` there, "
-                            "or leave out --address to run on a local instance") from None
-
-
-class ExecutorError(RuntimeError):
-    """The executor could not start (said in one line by the CLI)."""
-
-
 def check_executor(executor: str) -> None:
     """Refuse an unknown executor, or Ray when it is not installed, in one line before any run."""
     if executor not in EXECUTORS:
@@ -397,28 +372,6 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
         summary_path = out / spec.name / "summary.json"
         atomic_write_text(summary_path, strict_json(summary, indent=1, default=json_default))
     return RunOutcome(summary, summary_path, records, len(todo), reused)
-
-
-@contextlib.contextmanager
-def run_lock(folder: Path):
-    """Hold ``FOLDER/.connrl-run.lock`` while a run writes there: a second ``connrl run`` of the same experiment into
-    the same folder is refused at once (``BlockingIOError`` in one line) instead of computing everything twice. The
-    lock is the OS's (released even when the holder is killed); where ``fcntl`` is missing (Windows) there is none."""
-    try:
-        import fcntl
-    except ImportError:
-        yield
-        return
-    fd = os.open(folder / ".connrl-run.lock", os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
-    try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            raise BlockingIOError(errno.EWOULDBLOCK, f"another connrl run is writing to {folder}; wait for it to "
-                                  "finish (its finished runs are then reused) or give another --out") from None
-        yield
-    finally:
-        os.close(fd)
 
 
 def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind: str = "process",

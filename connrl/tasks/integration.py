@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from connrl.agents import LinearSchedule, ReplayConfig
-from connrl.agents.behaviour_level import BehaviourRecurrentQ
+from connrl.agents.behaviour_level import BehaviourChoice, BehaviourRecurrentQ
 from connrl.agents.memory import RecurrentQConfig
 from connrl.core.exploration import TemperatureSchedule
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, HIGH_SIZE, HIGH_SIZE_NO_XY
@@ -34,8 +34,9 @@ def make_recurrent_agent(p, rng: np.random.Generator) -> BehaviourRecurrentQ:
                           p_threshold=0.0, p_threshold_oldest=p.p_oldest, batch=True)
     cfg = RecurrentQConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials),
                            gamma=p.gamma, lam=p.lam, replay=replay)
-    return BehaviourRecurrentQ(cfg, len(BEHAVIOUR_TASKS), rng, persistence=p.persistence,
-                               merit_scale=p.success_reward, target_max=p.target_max)
+    return BehaviourRecurrentQ(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
+                                                                               target_max=p.target_max),
+                               merit_scale=p.success_reward)
 
 
 def make_integration_agent(p, rng: np.random.Generator):

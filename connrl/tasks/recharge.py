@@ -24,7 +24,7 @@ import numpy as np
 from gymnasium import spaces
 
 from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
-from connrl.agents.behaviour_level import TARGET_MAX, BehaviourQCON  # noqa: F401  (experiments see it through tasks)
+from connrl.agents.behaviour_level import TARGET_MAX, BehaviourChoice, BehaviourQCON  # noqa: F401  (experiments see it through tasks)
 from connrl.agents.teaching import TeachingConfig, TeachingQCON
 from connrl.core.exploration import StuckConfig, TemperatureSchedule
 from connrl.core.lesson_files import load_lessons, save_lessons
@@ -120,8 +120,9 @@ def make_high_level_agent(p, rng: np.random.Generator, n_inputs: int = HIGH_SIZE
                           grouping=(p.mu_low, p.mu_high) if p.grouping else None)
     cfg = QCONConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials), gamma=p.gamma,
                      lam=p.lam, online=p.online, replay=replay)
-    return BehaviourQCON(cfg, len(BEHAVIOUR_TASKS), rng, persistence=p.persistence, merit_scale=p.success_reward,
-                         target_max=p.target_max)
+    return BehaviourQCON(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
+                                                                         target_max=p.target_max),
+                         merit_scale=p.success_reward)
 
 
 def make_chg_lessons(n: int = CHG_TAUGHT, seed: int = 0, max_tries: int = 100) -> list[Lesson]:

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
-from connrl.agents.behaviour_level import BehaviourQCON
+from connrl.agents.behaviour_level import BehaviourChoice, BehaviourQCON
 from connrl.agents.memory import replay_recurrent_q
 from connrl.core.exploration import TemperatureSchedule
 from connrl.nets import NetConfig
@@ -16,7 +16,8 @@ def agent(persistence=False, seed=0, t=0.05, target_max="all", grouping=None):
                      temperature=TemperatureSchedule.direct(t, t, 10), gamma=0.99, lam=0.8,
                      replay=ReplayConfig(capacity=10, lessons_per_trial=LinearSchedule(2, 2), p_threshold=0.0,
                                          p_threshold_oldest=0.02, grouping=grouping))
-    return BehaviourQCON(cfg, 4, np.random.default_rng(seed), persistence=persistence, target_max=target_max)
+    return BehaviourQCON(cfg, 4, np.random.default_rng(seed),
+                         BehaviourChoice(persistence=persistence, target_max=target_max))
 
 
 def info(app, goal=False):
@@ -37,14 +38,14 @@ def test_persistence_keeps_the_active_behaviour_until_its_goal_or_a_new_applicab
     x = np.zeros(3)
     a.begin_trial(x, info([False, False, True, True]), trial=0, learning=True)
     first = a.act(x, info([False, False, True, True]))
-    w = a.weights(info([False, False, True, True]))
+    w = a.choice.weights(info([False, False, True, True]))
     assert w[first] == 100.0 and sorted(w.tolist()) == [0.0, 0.0, 1.0, 100.0]
-    assert a.weights(info([False, False, True, True], goal=True)).tolist() == [0, 0, 1, 1]  # its goal: no persisting
-    assert a.weights(info([False, True, True, True])).tolist() == [0, 1, 1, 1]  # DP came into sight
+    assert a.choice.weights(info([False, False, True, True], goal=True)).tolist() == [0, 0, 1, 1]  # its goal
+    assert a.choice.weights(info([False, True, True, True])).tolist() == [0, 1, 1, 1]  # DP came into sight
     no = agent(persistence=False)
     no.begin_trial(x, info([False, False, True, True]), trial=0, learning=True)
     no.act(x, info([False, False, True, True]))
-    assert no.weights(info([False, False, True, True])).tolist() == [0, 0, 1, 1]  # Exp. 2
+    assert no.choice.weights(info([False, False, True, True])).tolist() == [0, 0, 1, 1]  # Exp. 2
 
 
 @pytest.mark.parametrize("target_max", ["all", "applicable"])
@@ -106,7 +107,7 @@ def test_persistence_holds_a_hot_choice_and_resets_between_trials():
         picks = [a.act(x, info(app)) for _ in range(100)]
         switches[persistence] = sum(p != q for p, q in zip(picks[:-1], picks[1:], strict=True))
         a.begin_trial(x, info(app), trial=1, learning=True)  # a new trial forgets the active behaviour
-        assert a.weights(info(app)).tolist() == [1, 1, 1, 1]
+        assert a.choice.weights(info(app)).tolist() == [1, 1, 1, 1]
     assert switches[False] > 50 and switches[True] < 10  # 100 : 1 : 1 : 1 keeps the active one ~97 % of steps
 
 
@@ -128,7 +129,8 @@ def recurrent_agent(seed=0, t=0.05, target_max="applicable", persistence=True):
                            temperature=TemperatureSchedule.direct(t, t, 10), gamma=0.99, lam=0.8,
                            replay=ReplayConfig(capacity=10, lessons_per_trial=LinearSchedule(2, 2), p_threshold=0.0,
                                                p_threshold_oldest=0.02, batch=True))
-    return BehaviourRecurrentQ(cfg, 4, np.random.default_rng(seed), persistence=persistence, target_max=target_max)
+    return BehaviourRecurrentQ(cfg, 4, np.random.default_rng(seed),
+                               BehaviourChoice(persistence=persistence, target_max=target_max))
 
 
 def test_recurrent_choice_reads_the_context_the_chosen_behaviours_net_made():
