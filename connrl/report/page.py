@@ -21,6 +21,7 @@ from connrl.experiments import store
 from connrl.experiments.registry import all_experiments
 from connrl.experiments.runner import make_jobs, missing_runs, stored_runs
 from connrl.experiments.store import DamagedFile
+from connrl.report import verdicts
 from connrl.storage import atomic_write_text
 
 
@@ -182,6 +183,7 @@ def write_results(out: Path, doc: Path) -> Path:
         "`summary.json` files that `connrl run` wrote. Do not edit by hand: re-run the experiments and this command.",
         "",
     ]
+    verdicts.BOARD.clear()  # the sections put their claims on it
     covered = set()
     for mod in SECTIONS:
         module = importlib.import_module(mod)
@@ -202,5 +204,6 @@ def write_results(out: Path, doc: Path) -> Path:
     missing = sorted(set(specs) - covered)
     if missing:
         parts += ["## Not yet run", "", "No stored results for: " + ", ".join(f"`{m}`" for m in missing) + ".", ""]
+    parts[4:4] = verdicts.scoreboard(list(verdicts.BOARD))
     atomic_write_text(doc, "\n".join(parts))
     return doc

@@ -204,3 +204,63 @@ def ordering(samples: dict[str, list[float]], expected: list[str], *, higher_is_
         elif verdict == UNDETERMINED and worst == "agrees":
             worst = UNDETERMINED
     return worst, lines
+
+
+# ---------------------------------------------------------------------------------------------- scoreboard
+
+REPRODUCED, PARTLY, NOT_REPRODUCED, NOT_BUILT, OPEN = "reproduced", "partly", "not reproduced", "not built", \
+    "undetermined"
+VERDICTS = (REPRODUCED, PARTLY, NOT_REPRODUCED, NOT_BUILT, OPEN)
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One thesis result item (a figure, a table or a sentence) as the scoreboard lists it."""
+
+    item: str  # "Fig. 6.5", "Table 4.5", "6.6: 'room B ...'"
+    section: str  # thesis section, e.g. "6.6.3"
+    thesis: str  # what the thesis reports, short
+    ours: str  # our number(s), short
+    criterion: str  # the rule the verdict applies
+    verdict: str  # one of VERDICTS
+    cause: str = ""  # the measured cause of a gap, where known
+    anchor: str = ""  # the results page heading it links to (its text; the link is made from it)
+
+    def __post_init__(self):
+        if self.verdict not in VERDICTS:
+            raise ValueError(f"verdict must be one of {VERDICTS}, got {self.verdict!r}")
+
+
+BOARD: list[Claim] = []  # filled by the page's sections while ``connrl results`` writes the page
+
+
+def claim(*args, **kwargs) -> Claim:
+    """Put a claim on the scoreboard of the page being written (and return it)."""
+    c = Claim(*args, **kwargs)
+    BOARD.append(c)
+    return c
+
+
+def _slug(heading: str) -> str:
+    """GitHub's anchor for a Markdown heading."""
+    text = "".join(ch for ch in heading.strip().lower() if ch.isalnum() or ch in " -_")
+    return text.replace(" ", "-")
+
+
+def scoreboard(claims: list[Claim]) -> list[str]:
+    """The page's opening table: every claim, its verdict, linked to its section; then the tally."""
+    if not claims:
+        return []
+    lines = ["## Scoreboard", "",
+             "Every thesis result item the page checks, with our number, the rule applied and the verdict "
+             f"(rules: `connrl/report/verdicts.py`; \"same\" is an equivalence test, TOST at {ALPHA:g} within the "
+             "stated margin, never the absence of a significant difference).", "",
+             "| item | section | thesis | ours | criterion | verdict |", "|---|---|---|---|---|---|"]
+    for c in claims:
+        item = f"[{c.item}](#{_slug(c.anchor)})" if c.anchor else c.item
+        verdict = c.verdict if c.verdict == REPRODUCED else f"**{c.verdict}**"
+        lines.append(f"| {item} | {c.section} | {c.thesis} | {c.ours} | {c.criterion} | {verdict}"
+                     f"{': ' + c.cause if c.cause else ''} |")
+    tally = {v: sum(c.verdict == v for c in claims) for v in VERDICTS}
+    lines += ["", "Tally: " + ", ".join(f"{n} {v}" for v, n in tally.items() if n) + f" (of {len(claims)}).", ""]
+    return lines
