@@ -221,13 +221,44 @@ def check_lesson_fits(lesson: Lesson, n_actions: int, n_inputs: int) -> None:
                          f"not fit nets of actions 0..{n_actions - 1} on {n_inputs} inputs")
 
 
+def ahc_batch_targets(v_values: np.ndarray, merits: np.ndarray, actions: np.ndarray, rewards: np.ndarray,
+                      terminated: bool, params: ReplayParams) -> tuple[np.ndarray, np.ndarray]:
+    """Fig. 5.1(b) in batch mode: every V target of a lesson from fixed predictions (5.1.2), as ``batch_targets``.
+
+    ``v_values`` (n+1,) are V(x_0..x_n) and ``merits`` (n, A) the policy net's merits before any update. Returns
+    ``(targets (n,), policy (n,) bool)``: the non-policy test is on the merits (3.5.1); a non-policy action is not
+    replayed and cuts lambda for the step before it (lambda is also 0 at the last step). Pure.
+    """
+    n = len(actions)
+    u = np.array(v_values, dtype=np.float64)[1:]
+    if u.shape != (n,):
+        raise ValueError(f"v_values must have n+1={n + 1} entries for a lesson of {n} steps, got {len(u) + 1}")
+    if terminated:
+        u[-1] = 0.0
+    policy = policy_mask(merits, actions, params)
+    lams = np.where(np.append(policy[1:], False), params.lam, 0.0)
+    return lambda_returns(rewards, u, params.gamma, lams, params.clip), policy
+
+
 def replay_ahc(v_net, policy_net, lesson: Lesson, params: ReplayParams) -> int:
     """Fig. 5.1(b): replay a lesson backward into a V-net (one output) and a policy net (one per action).
 
-    Non-policy actions are judged by the Boltzmann probabilities of the policy net's merits (3.5.1).
+    Non-policy actions are judged by the Boltzmann probabilities of the policy net's merits (3.5.1). Each replayed
+    experience moves V(x_t) toward its target e_t and the taken action's merit by the same error, e_t - V(x_t) with
+    V as it is just before that step (Fig. 3.2 steps 5-6). In batch mode (5.1.2) the targets and the non-policy test
+    come from the nets as they were before the lesson (``ahc_batch_targets``), as ``replay_q_reference``'s do.
     """
     x, acts, rews = lesson.inputs, lesson.actions, lesson.rewards
     n = len(lesson)
+    if params.batch and n > 0:
+        targets, policy = ahc_batch_targets(np.array([v_net.value(x[t], 0) for t in range(n + 1)]),
+                                            np.array([policy_net.values(x[t]) for t in range(n)]).reshape(n, -1),
+                                            acts, rews, lesson.terminated, params)
+        for t in range(n - 1, -1, -1):
+            if policy[t]:
+                v_before = v_net.update(x[t], 0, targets[t])
+                policy_net.update_error(x[t], int(acts[t]), targets[t] - v_before)
+        return int(policy.sum())
     used = 0
     e_next, next_policy = 0.0, False
     for t in range(n - 1, -1, -1):

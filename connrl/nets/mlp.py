@@ -10,7 +10,8 @@ value_range: 7.4 gives the sigmoid to output units "in the nonlinear case" only,
 
 The thesis trains per sample (one experience at a time), so the work per call is tiny (a 145-30-1 net is
 about 9k multiply-adds) and interpreter/dispatch overhead dominates; the kernels are therefore Numba-compiled
-loops over preallocated arrays (see benchmarks/bench_core.py and docs/PERFORMANCE.md).
+loops over preallocated arrays, in ``connrl.nets.kernels`` with every kernel that calls them (see
+benchmarks/bench_core.py and docs/PERFORMANCE.md).
 
 Weights of all action nets are stacked: ``w1[a]`` is net a's hidden layer (H, I+1) and ``w2[a]`` its output
 layer (H+1,); the last column/entry is the bias. For a perceptron ``w2[a]`` has shape (I+1,) and ``w1`` is
@@ -22,8 +23,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
+
+from connrl.nets.kernels import (
+    _mlp_forward,
+    _mlp_update,
+    _mlp_values,
+    _perceptron_forward,
+    _perceptron_update,
+    _perceptron_values,
+)
 
 
 def symmetric_sigmoid(x):
@@ -58,97 +67,6 @@ class NetConfig:
         if self.linear_output and self.n_hidden > 0:
             raise ValueError("linear_output applies to single-layer perceptrons only (n_hidden=0), "
                              f"got n_hidden={self.n_hidden}")
-
-
-# --------------------------------------------------------------------------------------------- kernels
-# Each kernel works on one action net (index a) or loops over all of them; arrays are float64, C-contiguous.
-
-@numba.njit(cache=True, fastmath=True)
-def _mlp_forward(w1, w2, a, x, h):
-    """Forward pass of net a; fills h (H,) with hidden activations and returns the raw output f(net)."""
-    n_h, n_in1 = w1.shape[1], w1.shape[2]
-    n_in = n_in1 - 1
-    out = w2[a, n_h]
-    for j in range(n_h):
-        s = w1[a, j, n_in]
-        for i in range(n_in):
-            s += w1[a, j, i] * x[i]
-        hj = 1.0 / (1.0 + math.exp(-s)) - 0.5
-        h[j] = hj
-        out += w2[a, j] * hj
-    return 1.0 / (1.0 + math.exp(-out)) - 0.5
-
-
-@numba.njit(cache=True, fastmath=True)
-def _mlp_values(w1, w2, x, h, scale, q):
-    for a in range(w1.shape[0]):
-        q[a] = scale * _mlp_forward(w1, w2, a, x, h)
-
-
-@numba.njit(cache=True, fastmath=True)
-def _mlp_update(w1, w2, d1, d2, a, x, h, target, is_error, scale, lr, momentum):
-    """One momentum-SGD step of net a toward ``target`` (or by the error ``target`` when ``is_error``);
-    returns the output before the step."""
-    n_h, n_in1 = w1.shape[1], w1.shape[2]
-    n_in = n_in1 - 1
-    y = _mlp_forward(w1, w2, a, x, h)
-    err = target if is_error else target - scale * y
-    # error in the net's own output units (see module docstring), times f'(net) = 0.25 - f^2
-    delta = err / scale * (0.25 - y * y)
-    for j in range(n_h):
-        # hidden delta uses the output weight before it is changed (plain backprop)
-        dh = delta * w2[a, j] * (0.25 - h[j] * h[j])
-        step = lr * delta * h[j] + momentum * d2[a, j]
-        d2[a, j] = step
-        w2[a, j] += step
-        if dh != 0.0 or momentum != 0.0:
-            for i in range(n_in):
-                s = lr * dh * x[i] + momentum * d1[a, j, i]
-                d1[a, j, i] = s
-                w1[a, j, i] += s
-            s = lr * dh + momentum * d1[a, j, n_in]
-            d1[a, j, n_in] = s
-            w1[a, j, n_in] += s
-    step = lr * delta + momentum * d2[a, n_h]
-    d2[a, n_h] = step
-    w2[a, n_h] += step
-    return scale * y
-
-
-@numba.njit(cache=True, fastmath=True)
-def _perceptron_forward(w2, a, x, linear):
-    """Output of perceptron a in the net's units (times ``scale`` = the value): f(net), or net / 2 when
-    ``linear`` (so the value is value_range * net)."""
-    n_in = w2.shape[1] - 1
-    s = w2[a, n_in]
-    for i in range(n_in):
-        s += w2[a, i] * x[i]
-    if linear:
-        return 0.5 * s
-    return 1.0 / (1.0 + math.exp(-s)) - 0.5
-
-
-@numba.njit(cache=True, fastmath=True)
-def _perceptron_values(w2, x, scale, q, linear):
-    for a in range(w2.shape[0]):
-        q[a] = scale * _perceptron_forward(w2, a, x, linear)
-
-
-@numba.njit(cache=True, fastmath=True)
-def _perceptron_update(w2, d2, a, x, target, is_error, scale, lr, momentum, linear):
-    n_in = w2.shape[1] - 1
-    y = _perceptron_forward(w2, a, x, linear)
-    err = target if is_error else target - scale * y
-    # gradient of 0.5 (err / value_range)^2 for a linear unit; error in output units times f' otherwise
-    delta = 2.0 * err / scale if linear else err / scale * (0.25 - y * y)
-    for i in range(n_in):
-        s = lr * delta * x[i] + momentum * d2[a, i]
-        d2[a, i] = s
-        w2[a, i] += s
-    s = lr * delta + momentum * d2[a, n_in]
-    d2[a, n_in] = s
-    w2[a, n_in] += s
-    return scale * y
 
 
 # ------------------------------------------------------------------------------------------------ OAON

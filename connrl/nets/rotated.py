@@ -17,33 +17,10 @@ rotated copies are made on the hot path.
 
 from __future__ import annotations
 
-import math
-
-import numba
 import numpy as np
 
-from connrl.nets.mlp import OAON, NetConfig, _mlp_update
-
-
-@numba.njit(cache=True, fastmath=True)
-def _rotated_values(w1, w2, x, perms, scale, q):
-    """q[a] = scale * net(x[perms[a]]) for every rotation a (one hidden layer, symmetric sigmoids)."""
-    n_h, n_in = w1.shape[1], w1.shape[2] - 1
-    for a in range(perms.shape[0]):
-        out = w2[0, n_h]
-        for j in range(n_h):
-            s = w1[0, j, n_in]
-            for i in range(n_in):
-                s += w1[0, j, i] * x[perms[a, i]]
-            out += w2[0, j] * (1.0 / (1.0 + math.exp(-s)) - 0.5)
-        q[a] = scale * (1.0 / (1.0 + math.exp(-out)) - 0.5)
-
-
-@numba.njit(cache=True, fastmath=True)
-def _rotated_update(w1, w2, d1, d2, x, perm, xr, h, target, is_error, scale, lr, momentum):
-    for i in range(perm.shape[0]):
-        xr[i] = x[perm[i]]
-    return _mlp_update(w1, w2, d1, d2, 0, xr, h, target, is_error, scale, lr, momentum)
+from connrl.nets.kernels import _rotated_update, _rotated_values
+from connrl.nets.mlp import OAON, NetConfig
 
 
 class RotatedNet:

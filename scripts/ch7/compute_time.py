@@ -24,7 +24,7 @@ PARTS = {  # label -> (file suffix, function) whose cumulative time is reported
     "model training (BPTT) after each trial": ("agents/memory.py", "train_model"),
     "compiled recurrent-net forward kernel": ("nets/recurrent.py", "_forward_sequence"),
     "compiled recurrent-net BPTT kernel": ("nets/recurrent.py", "_bptt"),
-    "compiled feed-forward replay kernel": ("core/replay_kernel.py", "_replay_q_kernel"),
+    "compiled feed-forward replay kernel": ("nets/kernels.py", "_replay_q_kernel"),
     "greedy tests": ("experiments/hidden_state.py", "test"),
 }
 

@@ -116,6 +116,73 @@ def test_replay_ahc_moves_v_toward_the_return_and_policy_by_the_td_error():
     assert pol.value([0.5], 0) == m_other  # OAON: the other action's net is untouched
 
 
+
+def _ahc_nets(seed=4):
+    rng = np.random.default_rng(seed)
+    v = OAON(NetConfig(2, 3, value_range=1.5, init_range=0.5, lr=0.4, momentum=0.9), 1, rng)
+    pol = OAON(NetConfig(2, 3, init_range=0.5, lr=0.3, momentum=0.9), 2, rng)
+    return v, pol
+
+
+AHC_LESSON = Lesson(np.array([[0.5, -0.2], [-0.3, 0.4], [0.2, 0.7], [0.6, -0.6]]), np.array([1, 0, 1]),
+                    np.array([0.2, -0.4, 0.9]), terminated=False)
+AHC_PARAMS = ReplayParams(gamma=0.8, lam=0.6)
+
+
+def _numpy_replay_ahc(v, pol, lesson, params):
+    """Fig. 5.1(b), written out for a lesson whose actions are all policy actions: backward from the last step,
+    e_t = r_t + gamma ((1 - lam) u_{t+1} + lam e_{t+1}) (lam 0 at the last step), V(x_t) moved toward e_t and the
+    taken action's merit by e_t - V(x_t). Incremental: u_{t+1} = V(x_{t+1}) now; batch: V as before the lesson."""
+    x, n = lesson.inputs, len(lesson)
+    frozen = [v.value(x[t], 0) for t in range(n + 1)]
+    e_next = 0.0
+    for t in range(n - 1, -1, -1):
+        u = 0.0 if (t == n - 1 and lesson.terminated) else (frozen[t + 1] if params.batch else v.value(x[t + 1], 0))
+        lam = 0.0 if t == n - 1 else params.lam
+        e = lesson.rewards[t] + params.gamma * ((1 - lam) * u + lam * e_next)
+        v_x = v.update(x[t], 0, e)
+        pol.update_error(x[t], int(lesson.actions[t]), e - v_x)
+        e_next = e
+
+
+@pytest.mark.parametrize("batch", [False, True])
+def test_replay_ahc_gives_the_exact_weights_of_fig_5_1b(batch):
+    from tests.numpy_nets import NumpyOAON
+
+    params = ReplayParams(gamma=AHC_PARAMS.gamma, lam=AHC_PARAMS.lam, batch=batch)
+    v, pol = _ahc_nets()
+    v_ref, pol_ref = NumpyOAON(v), NumpyOAON(pol)
+    assert replay_ahc(v, pol, AHC_LESSON, params) == 3
+    _numpy_replay_ahc(v_ref, pol_ref, AHC_LESSON, params)
+    v_ref.assert_same(v)
+    pol_ref.assert_same(pol)
+
+
+def test_replay_ahc_batch_mode_differs_from_incremental():
+    nets = {}
+    for batch in (False, True):
+        v, pol = _ahc_nets()
+        replay_ahc(v, pol, AHC_LESSON, ReplayParams(gamma=0.8, lam=0.6, batch=batch))
+        nets[batch] = (v.w1.copy(), pol.w2.copy())
+    assert not np.allclose(nets[False][0], nets[True][0]) and not np.allclose(nets[False][1], nets[True][1])
+
+
+def test_replay_ahc_batch_mode_judges_non_policy_actions_before_the_lesson():
+    # a greedy policy (T = 0) with P_t 0.5: only the actions the policy net preferred before the lesson are replayed,
+    # and lambda is cut before a non-policy action (the targets of ahc_batch_targets)
+    v, pol = _ahc_nets()
+    x = AHC_LESSON.inputs
+    merits = np.array([pol.values(x[t]) for t in range(3)])
+    params = ReplayParams(gamma=0.8, lam=0.6, temperature=0.0, p_threshold=0.5, batch=True)
+    greedy = merits.argmax(axis=1) == AHC_LESSON.actions
+    assert replay_ahc(v, pol, AHC_LESSON, params) == greedy.sum()
+    targets, policy = replay_module.ahc_batch_targets([0.0, 0.1, 0.2, 0.3], merits, AHC_LESSON.actions,
+                                                      AHC_LESSON.rewards, False, params)
+    np.testing.assert_array_equal(policy, greedy)
+    lams = np.where(np.append(greedy[1:], False), 0.6, 0.0)
+    np.testing.assert_allclose(targets, lambda_returns(AHC_LESSON.rewards, [0.1, 0.2, 0.3], 0.8, lams), rtol=1e-15)
+
+
 # ---------------------------------------------------------------------------- batch targets (5.1.2, 7.5)
 
 def test_batch_targets_by_hand():

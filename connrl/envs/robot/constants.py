@@ -3,18 +3,26 @@ world")."""
 
 from __future__ import annotations
 
+# The sensor constants the compiled geometry reads are defined beside its kernels (Numba freezes a global into a
+# cached kernel and notices an edit of the kernel's own file only; issue 25), and re-exported here.
+from connrl.envs.robot.geometry import (  # noqa: F401
+    DROPOUT_PROB,
+    LIGHT_HALF_ANGLE,
+    LIGHT_RANGE,
+    RAY_STEP_DEG,
+    SEG_CHARGER,
+    SEG_OBSTACLE,
+    SEG_WALL,
+    SONAR_ERROR,
+    SONAR_MAX,
+)
+
 # ---------------------------------------------------------------------------------------------------
 # Constants of the robot and its sensors (5.2.1; R: docs/RECONSTRUCTION.md, "HEROINE robot world")
 ROBOT_RADIUS = 12.0  # inches (Fig. 5.3 caption)
 N_RAYS = 24  # sonar / light readings per rotation, 15 deg apart (5.2.1)
-RAY_STEP_DEG = 15.0
-SONAR_MAX = 127  # sonar range 0..127 in, 1-in resolution (5.2.1)
-SONAR_ERROR = 0.10  # reading uniform in [0.9x, 1.1x] (5.2.1)
-DROPOUT_PROB = 0.25  # one reading of every 4 scans set to 127 (5.2.1)
 CONTROL_ERROR = 0.08  # "about 8% control error" (5.2.1; R: uniform on length and angle)
 DOOR_EDGE_JUMP = 44  # neighbouring readings differing by this much mark a potential door edge (R, Fig. 5.3b)
-LIGHT_HALF_ANGLE = 7.5  # light bit k on when the light is within +-7.5 deg of ray k (R)
-LIGHT_RANGE = 120.0  # light detectable up to this distance from the centre (R)
 
 # Actions, in the order of 5.2.1 ("turn +-15, turn +-60, move +-12").
 TURN_LEFT_15, TURN_RIGHT_15, TURN_LEFT_60, TURN_RIGHT_60, MOVE_FORWARD, MOVE_BACKWARD = range(6)
@@ -36,9 +44,6 @@ KEYMAP = {
 # Collision bit order.
 FRONT, BACK, LEFT, RIGHT = range(4)
 COLLISION_SIDES = ("front", "back", "left", "right")
-
-# Segment kinds.
-SEG_WALL, SEG_OBSTACLE, SEG_CHARGER = 0, 1, 2
 
 
 _RNG_PER_SCAN = 26  # 24 sonar noise factors + dropout coin + dropout index

@@ -7,15 +7,18 @@ import math
 import numba as nb
 import numpy as np
 
-from connrl.envs.robot.constants import (
-    DROPOUT_PROB,
-    LIGHT_HALF_ANGLE,
-    LIGHT_RANGE,
-    RAY_STEP_DEG,
-    SEG_CHARGER,
-    SONAR_ERROR,
-    SONAR_MAX,
-)
+# Sensor constants (5.2.1; R: docs/RECONSTRUCTION.md, "HEROINE robot world"), re-exported by
+# ``connrl.envs.robot.constants``. They are defined here because the cached kernels below compile them in, and
+# Numba's cache notices an edit of this file only (issue 25; tests/nets/test_kernel_cache.py).
+RAY_STEP_DEG = 15.0  # the N_RAYS sonar / light readings are 15 deg apart (5.2.1)
+SONAR_MAX = 127  # sonar range 0..127 in, 1-in resolution (5.2.1)
+SONAR_ERROR = 0.10  # reading uniform in [0.9x, 1.1x] (5.2.1)
+DROPOUT_PROB = 0.25  # one reading of every 4 scans set to 127 (5.2.1)
+LIGHT_HALF_ANGLE = 7.5  # light bit k on when the light is within +-7.5 deg of ray k (R)
+LIGHT_RANGE = 120.0  # light detectable up to this distance from the centre (R)
+
+# Segment kinds.
+SEG_WALL, SEG_OBSTACLE, SEG_CHARGER = 0, 1, 2
 
 
 # ---------------------------------------------------------------------------------------------------

@@ -1,0 +1,258 @@
+"""Every Numba kernel over an OAON's stacked weight arrays, in one file: the forward pass and momentum update of
+``connrl.nets.mlp``, the rotated net of ``connrl.nets.rotated`` and the whole-lesson backward replay (Fig. 5.1a)
+that ``connrl.core.replay_kernel`` runs.
+
+They share one file because they call one another and Numba inlines what a kernel calls, while ``cache=True``
+keys a compiled kernel on its own source file only: a cached replay kernel in another file went on running the
+old net arithmetic after ``mlp.py`` was edited (issue 25). The rule, checked by ``tests/nets/test_kernel_cache.py``:
+a cached kernel calls, and reads constants, only from its own file.
+
+Each kernel works on one action net (index a) or loops over all of them; arrays are float64, C-contiguous.
+Weights of all action nets are stacked: ``w1[a]`` (H, I+1), ``w2[a]`` (H+1,) (a perceptron: ``w2[a]`` (I+1,),
+``w1`` empty); the last column/entry is the bias (see ``connrl.nets.mlp``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+
+# ------------------------------------------------------------------------------- one net: forward and update
+
+@numba.njit(cache=True, fastmath=True)
+def _mlp_forward(w1, w2, a, x, h):
+    """Forward pass of net a; fills h (H,) with hidden activations and returns the raw output f(net)."""
+    n_h, n_in1 = w1.shape[1], w1.shape[2]
+    n_in = n_in1 - 1
+    out = w2[a, n_h]
+    for j in range(n_h):
+        s = w1[a, j, n_in]
+        for i in range(n_in):
+            s += w1[a, j, i] * x[i]
+        hj = 1.0 / (1.0 + math.exp(-s)) - 0.5
+        h[j] = hj
+        out += w2[a, j] * hj
+    return 1.0 / (1.0 + math.exp(-out)) - 0.5
+
+
+@numba.njit(cache=True, fastmath=True)
+def _mlp_values(w1, w2, x, h, scale, q):
+    for a in range(w1.shape[0]):
+        q[a] = scale * _mlp_forward(w1, w2, a, x, h)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _mlp_update(w1, w2, d1, d2, a, x, h, target, is_error, scale, lr, momentum):
+    """One momentum-SGD step of net a toward ``target`` (or by the error ``target`` when ``is_error``);
+    returns the output before the step."""
+    n_h, n_in1 = w1.shape[1], w1.shape[2]
+    n_in = n_in1 - 1
+    y = _mlp_forward(w1, w2, a, x, h)
+    err = target if is_error else target - scale * y
+    # error in the net's own output units (see module docstring), times f'(net) = 0.25 - f^2
+    delta = err / scale * (0.25 - y * y)
+    for j in range(n_h):
+        # hidden delta uses the output weight before it is changed (plain backprop)
+        dh = delta * w2[a, j] * (0.25 - h[j] * h[j])
+        step = lr * delta * h[j] + momentum * d2[a, j]
+        d2[a, j] = step
+        w2[a, j] += step
+        if dh != 0.0 or momentum != 0.0:
+            for i in range(n_in):
+                s = lr * dh * x[i] + momentum * d1[a, j, i]
+                d1[a, j, i] = s
+                w1[a, j, i] += s
+            s = lr * dh + momentum * d1[a, j, n_in]
+            d1[a, j, n_in] = s
+            w1[a, j, n_in] += s
+    step = lr * delta + momentum * d2[a, n_h]
+    d2[a, n_h] = step
+    w2[a, n_h] += step
+    return scale * y
+
+
+@numba.njit(cache=True, fastmath=True)
+def _perceptron_forward(w2, a, x, linear):
+    """Output of perceptron a in the net's units (times ``scale`` = the value): f(net), or net / 2 when
+    ``linear`` (so the value is value_range * net)."""
+    n_in = w2.shape[1] - 1
+    s = w2[a, n_in]
+    for i in range(n_in):
+        s += w2[a, i] * x[i]
+    if linear:
+        return 0.5 * s
+    return 1.0 / (1.0 + math.exp(-s)) - 0.5
+
+
+@numba.njit(cache=True, fastmath=True)
+def _perceptron_values(w2, x, scale, q, linear):
+    for a in range(w2.shape[0]):
+        q[a] = scale * _perceptron_forward(w2, a, x, linear)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _perceptron_update(w2, d2, a, x, target, is_error, scale, lr, momentum, linear):
+    n_in = w2.shape[1] - 1
+    y = _perceptron_forward(w2, a, x, linear)
+    err = target if is_error else target - scale * y
+    # gradient of 0.5 (err / value_range)^2 for a linear unit; error in output units times f' otherwise
+    delta = 2.0 * err / scale if linear else err / scale * (0.25 - y * y)
+    for i in range(n_in):
+        s = lr * delta * x[i] + momentum * d2[a, i]
+        d2[a, i] = s
+        w2[a, i] += s
+    s = lr * delta + momentum * d2[a, n_in]
+    d2[a, n_in] = s
+    w2[a, n_in] += s
+    return scale * y
+
+
+# ---------------------------------------------------------------------- one net on rotated inputs (4.2.4)
+
+@numba.njit(cache=True, fastmath=True)
+def _rotated_values(w1, w2, x, perms, scale, q):
+    """q[a] = scale * net(x[perms[a]]) for every rotation a (one hidden layer, symmetric sigmoids)."""
+    n_h, n_in = w1.shape[1], w1.shape[2] - 1
+    for a in range(perms.shape[0]):
+        out = w2[0, n_h]
+        for j in range(n_h):
+            s = w1[0, j, n_in]
+            for i in range(n_in):
+                s += w1[0, j, i] * x[perms[a, i]]
+            out += w2[0, j] * (1.0 / (1.0 + math.exp(-s)) - 0.5)
+        q[a] = scale * (1.0 / (1.0 + math.exp(-out)) - 0.5)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _rotated_update(w1, w2, d1, d2, x, perm, xr, h, target, is_error, scale, lr, momentum):
+    for i in range(perm.shape[0]):
+        xr[i] = x[perm[i]]
+    return _mlp_update(w1, w2, d1, d2, 0, xr, h, target, is_error, scale, lr, momentum)
+
+
+# ------------------------------------------------------ whole-lesson backward replay (Fig. 5.1a, incremental)
+
+@numba.njit(cache=True, fastmath=True)
+def _values_any(w1, w2, x, h, scale, q, linear):
+    if w1.shape[1] > 0:
+        _mlp_values(w1, w2, x, h, scale, q)
+    else:
+        _perceptron_values(w2, x, scale, q, linear)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _policy_probability(q, a, temperature):
+    """Eq. 3.6 probability of action a (greedy, ties shared, at T = 0)."""
+    m = q.max()
+    if temperature == 0.0:
+        if q[a] < m:
+            return 0.0
+        n = 0
+        for k in range(q.size):
+            if q[k] == m:
+                n += 1
+        return 1.0 / n
+    s = 0.0
+    for k in range(q.size):
+        s += math.exp((q[k] - m) / temperature)
+    return math.exp((q[a] - m) / temperature) / s
+
+
+@numba.njit(cache=True, fastmath=True)
+def _weighted_policy_probability(q, w, a, temperature):
+    """Eq. 6.6 probability of choice a under weights w (0 rules a choice out; greedy among the allowed at T = 0)."""
+    if w[a] <= 0.0:
+        return 0.0
+    top = q[a]  # no infinities: fastmath assumes there are none
+    for k in range(q.size):
+        if w[k] > 0.0 and q[k] > top:
+            top = q[k]
+    if temperature == 0.0:
+        if q[a] < top:
+            return 0.0
+        n = 0
+        for k in range(q.size):
+            if w[k] > 0.0 and q[k] == top:
+                n += 1
+        return 1.0 / n
+    s = 0.0
+    for k in range(q.size):
+        if w[k] > 0.0:
+            s += w[k] * math.exp((q[k] - top) / temperature)
+    return w[a] * math.exp((q[a] - top) / temperature) / s
+
+
+@numba.njit(cache=True, fastmath=True)
+def _allowed_max(q, allowed):
+    """The largest value among the allowed choices (all of them when none is allowed)."""
+    found, best = False, 0.0  # no infinities: fastmath assumes there are none
+    for k in range(q.size):
+        if allowed[k] and (not found or q[k] > best):
+            found, best = True, q[k]
+    return best if found else q.max()
+
+
+@numba.njit(cache=True, fastmath=True)
+def _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum, linear):
+    if w1.shape[1] > 0:
+        _mlp_update(w1, w2, d1, d2, a, x, h, target, False, scale, lr, momentum)
+    else:
+        _perceptron_update(w2, d2, a, x, target, False, scale, lr, momentum, linear)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, discounts, lam, temperature,
+                     p_threshold, clip, has_clip, scale, lr, momentum, repair, linear, weights, allowed):
+    """Fig. 5.1(a) in incremental mode over a whole lesson; same arithmetic as ``replay_q_reference``.
+
+    ``discounts[t]`` is step t's discount (gamma, or gamma^n for a group of n steps, 6.6.4); ``weights`` (n, A) each
+    step's W of Eq. 6.6 for the non-policy test, ``allowed`` (n+1, A) the choices the target's max ranges over in
+    each state; an empty array (0 rows) means none (Boltzmann test, max over all).
+
+    ``repair`` (5.4.3, for taught lessons; see ``connrl.core.replay.repair_step``): 0 none; 1 *lower*: every other
+    action valued above the taught one is moved toward it; 2 *raise*: the taught action is moved toward the largest
+    other value. The check follows the TD update of each experience, with the net as it is then.
+    """
+    n = actions.shape[0]
+    used = 0
+    e_next = 0.0
+    next_policy = False
+    for t in range(n - 1, -1, -1):
+        if t == n - 1 and terminated:
+            u = 0.0
+        else:
+            _values_any(w1, w2, inputs[t + 1], h, scale, q, linear)
+            u = _allowed_max(q, allowed[t + 1]) if allowed.shape[0] > 0 else q.max()
+        lam_t = lam if (t < n - 1 and next_policy) else 0.0
+        e = rewards[t] + discounts[t] * ((1.0 - lam_t) * u + lam_t * e_next)
+        if has_clip and e > clip:
+            e = clip
+        a = actions[t]
+        if p_threshold > 0.0:
+            _values_any(w1, w2, inputs[t], h, scale, q, linear)
+            if weights.shape[0] > 0:
+                next_policy = _weighted_policy_probability(q, weights[t], a, temperature) >= p_threshold
+            else:
+                next_policy = _policy_probability(q, a, temperature) >= p_threshold
+        else:
+            next_policy = True
+        if next_policy:
+            _update_any(w1, w2, d1, d2, a, inputs[t], h, e, scale, lr, momentum, linear)
+            used += 1
+        if repair != 0:
+            _values_any(w1, w2, inputs[t], h, scale, q, linear)
+            qa = q[a]
+            if repair == 1:
+                for i in range(q.shape[0]):
+                    if i != a and q[i] > qa:
+                        _update_any(w1, w2, d1, d2, i, inputs[t], h, qa, scale, lr, momentum, linear)
+            else:
+                found, best = False, 0.0  # no infinities: fastmath assumes there are none
+                for i in range(q.shape[0]):
+                    if i != a and (not found or q[i] > best):
+                        found, best = True, q[i]
+                if found and best > qa:
+                    _update_any(w1, w2, d1, d2, a, inputs[t], h, best, scale, lr, momentum, linear)
+        e_next = e
+    return used
