@@ -16,6 +16,7 @@ SPEC_MODULES = (
     "connrl.experiments.td_depth",
     "connrl.experiments.recharge",
     "connrl.experiments.recharge_flat",
+    "connrl.experiments.recharge_bound",
     "connrl.experiments.complexity",
     "connrl.experiments.integration",
     "connrl.experiments.steps",
@@ -26,7 +27,8 @@ SPEC_MODULES = (
 # 7.5.4's (Appendix C's task)
 CHAPTERS = {"connrl.experiments.survival": 4, "connrl.experiments.robot": 5, "connrl.experiments.robot_bounds": 5,
             "connrl.experiments.robot_noise": 5, "connrl.experiments.td_depth": 5,
-            "connrl.experiments.recharge_flat": 6, "connrl.experiments.recharge": 6, "connrl.experiments.complexity": 6,
+            "connrl.experiments.recharge_flat": 6, "connrl.experiments.recharge": 6,
+            "connrl.experiments.recharge_bound": 6, "connrl.experiments.complexity": 6,
             "connrl.experiments.pole": 7, "connrl.experiments.hidden_state": 7, "connrl.experiments.integration": 8,
             "connrl.experiments.steps": 8}
 

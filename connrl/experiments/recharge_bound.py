@@ -1,0 +1,143 @@
+"""Ch. 6's bound: what a fixed rule over the behaviour library achieves on the learners' own test tasks (ours).
+
+The high-level learner of Exps 2-4 can do no better than the best choice among the shipped behaviours, so a low Ch. 6
+result has two possible causes: the behaviours cannot reach the charger in time, or the learner does not find the
+choice that does. This experiment separates them. A fixed rule, reading the true room and position (which the learner
+has only through its inputs), plays the recharging task of ``connrl.experiments.recharge`` on exactly the test tasks a
+learning run of the same seed and ``tests_per_room`` is tested on:
+
+- DK (docking) whenever it is applicable;
+- else DP (door passing) when it is applicable within ``near_door`` inches of the door that leads on towards the
+  charger (room B: door B into C; room C: door A into A);
+- else the room's wall follower (``wall_A`` / ``wall_B`` / ``wall_C``: WFL or WFR; chosen on the development seeds
+  100-106, docs/RECONSTRUCTION.md, "Ch. 6 bound").
+
+The variant without position takes DP wherever it is applicable outside room A: what a rule that knows only its room
+can do, the hidden state 6.4.2 adds X-Y against. Reported per start room: the share of test tasks docked, the mean
+primitive steps of those that dock, reinforcement per step, and the scripted teacher's on the same tasks.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, sample_in_room
+from connrl.envs.robot.teachers import teach_chg
+from connrl.experiments.recharge import LAYOUT, SHIPPED_LIBRARY
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
+from connrl.tasks.recharge import make_recharge_env
+
+WALLS = ("WFL", "WFR")
+LEADS_ON = {"B": "B", "C": "A"}  # the door out of a room towards the charger (in room A)
+
+
+@dataclass(frozen=True)
+class BoundParams:
+    """The fixed rule's settings and the recharging task's (as ``RechargeParams``'s)."""
+
+    position: bool = True  # DP only near the door that leads on (needs X-Y); False: DP wherever applicable
+    near_door: float = 60.0  # inches from the door's centre within which DP is taken (ours)
+    wall_A: str = "WFL"  # wall follower per room (ours: development seeds 100-106)
+    wall_B: str = "WFL"
+    wall_C: str = "WFR"
+    max_steps: int = 200  # (6.6)
+    tests_per_room: int = 10  # as RechargeParams: the same test tasks for the same seed
+    step_scale: float = 1.0
+    success_reward: float = 100.0
+    library: str = SHIPPED_LIBRARY
+
+    def __post_init__(self):
+        check_types(self, {"near_door": ">0", "max_steps": ">=1", "tests_per_room": ">=1", "step_scale": ">0",
+                           "success_reward": ">0"}, wall_A=WALLS, wall_B=WALLS, wall_C=WALLS)
+        if self.library != SHIPPED_LIBRARY:
+            raise ValueError(f"parameter library must be the shipped behaviour library's digest {SHIPPED_LIBRARY}, "
+                             f"got {self.library!r}")
+
+
+def fixed_test_tasks(tests_per_room: int, rng: np.random.Generator) -> tuple[list, np.ndarray]:
+    """The fixed test tasks (room, start) and their seeds, drawn as ``connrl.experiments.recharge.run_rooms`` draws
+    them first from a run's generator: the same seed and ``tests_per_room`` give the same tasks."""
+    task_rng = np.random.default_rng(rng.integers(2**63))
+    tasks = [(r, sample_in_room(task_rng, LAYOUT, r)) for r in ROOMS for _ in range(tests_per_room)]
+    return tasks, task_rng.integers(2**31, size=len(tasks))
+
+
+def choose(p: BoundParams, info: dict) -> str:
+    """The rule's behaviour in the state of ``info`` (module docstring)."""
+    applicable = dict(zip(BEHAVIOUR_TASKS, info["applicable"], strict=True))
+    room = info["room"]
+    if applicable["DK"]:
+        return "DK"
+    if applicable["DP"] and room in LEADS_ON:
+        if not p.position:
+            return "DP"
+        (x0, y0, x1, y1) = LAYOUT.doors[LEADS_ON[room]].segment
+        if math.dist(info["pose"][:2], ((x0 + x1) / 2, (y0 + y1) / 2)) < p.near_door:
+            return "DP"
+    return {"A": p.wall_A, "B": p.wall_B, "C": p.wall_C}[room]
+
+
+def play(env, p: BoundParams, start, seed: int) -> tuple[bool, int, float]:
+    """One test task under the rule: (docked, primitive steps, total reinforcement)."""
+    _, info = env.reset(seed=seed, options={"start": start})
+    total, steps = 0.0, 0
+    while True:
+        _, r, terminated, truncated, info = env.step(BEHAVIOUR_TASKS.index(choose(p, info)))
+        total, steps = total + r, steps + 1
+        if terminated or truncated:
+            return bool(info["success"]), steps, total
+
+
+def run_bound(p: BoundParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
+    tasks, seeds = fixed_test_tasks(p.tests_per_room, rng)
+    env = make_recharge_env(p)
+    by_room = {r: [] for r in ROOMS}
+    teacher = {r: [] for r in ROOMS}
+    for i, ((room, start), s) in enumerate(zip(tasks, seeds, strict=True)):
+        by_room[room].append(play(env, p, start, int(s)))
+        lesson = teach_chg(env.world, start, seed=int(s))
+        teacher[room].append((bool(lesson[-1][4]), len(lesson), sum(step[2] for step in lesson)))
+        progress(i + 1, len(tasks))
+    metrics = {}
+    for who, results in (("", by_room), ("teacher_", teacher)):
+        for r in ROOMS:
+            docked = [n for ok, n, _ in results[r] if ok]
+            metrics[f"{who}docked_{r}"] = len(docked) / len(results[r])
+            metrics[f"{who}steps_{r}"] = float(np.mean(docked)) if docked else None
+        plays = [x for r in ROOMS for x in results[r]]
+        metrics[f"{who}performance"] = sum(t for _, _, t in plays) / sum(n for _, n, _ in plays)
+    teacher_perf = metrics["teacher_performance"]  # 0 when the teacher cannot dock within max_steps (tiny profile)
+    metrics["share_of_teacher"] = metrics["performance"] / teacher_perf if teacher_perf else None
+    rows = [{"room": i, "docked": metrics[f"docked_{r}"], "teacher_docked": metrics[f"teacher_docked_{r}"]}
+            for i, r in enumerate(ROOMS)]
+    return RunResult([0, 1, 2], [metrics[f"docked_{r}"] for r in ROOMS], metrics, rows)
+
+
+def _q(name, text, better="higher"):
+    return Quantity(name, text, better, "6.6")
+
+
+QUANTITIES = (*(_q(f"docked_{r}", f"share of the test tasks from room {r} the rule docks") for r in ROOMS),
+              *(_q(f"steps_{r}", f"mean primitive steps of the rule's dockings from room {r}", "lower") for r in ROOMS),
+              _q("performance", "the rule's reinforcement per primitive step over all test tasks"),
+              _q("share_of_teacher", "the rule's performance as a share of the scripted teacher's"),
+              *(_q(f"teacher_steps_{r}", f"the scripted teacher's mean steps to dock from room {r}", "lower")
+                for r in ROOMS),
+              _q("teacher_performance", "the scripted teacher on the same test tasks"))
+
+EXPERIMENTS = [
+    ExperimentSpec(
+        name="recharge-bound", title="Ch. 6 bound: a fixed rule over the behaviour library on the learners' test "
+        "tasks", section="6.6 (ours)", run="connrl.experiments.recharge_bound:run_bound", params=BoundParams(),
+        profiles={"tiny": {"runs": 1, "tests_per_room": 1, "max_steps": 20}, "quick": {"runs": 2},
+                  "full": {"runs": 7}},
+        variants=(Variant("rule with position", {"position": True}),
+                  Variant("rule without position", {"position": False})),
+        quantities=QUANTITIES, x_label="start room (0 = A, 1 = B, 2 = C)", y_label="share of test tasks docked",
+        description="ours: what the shipped behaviours can do under a fixed rule that knows the room and position, "
+                    "on the test tasks of recharge-behaviours (same seeds); separates 'the behaviours cannot' from "
+                    "'the learner does not'"),
+]

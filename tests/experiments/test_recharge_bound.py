@@ -1,0 +1,46 @@
+"""Ch. 6's bound: the fixed rule's choices on hand-made states, and the learners' own test tasks."""
+
+import numpy as np
+import pytest
+
+import connrl.experiments.recharge as recharge
+from connrl.experiments.recharge import RechargeParams, run_recharge
+from connrl.experiments.recharge_bound import BoundParams, choose, fixed_test_tasks, run_bound
+
+DOOR_B, DOOR_A = (246.0, 300.0), (114.0, 300.0)  # the doors' centres in the default layout (Fig. 5.3)
+
+
+def info(room, x, y, dk=False, dp=False):
+    return {"room": room, "pose": (x, y, 0.0), "applicable": np.array([dk, dp, True, True])}
+
+
+@pytest.mark.parametrize("state, position, expected", [
+    (info("B", 250, 200, dk=True, dp=True), True, "DK"),  # docking first, wherever it applies
+    (info("B", DOOR_B[0], DOOR_B[1] - 40, dp=True), True, "DP"),  # near the door that leads on
+    (info("B", DOOR_B[0], DOOR_B[1] - 80, dp=True), True, "WFL"),  # door passing applies, but far from that door
+    (info("B", DOOR_B[0], DOOR_B[1] - 80, dp=True), False, "DP"),  # without position: wherever it applies
+    (info("C", DOOR_A[0], DOOR_A[1] + 30, dp=True), True, "DP"),  # room C leads on through door A
+    (info("C", DOOR_B[0], DOOR_B[1] + 30, dp=True), True, "WFR"),  # ... not back through door B
+    (info("A", DOOR_A[0], DOOR_A[1] - 30, dp=True), True, "WFL"),  # in room A the charger is here: no door
+    (info("A", DOOR_A[0], DOOR_A[1] - 30, dp=True), False, "WFL"),
+])
+def test_the_rule_chooses_as_written(state, position, expected):
+    assert choose(BoundParams(position=position), state) == expected
+
+
+def test_the_bound_plays_the_learners_own_test_tasks(monkeypatch):
+    seen = []
+    monkeypatch.setattr(recharge, "_test", lambda env, agent, tasks, seeds: seen.append((tasks, seeds)) or
+                        {r: (0.0, 1, 0, 0) for r in "ABC"})
+    monkeypatch.setattr(recharge, "_teacher", lambda world, tasks, seeds: 1.0)
+    run_recharge(RechargeParams(trials=1, test_every=1, tests_per_room=2, lessons_per_trial=1, max_steps=5),
+                 np.random.default_rng(7))
+    tasks, seeds = fixed_test_tasks(2, np.random.default_rng(7))
+    assert seen[0][0] == tasks and np.array_equal(seen[0][1], seeds)
+
+
+def test_the_bound_reports_each_room_beside_the_teacher():
+    m = run_bound(BoundParams(tests_per_room=1, max_steps=30), np.random.default_rng(0)).metrics
+    for who in ("", "teacher_"):
+        assert all(0 <= m[f"{who}docked_{r}"] <= 1 for r in "ABC")
+    assert m["share_of_teacher"] == pytest.approx(m["performance"] / m["teacher_performance"])
