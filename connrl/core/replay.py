@@ -107,13 +107,15 @@ def repair_step(q: QFunction, x: np.ndarray, a: int, mode: str) -> int:
 
 def batch_targets(values: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool,
                   params: ReplayParams, weights: np.ndarray | None = None,
-                  allowed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  allowed: np.ndarray | None = None,
+                  discounts: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Fig. 5.1(a) in batch mode: every target of a lesson from fixed predictions (5.1.2, 7.5).
 
     ``values`` (n+1, A) are the Q-values along the lesson before any update. Returns ``(targets (n,),
     policy (n,) bool)``: a non-policy action is not replayed and cuts lambda for the step before it
-    (lambda is also 0 at the last step). ``weights`` and ``allowed`` as ``replay_q_reference``'s (Ch. 6's W of
-    Eq. 6.6 in the non-policy test; the actions each state's max ranges over). Pure.
+    (lambda is also 0 at the last step). ``weights``, ``allowed`` and ``discounts`` as ``replay_q_reference``'s (Ch.
+    6's W of Eq. 6.6 in the non-policy test; the actions each state's max ranges over; state grouping's per-step
+    discounts, 6.6.4). Pure.
     """
     values = np.asarray(values, dtype=np.float64)
     n = len(actions)
@@ -130,7 +132,8 @@ def batch_targets(values: np.ndarray, actions: np.ndarray, rewards: np.ndarray, 
     if terminated:
         u[-1] = 0.0
     lams = np.where(np.append(policy[1:], False), params.lam, 0.0)
-    return lambda_returns(rewards, u, params.gamma, lams, params.clip), policy
+    gamma = params.gamma if discounts is None else discounts
+    return lambda_returns(rewards, u, gamma, lams, params.clip), policy
 
 
 def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "none",
@@ -148,10 +151,10 @@ def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repai
     n = len(lesson)
     _check_step_arrays(lesson, weights, allowed, discounts)
     if params.batch:
-        if repair != "none" or discounts is not None:
-            raise ValueError("the 5.4.3 repairs and state grouping's discounts are defined for incremental replay only")
+        if repair != "none":
+            raise ValueError("the 5.4.3 repairs are defined for incremental replay only")
         targets, policy = batch_targets(np.array([q.values(x[t]) for t in range(n + 1)]), acts, rews,
-                                        lesson.terminated, params, weights, allowed)
+                                        lesson.terminated, params, weights, allowed, discounts)
         for t in range(n - 1, -1, -1):
             if policy[t]:
                 q.update(x[t], int(acts[t]), targets[t])

@@ -111,13 +111,13 @@ def check_table(table: dict) -> None:
             raise ValueError(f"parameter table entry {key!r} must be {want}, got {v!r}")
 
 
-def check_hidden_state(p) -> None:
+def check_hidden_state(p: CupParams | PoleHiddenParams) -> None:
     """The checks the cup and pole parameter classes share beyond ``check_types``: ``table``'s entries and the
     tuples' lengths and values."""
     check_table(p.table)
-    if getattr(p, "probe_steps", None) is not None:
+    if p.probe_steps is not None:
         check_sequence("probe_steps", p.probe_steps, int, 0, PROBE_MAX, 100)
-    if getattr(p, "window_q_inv_t", None) is not None and not (
+    if p.window_q_inv_t is not None and not (
             len(p.window_q_inv_t) == 2 and all(_number(x) and x > 0 for x in p.window_q_inv_t)):
         raise ValueError(f"parameter window_q_inv_t must be two numbers > 0 (1/T: a -> b), got {p.window_q_inv_t!r}")
 
@@ -183,6 +183,17 @@ class PoleHiddenParams(HiddenStateParams):
                            "train_max_steps": ">=1", "start_x": ">=0", "start_theta": ">=0", "test_steps": ">=1"},
                     arch=ARCHITECTURES, task=(4,))
         check_hidden_state(self)
+
+    # Not parameters here (so outside the run records and the run-folder hashes), as CupParams has them.
+    @property
+    def window_q_inv_t(self) -> tuple | None:
+        """window-Q's 1/T: None, Table B.1's."""
+        return None
+
+    @property
+    def probe_steps(self) -> tuple | None:
+        """The robustness probe's forced steps: None, no probe (it is the cup tasks')."""
+        return None
 
 
 # 7.5.1: recurrent-model's action model on fixed random walks every 50 trials (connrl.tasks.hidden_state.model_probe;

@@ -105,6 +105,12 @@ class RobotParams:
             raise ValueError(f"parameter lessons must be at most {MAX_TAUGHT} (beyond the shipped "
                              f"{TAUGHT_COUNTS[self.task]} the teacher demonstrates afresh), got {self.lessons}")
 
+    @property
+    def noise(self) -> bool:
+        """The world's sensing and control noise (5.2.1): always on here, and not a parameter (so outside the run
+        records and the run-folder hashes); ``connrl.experiments.robot_noise.RobotNoiseParams`` makes it one."""
+        return True
+
     def check_combination(self):
         defaults = {f.name: f.default for f in fields(RobotParams)}
         dp_only = [k for k in ("dp_heading", "dp_far", "lesson_starts", "edge_jump") if getattr(self, k) != defaults[k]]

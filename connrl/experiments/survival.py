@@ -69,6 +69,18 @@ class SurvivalParams:
                            "eval_envs": ">=0", "planning_block": ">=1"},
                     framework=FRAMEWORKS, model=MODELS, representation=("global", "local"), curve=("food", "planning"))
 
+    # Not parameters here (so outside the run records and the run-folder hashes): SurvivalTuningParams and
+    # SurvivalFoodParams make them parameters.
+    @property
+    def p_threshold(self) -> float | None:
+        """Replay's P_t: None, 4.2.7's value per framework."""
+        return None
+
+    @property
+    def food_reward(self) -> float:
+        """The reinforcement for food in training: the world's (4.2.1)."""
+        return REWARD_FOOD
+
 
 @dataclass(frozen=True)
 class SurvivalTuningParams(SurvivalParams):
@@ -101,13 +113,12 @@ class SurvivalFoodParams(SurvivalParams):
 def _agent_params(p: SurvivalParams) -> SurvivalAgentParams:
     return SurvivalAgentParams(framework=p.framework, representation=p.representation, model=p.model,
                                lr_scale=p.lr_scale, plays=p.train_plays if p.train_plays > 1 else 2,
-                               p_threshold=getattr(p, "p_threshold", None))  # SurvivalTuningParams sets it
+                               p_threshold=p.p_threshold)
 
 
 def _training_env(p: SurvivalParams):
     env = SurvivalEnv(p.representation)
-    food = getattr(p, "food_reward", REWARD_FOOD)  # SurvivalFoodParams sets it (4.2.1)
-    return FoodReward(env, food) if food != REWARD_FOOD else env
+    return FoodReward(env, p.food_reward) if p.food_reward != REWARD_FOOD else env
 
 
 def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:

@@ -3,12 +3,14 @@ memory architectures of Fig. 7.1 built from Table B.1 (``make_agent``), the cup 
 robustness probe of 7.5.1.
 
 Builders take the experiment's parameters (``connrl.experiments.hidden_state.CupParams`` /
-``PoleHiddenParams``) by attribute.
+``PoleHiddenParams``) by attribute; ``TableParams`` and ``MemoryAgentParams`` state what they read.
 
 Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Cup collection", gives each with its reason.
 """
 
 from __future__ import annotations
+
+from typing import Protocol
 
 import gymnasium as gym
 import numpy as np
@@ -58,14 +60,66 @@ CUP_TASKS = {1: {"random_bits": 0, "control_error": 0.0},  # 7.5.1
              3: {"random_bits": 0, "control_error": 0.15}}  # 7.5.3: 15% control errors, off in tests
 
 
-def table_entry(p) -> dict:
+class TableParams(Protocol):
+    """What ``table_entry`` reads (read-only, as the frozen parameter dataclasses are)."""
+
+    @property
+    def task(self) -> int: ...
+    @property
+    def arch(self) -> str: ...
+    @property
+    def window_q_inv_t(self) -> tuple | None: ...  # window-Q's 1/T: a -> b instead of Table B.1's; None: the table's
+    @property
+    def table(self) -> dict: ...  # overrides of Table B.1 entries
+    @property
+    def lam(self) -> float | None: ...  # None: Table B.1's
+
+
+class MemoryAgentParams(TableParams, Protocol):
+    """What ``make_agent`` reads."""
+
+    @property
+    def trials(self) -> int: ...
+    @property
+    def anneal_trials(self) -> int | None: ...  # None: ``trials``
+    @property
+    def lessons_per_trial(self) -> int: ...
+    @property
+    def capacity(self) -> int: ...
+    @property
+    def p_threshold(self) -> float: ...
+    @property
+    def p_threshold_oldest(self) -> float: ...
+    @property
+    def init_range(self) -> float: ...
+    @property
+    def momentum(self) -> float: ...
+    @property
+    def linear_perceptron(self) -> bool: ...
+    @property
+    def gamma(self) -> float: ...
+    @property
+    def online(self) -> bool: ...
+    @property
+    def feedback(self) -> float: ...
+    @property
+    def decay(self) -> float: ...
+    @property
+    def share_output(self) -> bool: ...
+    @property
+    def model_range(self) -> float: ...
+    @property
+    def model_lessons_per_trial(self) -> int: ...
+
+
+def table_entry(p: TableParams) -> dict:
     task, arch = p.task, p.arch
     if task not in TABLE_B1:
         raise ValueError(f"task must be 1, 2, 3 (cups) or 4 (pole), got {task!r}")
     if arch not in TABLE_B1[task]:
         raise ValueError(f"arch must be one of {', '.join(ARCHITECTURES)}, got {arch!r}")
     t = dict(TABLE_B1[task][arch])
-    if arch == "window-Q" and getattr(p, "window_q_inv_t", None) is not None:
+    if arch == "window-Q" and p.window_q_inv_t is not None:
         t["inv_t"] = tuple(p.window_q_inv_t)
     t.update(p.table or {})
     if p.lam is not None:
@@ -73,7 +127,7 @@ def table_entry(p) -> dict:
     return t
 
 
-def make_agent(p, n_sensation: int, n_actions: int, rng: np.random.Generator):
+def make_agent(p: MemoryAgentParams, n_sensation: int, n_actions: int, rng: np.random.Generator):
     """The architecture ``p.arch`` with Table B.1's parameters for ``p.task`` (plus overrides)."""
     t = table_entry(p)
     arch = p.arch

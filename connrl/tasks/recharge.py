@@ -13,11 +13,14 @@ whether that step reached the chosen behaviour's own goal (DK docked, DP into an
 Experiment 1 (6.6.1) learns Q(state, action) on the flat input with QCON-T (``make_flat_agent``) and 10 taught
 lessons of the scripted recharging teacher (``connrl.envs.robot.teachers.teach_chg``; ``connrl make-lessons robot``
 writes them to ``connrl/data/lessons/robot-chg.json``).
+
+Builders take the experiment's parameters by attribute; the protocols beside them state what each reads.
 """
 
 from __future__ import annotations
 
 import functools
+from typing import Protocol
 
 import gymnasium as gym
 import numpy as np
@@ -103,13 +106,99 @@ def _shipped_library() -> dict[str, Behaviour]:
     return load_library()  # read once per process; behaviours are only read, never trained, here
 
 
-def make_recharge_env(p) -> BehaviourEnv:
+class BehaviourTaskParams(Protocol):
+    """What ``make_recharge_env`` reads (read-only, as the frozen parameter dataclasses are)."""
+
+    @property
+    def max_steps(self) -> int: ...
+    @property
+    def step_scale(self) -> float: ...
+    @property
+    def success_reward(self) -> float: ...
+
+
+class LearnerParams(Protocol):
+    """The Q-nets, exploration and replay that every Ch. 6 and Ch. 8 learner's builder reads."""
+
+    @property
+    def hidden(self) -> int: ...
+    @property
+    def init_range(self) -> float: ...
+    @property
+    def lr(self) -> float: ...
+    @property
+    def momentum(self) -> float: ...
+    @property
+    def capacity(self) -> int: ...
+    @property
+    def lessons_per_trial(self) -> int: ...
+    @property
+    def t_start(self) -> float: ...
+    @property
+    def t_end(self) -> float: ...
+    @property
+    def trials(self) -> int: ...
+    @property
+    def gamma(self) -> float: ...
+    @property
+    def lam(self) -> float: ...
+
+
+class HighLevelAgentParams(LearnerParams, Protocol):
+    """What ``make_high_level_agent`` reads (``connrl.experiments.recharge.RechargeParams``)."""
+
+    @property
+    def success_reward(self) -> float: ...
+    @property
+    def p_oldest(self) -> float: ...
+    @property
+    def grouping(self) -> bool: ...
+    @property
+    def mu_low(self) -> float: ...
+    @property
+    def mu_high(self) -> float: ...
+    @property
+    def online(self) -> bool: ...
+    @property
+    def persistence(self) -> bool: ...
+    @property
+    def target_max(self) -> str: ...
+
+
+class FlatWorldParams(Protocol):
+    """What ``make_flat_env`` reads (``connrl.experiments.recharge_flat.FlatParams``)."""
+
+    @property
+    def max_steps(self) -> int: ...
+    @property
+    def collision_penalty(self) -> float: ...
+
+
+class FlatAgentParams(LearnerParams, Protocol):
+    """What ``make_flat_agent`` reads (``connrl.experiments.recharge_flat.FlatParams``)."""
+
+    @property
+    def p_threshold(self) -> float: ...
+    @property
+    def online(self) -> bool: ...
+    @property
+    def stuck_window(self) -> int: ...
+    @property
+    def stuck_radius(self) -> float: ...
+    @property
+    def stuck_boost(self) -> float: ...
+    @property
+    def lessons(self) -> int: ...
+
+
+def make_recharge_env(p: BehaviourTaskParams) -> BehaviourEnv:
     """The behaviour-level task of a Ch. 6 parameter set (``connrl.experiments.recharge.RechargeParams``)."""
     return BehaviourEnv(_shipped_library(), max_steps=p.max_steps, step_scale=p.step_scale,
                         success_reward=p.success_reward)
 
 
-def make_high_level_agent(p, rng: np.random.Generator, n_inputs: int = HIGH_SIZE) -> BehaviourQCON:
+def make_high_level_agent(p: HighLevelAgentParams, rng: np.random.Generator,
+                          n_inputs: int = HIGH_SIZE) -> BehaviourQCON:
     """Q(state, behaviour) of 6.5-6.6 from a Ch. 6 parameter set (``n_inputs``: 14 without X-Y, Ch. 8)."""
     # Q in +-success_reward and T on Q / success_reward, so Exp. 4's reward of 500 keeps Exp. 3's choices (6.6.4)
     net = NetConfig(n_inputs, p.hidden, value_range=p.success_reward, init_range=p.init_range, lr=p.lr,
@@ -165,12 +254,12 @@ def chg_lessons(n: int) -> list[Lesson]:
     return lessons[:n]
 
 
-def make_flat_env(p) -> RechargeEnv:
+def make_flat_env(p: FlatWorldParams) -> RechargeEnv:
     """Experiment 1's world: the flat input, primitive actions (``connrl.experiments.recharge_flat.FlatParams``)."""
     return RechargeEnv(obs="flat", max_steps=p.max_steps, collision_penalty=p.collision_penalty)
 
 
-def make_flat_agent(p, rng: np.random.Generator) -> TeachingQCON:
+def make_flat_agent(p: FlatAgentParams, rng: np.random.Generator) -> TeachingQCON:
     """Experiment 1's monolithic QCON-T: "the same learning technique used to train the elementary behaviors"
     (6.6.1), i.e. Ch. 5's, with Ch. 6's gamma, lambda and net size."""
     net = NetConfig(FLAT_SIZE, p.hidden, value_range=100.0, init_range=p.init_range, lr=p.lr, momentum=p.momentum)

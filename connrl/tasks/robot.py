@@ -1,7 +1,8 @@
 """Ch. 5 wiring: the robot task worlds of a parameter set, the scripted teachers' taught lessons (3.7, 5.4), and
 QCON-T (5.3) with its taught lessons; ``evaluate`` is the greedy test of 5.4.
 
-Builders take the experiment's parameters (``connrl.experiments.robot.RobotParams``) by attribute.
+Builders take the experiment's parameters (``connrl.experiments.robot.RobotParams``) by attribute;
+``RobotWorldParams`` and ``RobotAgentParams`` state what they read.
 
 Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "HEROINE robot world", gives each with its reason.
 """
@@ -12,6 +13,7 @@ import functools
 import math
 from pathlib import Path
 from types import SimpleNamespace
+from typing import Protocol
 
 import numpy as np
 
@@ -38,14 +40,96 @@ def lesson_path(task: str) -> Path:
     return LESSON_DIR / f"robot-{task.lower()}.json"
 
 
-def make_env(p) -> RobotTaskEnv:
+class RobotWorldParams(Protocol):
+    """What ``make_env`` reads (read-only, as the frozen parameter dataclasses are)."""
+
+    @property
+    def task(self) -> str: ...
+    @property
+    def door_width(self) -> float: ...
+    @property
+    def binary_low(self) -> float: ...
+    @property
+    def max_steps(self) -> int: ...
+    @property
+    def dp_heading(self) -> float: ...
+    @property
+    def dp_far(self) -> float: ...
+    @property
+    def dock_tolerance(self) -> float: ...
+    @property
+    def edge_jump(self) -> float: ...
+    @property
+    def noise(self) -> bool: ...  # RobotParams: always on (a class constant); RobotNoiseParams (5.5): a parameter
+
+
+class RobotAgentParams(Protocol):
+    """What ``make_agent`` reads."""
+
+    @property
+    def task(self) -> str: ...
+    @property
+    def hidden_fraction(self) -> float: ...
+    @property
+    def value_range(self) -> float: ...
+    @property
+    def init_range(self) -> float: ...
+    @property
+    def lr(self) -> float: ...
+    @property
+    def momentum(self) -> float: ...
+    @property
+    def linear_output(self) -> bool: ...
+    @property
+    def capacity(self) -> int: ...
+    @property
+    def lessons_per_trial(self) -> int: ...
+    @property
+    def p_threshold(self) -> float: ...
+    @property
+    def taught_order(self) -> str: ...
+    @property
+    def t_start(self) -> float: ...
+    @property
+    def t_end(self) -> float: ...
+    @property
+    def trials(self) -> int: ...
+    @property
+    def gamma(self) -> float: ...
+    @property
+    def lam(self) -> float: ...
+    @property
+    def online(self) -> bool: ...
+    @property
+    def stuck_window(self) -> int: ...
+    @property
+    def stuck_radius(self) -> float: ...
+    @property
+    def stuck_boost(self) -> float: ...
+    @property
+    def repair(self) -> str: ...
+    @property
+    def lessons(self) -> int: ...
+    @property
+    def binary_low(self) -> float: ...
+    @property
+    def door_width(self) -> float: ...
+    @property
+    def dock_tolerance(self) -> float: ...
+    @property
+    def edge_jump(self) -> float: ...
+    @property
+    def lesson_starts(self) -> str: ...
+
+
+def make_env(p: RobotWorldParams) -> RobotTaskEnv:
     """The task environment of a parameter set (the layout's doors resized when ``door_width`` asks)."""
     layout = Layout.load("default")
     if p.door_width != SHIPPED_WORLD["door_width"]:
         layout = layout.with_door_width(p.door_width)
     return RobotTaskEnv(p.task, layout=layout, binary_low=p.binary_low, max_steps=p.max_steps,
                         dp_heading=p.dp_heading, dp_depth=(24.0, p.dp_far), dock_tolerance=p.dock_tolerance,
-                        edge_jump=p.edge_jump, noise=getattr(p, "noise", True))  # RobotNoiseParams (5.5) sets it
+                        edge_jump=p.edge_jump, noise=p.noise)
 
 
 def spread_heading(start: tuple, k: int, layout: Layout) -> tuple:
@@ -117,7 +201,8 @@ def _demonstrated(task: str, n: int, door_width: float, dock_tolerance: float, e
     """The shipped lessons' recipe (seed 0, the default start region with any heading, 30 steps) in another world
     or for more lessons than the file has; cached per process (callers copy the inputs before changing them)."""
     env = make_env(SimpleNamespace(task=task, door_width=door_width, dock_tolerance=dock_tolerance, binary_low=-0.5,
-                                   max_steps=30, dp_heading=180.0, dp_far=DP_FAR, edge_jump=edge_jump))
+                                   max_steps=30, dp_heading=180.0, dp_far=DP_FAR, edge_jump=edge_jump,
+                                   noise=True))
     return tuple(make_taught_lessons(task, n, seed=0, env=env, max_tries=max(200, 20 * n), spread=spread))
 
 
@@ -156,7 +241,7 @@ def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: floa
     return out
 
 
-def make_agent(p, rng: np.random.Generator) -> TeachingQCON:
+def make_agent(p: RobotAgentParams, rng: np.random.Generator) -> TeachingQCON:
     """QCON-T of 5.3 from the run's parameters (``connrl.experiments.robot.RobotParams``); ``linear_output``:
     single-layer nets with a linear output unit."""
     n_in = OBS_SIZE[p.task]

@@ -499,3 +499,62 @@ class _StateTable:
     def update(self, x, a, target):
         self.calls.append((int(x[0]), a, target))
         return self.v[int(x[0]), a]
+
+
+def _grouped(rng, n=30, terminated=False):
+    """A lesson of a slow random walk (so state grouping merges steps) and its grouping (6.6.4)."""
+    from connrl.core.grouping import group_lesson
+
+    x = np.cumsum(rng.normal(scale=0.3, size=(n + 1, 7)), axis=0) * 0.2
+    lesson = Lesson(x, np.repeat(rng.integers(0, 4, n // 3 + 1), 3)[:n], rng.choice([0.0, -10.0, 100.0], n),
+                    terminated=terminated, truncated=not terminated)
+    w = rng.choice([1.0, 100.0], (n, 4))
+    allowed = rng.random((n + 1, 4)) < 0.7
+    g = group_lesson(lesson, 0.99, (0.5, 2.5), rng, w, allowed)
+    assert len(g.lesson) < n and g.discounts.min() < 0.99  # some steps were grouped
+    return g
+
+
+@pytest.mark.parametrize("hidden", [5, 0])
+@pytest.mark.parametrize("terminated", [True, False])
+def test_kernel_equals_reference_on_a_grouped_lesson(hidden, terminated):
+    """State grouping's replay (what QCON.replay_lesson passes): the compiled kernel and the plain loop agree."""
+    g = _grouped(np.random.default_rng(11), terminated=terminated)
+    fast, ref = _pair(hidden)
+    params = ReplayParams(gamma=0.99, lam=0.8, temperature=2.0, p_threshold=0.02)
+    kw = {"weights": g.weights, "allowed": g.allowed, "discounts": g.discounts}
+    assert replay_q(fast, g.lesson, params, **kw) == replay_q_reference(ref, g.lesson, params, **kw)
+    _assert_same_nets(fast, ref)
+
+
+class _Recorder:
+    """Fixed Q-values per input row (keyed by its first input); updates are only recorded."""
+
+    def __init__(self, inputs, rng):
+        self.v = {float(x[0]): rng.normal(size=4) for x in inputs}
+        self.calls = []
+
+    def values(self, x):
+        return self.v[float(x[0])].copy()
+
+    def update(self, x, a, target):
+        self.calls.append(target)
+        return self.v[float(x[0])][a]
+
+
+@pytest.mark.parametrize("batch", [False, True])
+def test_grouped_replay_targets_are_lambda_returns_with_per_step_discounts(batch):
+    """With fixed values and every action a policy action, replaying a grouped lesson (incremental or batch)
+    updates toward ``lambda_returns`` with the per-step discounts gamma^k."""
+    rng = np.random.default_rng(5)
+    g = _grouped(rng, terminated=True)
+    q = _Recorder(g.lesson.inputs, rng)
+    params = ReplayParams(gamma=0.99, lam=0.8, p_threshold=0.0, batch=batch)
+    replay_q_reference(q, g.lesson, params, discounts=g.discounts)
+    u = np.array([q.values(x).max() for x in g.lesson.inputs[1:]])
+    u[-1] = 0.0  # terminal
+    expected = lambda_returns(g.lesson.rewards, u, g.discounts, 0.8)
+    np.testing.assert_allclose(q.calls[::-1], expected, rtol=1e-12)
+    assert not np.allclose(expected, lambda_returns(g.lesson.rewards, u, 0.99, 0.8))  # the discounts mattered
+    with pytest.raises(ValueError, match="repairs are defined for incremental replay only"):
+        replay_q_reference(q, g.lesson, ReplayParams(gamma=0.99, batch=True), repair="lower")
