@@ -73,7 +73,7 @@ def relation_check(xs, ys, symbol: str) -> tuple[str, str]:
     if verdict == "yes":
         return AGREES, ("better" if up else "worse") + shown
     if verdict == "no":
-        return CONTRADICTED, ("worse" if up else "better") + shown
+        return CONTRADICTED, ("worse" if up else "better") + f" (p = {1 - p:.2g})"
     if symbol in (">=", "<="):
         c = compare_runs(ys, xs)
         if c is not None and c.verdict == SAME:
