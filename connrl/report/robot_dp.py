@@ -127,7 +127,9 @@ def _copy_reading(per_run) -> str:
     if key not in per_run or TEACH[2] not in per_run:
         return ""
     rows = {k: c for k, _, _, c in checks.matched_passes(*per_run[key], *per_run[TEACH[2]])}
-    c = rows.get(10)
+    if 10 not in rows:
+        return "Neither curve was measured at 10 passes here, so the matched comparison at trial 10 is not made."
+    c = rows[10]
     if c is None:
         return ("With fewer than 2 runs a side at 10 passes, the matched comparison decides nothing: it cannot say "
                 "whether QCON-T's use of the lessons or the number of passes limits early learning.")
