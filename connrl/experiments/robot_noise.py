@@ -4,9 +4,9 @@ in the noisy world of 5.2.1 (the Ch. 5 default: ~8 % control error, +-10 % sonar
 set to 127) and with both kinds of noise off in training and tests. The simulator draws the same random numbers
 either way (connrl.envs.robot), so a noise-free run differs from its noisy twin only by the noise.
 
-"Almost the same" is read as: the final performances differ by less than two standard errors of the difference
-(Welch), or by less than 10 % of the noisy world's (R; the thesis gives no number): ``about_the_same``, the rule
-the whole results page uses (connrl.experiments.spec).
+"Almost the same" is read as: the final performances are the same within +-10 % of the noisy world's mean by two
+one-sided t-tests (TOST) at 0.05 (R; the thesis gives no margin): ``connrl.report.verdicts.compare``, the rule the
+whole results page uses; a difference is a Welch t-test, and otherwise the runs decide neither.
 """
 
 from __future__ import annotations

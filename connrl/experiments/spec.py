@@ -21,8 +21,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 PROFILES = ("tiny", "quick", "full")
 
 
@@ -251,15 +249,3 @@ def qualified_name(obj) -> str:
     """``"module:QualName"`` of a class, for ``load_callable`` in a worker process."""
     cls = obj if isinstance(obj, type) else type(obj)
     return f"{cls.__module__}:{cls.__qualname__}"
-
-
-def about_the_same(reference, other, rel: float = 0.1) -> tuple[float, float, bool]:
-    """(mean(other) - mean(reference), 2 SE of that difference (Welch), and whether the two are "about the same":
-    within 2 SE, or within ``rel`` of the reference's mean; with fewer than 2 runs a side, by ``rel`` alone). The
-    results page's one reading of the thesis's "almost the same", "similar" and "roughly the best"."""
-    a, b = np.asarray(reference, float), np.asarray(other, float)
-    diff = float(b.mean() - a.mean())
-    if min(a.size, b.size) < 2:
-        return diff, float("nan"), abs(diff) <= rel * abs(float(a.mean()))
-    two_se = 2 * float(np.sqrt(a.var(ddof=1) / a.size + b.var(ddof=1) / b.size))
-    return diff, two_se, abs(diff) <= two_se or abs(diff) <= rel * abs(float(a.mean()))

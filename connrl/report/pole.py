@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from connrl.experiments.pole import EXPERIMENTS
+from connrl.report import checks
 from connrl.report.page import figure, load_summary, note, summary_table
 
 
@@ -16,6 +17,7 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
         summary = load_summary(out_dir, spec.name)
         if summary is None:
             continue
+        checks.meets_claims(summary, "7.5.4 fn. 4", "7.5.4", f"{spec.name}: {spec.title}")
         parts += [f"### {spec.name}: {spec.title}", "", summary_table(summary), "",
                   figure(out_dir / spec.name / "curve.png", doc, spec.name), ""]
     parts += [note("pole-choices"), ""]

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from connrl.envs.survival import GRID_SIZE, render_rgb
-from connrl.experiments.spec import about_the_same
 from connrl.experiments.survival import EXPERIMENTS
+from connrl.report import checks, verdicts
 from connrl.report.page import figure, note, stored
 from connrl.report.plots import save_figure
 from connrl.report.survival_accuracy import model_accuracy
@@ -51,28 +51,9 @@ THESIS_COMPARISONS = [
     ("4.4.5", "local", "learned", "AHCON-R", "AHCON-M", ">=", "~"),
     ("4.4.5", "local", "learned", "QCON-R", "QCON-M", ">", ">"),
 ]
-_SIGN = {">": 2, ">=": 1, "~": 0, "<=": -1, "<": -2}
-
-
-def relation(xs, ys) -> str:
-    """Our symbol for X vs Y from per-run values: the mean difference against its standard error
-    (|d| < 1 se: ~; 1-2 se: >= or <=; > 2 se: > or <)."""
-    x, y = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
-    d = x.mean() - y.mean()
-    se = math.sqrt((x.var(ddof=1) / x.size if x.size > 1 else 0.0) + (y.var(ddof=1) / y.size if y.size > 1 else 0.0))
-    if se == 0.0:
-        return "~" if d == 0 else (">" if d > 0 else "<")
-    z = d / se
-    return ">" if z > 2 else ">=" if z > 1 else "~" if z >= -1 else "<=" if z >= -2 else "<"
-
-
-def agreement(ours: str, thesis: str) -> str:
-    a, b = _SIGN[ours], _SIGN[thesis]
-    if a == b:
-        return "agrees"
-    if a * b < 0 or abs(a - b) > 1:
-        return "**disagrees**"
-    return "roughly"
+PLANNING_FLOOR = 0.4  # Fig. 4.5 "did not drop close to zero": a tenth of the maximum of 4 hypothetical actions
+_COMPARISONS_HEADING = "Comparisons of 4.4.1-4.4.5, re-derived from our runs"
+_REPRESENTATION_HEADING = "4.4.1: final performance under the two action representations"
 
 
 def _load_records(out: Path, name: str) -> tuple[dict | None, list[dict]]:
@@ -140,7 +121,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
         if byv:
             studies[rep] = byv
     if studies:
-        parts += _comparisons(studies)
+        parts += _comparisons(studies) + _representation(studies)
     parts += _speedup(out_dir, doc)
     parts += _planning(out_dir, doc)
     parts += model_accuracy(out_dir, doc)
@@ -158,14 +139,19 @@ def _values(byv: dict, who: str, model: str | None, metric: str) -> list[float]:
 
 
 def _comparisons(studies: dict) -> list[str]:
-    lines = ["### Comparisons of 4.4.1-4.4.5, re-derived from our runs", "",
-             "Speed = mean food over all tests; final = mean food over the last three tests. Our symbol comes "
-             "from the difference of the means against its standard error over runs (< 1 se: ~, 1-2 se: >= / <=, "
-             "> 2 se: > / <). *roughly* = one step apart (e.g. > vs >=); *disagrees* = opposite or two steps "
-             "apart.", "",
+    lines = [f"### {_COMPARISONS_HEADING}", "",
+             "Speed = mean food over all tests; final = mean food over the last three tests; X vs Y per run "
+             "(\"Q\" / \"AHC\" pool the runs of all agents of a kind, as 4.4.1 does). The rules "
+             "(`connrl/report/verdicts.py`): > and < need X significantly better / worse than Y (one-sided Welch "
+             f"t-test at {verdicts.ALPHA:g}); ~ needs the same within ±10 % of Y's mean (TOST at "
+             f"{verdicts.ALPHA:g}: the 90 % CI of the difference inside the margin; the thesis gives no margin, "
+             "10 % is the page's default); >= and <= (\"slightly\") need X not significantly on the other side "
+             "and either significantly on this side or the same within 10 %. A cell is *contradicted* when the "
+             "test finds the opposite (or a difference where the thesis has ~), *undetermined* when the runs "
+             "decide neither.", "",
              "| § | repr. | model | comparison | speed: thesis | ours | | final: thesis | ours | |",
              "|---|---|---|---|---|---|---|---|---|---|"]
-    tally = {"agrees": 0, "roughly": 0, "**disagrees**": 0}
+    by_sec: dict[str, list[str]] = {}
     for sec, rep, model, x, y, t_speed, t_final in THESIS_COMPARISONS:
         byv = studies.get(rep)
         if not byv:
@@ -176,13 +162,68 @@ def _comparisons(studies: dict) -> list[str]:
             if not xs or not ys:
                 cells += [t, "—", ""]
                 continue
-            ours = relation(xs, ys)
-            a = agreement(ours, t)
-            tally[a] += 1
-            cells += [t, ours, a]
+            word, ours = checks.relation_check(xs, ys, t)
+            by_sec.setdefault(sec, []).append(word)
+            cells += [t, ours, word if word == checks.AGREES else f"**{word}**"]
         lines.append(f"| {sec} | {rep} | {model or ''} | {x} vs {y} | " + " | ".join(cells) + " |")
-    lines += ["", f"Agreement: {tally['agrees']} agree, {tally['roughly']} roughly, "
-              f"{tally['**disagrees**']} disagree (of {sum(tally.values())} cells).", ""]
+    every = [w for ws in by_sec.values() for w in ws]
+    lines += ["", f"Cells: {checks.tally(every)}.", ""]
+    what = {"4.4.1": "AHC- vs Q-agents", "4.4.2": "experience replay", "4.4.3": "action models",
+            "4.4.4": "teaching", "4.4.5": "experience replay vs action models"}
+    for sec, words in by_sec.items():
+        verdicts.claim(f"Table of {sec} ({what[sec]})", sec, "the table's > / ~ / < cells (speed, final)",
+                       checks.tally(words), "each cell by the rules above (Welch one-sided for > <; TOST ±10 % "
+                       "for ~); all agree = reproduced", checks.claim_verdict(words), anchor=_COMPARISONS_HEADING)
+    return lines
+
+
+def _representation(studies: dict) -> list[str]:
+    """4.4.1's sentence on the action representations, per agent: final food, global (Study 1) against local."""
+    if not {"global", "local"} <= set(studies):
+        return []
+    g, lo = studies["global"], studies["local"]
+    lines = [f"### {_REPRESENTATION_HEADING}", "",
+             "The thesis (4.4.1): \"Q-agents' final performance was basically unaffected by using different action "
+             "representations, while for AHC-agents, the local action representation apparently worked better than "
+             "the global action representation as far as the final performance is concerned.\" Per agent, final "
+             "food of Study 1 (global) against Study 2 (local). Q-agents: \"basically unaffected\" is read as the "
+             "same within ±10 % of the global runs' mean (TOST at 0.05; the thesis gives no margin). AHC-agents: "
+             "local better (one-sided Welch at 0.05).", "",
+             "| agent | global | local | local - global | verdict | numbers |", "|---|---|---|---|---|---|"]
+    q_words, a_words, q_ours, a_ours = [], [], [], []
+    for label in g:
+        if label not in lo:
+            continue
+        xs = [r["metrics"]["final_food"] for r in g[label]]
+        ys = [r["metrics"]["final_food"] for r in lo[label]]
+        mg, ml = float(np.mean(xs)), float(np.mean(ys))
+        if label.startswith("QCON"):
+            c = checks.compare_runs(xs, ys)
+            word = {verdicts.SAME: checks.AGREES, verdicts.DIFFERENT: checks.CONTRADICTED}.get(
+                c.verdict if c else "", checks.OPEN)
+            shown, numbers = checks.same_word(c), checks.comparison_text(c, xs, ys)
+            q_words.append(word)
+            q_ours.append(f"{label} {mg:.2f} → {ml:.2f}")
+        else:
+            v, p = checks.better_runs(xs, ys)
+            word = {"yes": checks.AGREES, "no": checks.CONTRADICTED}.get(v, checks.OPEN)
+            shown = {"yes": "local better", "no": "local worse"}.get(v, "not separated")
+            numbers = "fewer than 2 runs a side" if p is None else f"one-sided Welch p (local better) = {p:.2g}"
+            a_words.append(word)
+            a_ours.append(f"{label} {mg:.2f} → {ml:.2f}")
+        lines.append(f"| {label} | {mg:.2f} | {ml:.2f} | {ml - mg:+.2f} ({(ml - mg) / mg if mg else float('nan'):+.0%})"
+                     f" | {shown} ({word}) | {numbers} |")
+    lines += ["", f"Q-agents basically unaffected: {checks.claim_verdict(q_words)} ({checks.tally(q_words)}); "
+              f"AHC-agents better with the local representation: {checks.claim_verdict(a_words)} "
+              f"({checks.tally(a_words)}).", ""]
+    verdicts.claim("4.4.1: Q-agents' final performance unaffected by the representation", "4.4.1",
+                   "basically unaffected (global vs local)", "; ".join(q_ours),
+                   "per Q-agent, final food global vs local the same within ±10 % of global (TOST at 0.05)",
+                   checks.claim_verdict(q_words), anchor=_REPRESENTATION_HEADING)
+    verdicts.claim("4.4.1: AHC-agents' final performance better with the local representation", "4.4.1",
+                   "local apparently better", "; ".join(a_ours),
+                   "per AHC-agent, final food local > global (one-sided Welch at 0.05)",
+                   checks.claim_verdict(a_words), anchor=_REPRESENTATION_HEADING)
     return lines
 
 
@@ -218,14 +259,27 @@ def _speedup(out: Path, doc: Path) -> list[str]:
         sp = f"{base / c8:.1f}" if base and c8 else "—"
         lines.append(f"| {text} | {t} | {200 / t:.1f} | {'not reached' if c8 is None else f'{c8:.0f}'} | {sp} | "
                      f"{per} | {len(rs)} |")
-    order = [lab for lab, _, _ in _SPEEDUP_ROWS if lab in ours]
-    reached = sorted((v, k) for k, v in ours.items() if v is not None)
-    fastest = reached[0][1] if reached else None
-    slowest = "QCON" if ours.get("QCON") is None or (reached and reached[-1][1] == "QCON") else reached[-1][1]
-    verdict = ("agrees" if fastest == "QCON-T" and slowest == "QCON" else "**does not agree**")
-    lines += ["", f"Ordering check (thesis: replay + teaching fastest, no extension slowest): fastest here is "
-              f"{fastest}, slowest {slowest} — {verdict}. Rows: {', '.join(order)}. A run that never reaches 8 "
-              "within 300 plays is shown as —.", ""]
+    expected = [lab for lab, _, _ in reversed(_SPEEDUP_ROWS) if lab in byv]  # fastest first, as the table says
+    word, pair_lines = checks.ordering_check(
+        {lab: [r["metrics"]["food_auc"] for r in byv[lab]] for lab in expected}, expected)
+    lines += ["", "A run that never reaches 8 within 300 plays is shown as —.", "",
+              "**Ordering check.** The table orders the agents, fastest first: " + " > ".join(expected) + ". Plays to "
+              "8 cannot order runs that never reach 8 within the 300 plays, so each pair is checked on the mean food "
+              "over all tests (our measure of speed), one-sided Welch t-test at 0.05 per adjacent pair "
+              "(`verdicts.ordering`); the whole ordering is reproduced only when every pair is in order:", "",
+              *[f"- {line}" for line in pair_lines], "", f"Ordering: **{word}**.", ""]
+    heading = "Table of 4.5: Study 2 Q-agents, plays to reach 8 food per play"
+    means = {lab: float(np.mean([r["metrics"]["food_auc"] for r in byv[lab]])) for lab in expected}
+    verdicts.claim("Table 4.5: the ordering of the speedups", "4.5", " > ".join(expected) + " (fastest first)",
+                   "food over all tests " + ", ".join(f"{lab} {m:.2f}" for lab, m in means.items()),
+                   "each adjacent pair in order, one-sided Welch at 0.05 on food over all tests",
+                   checks.ordering_verdict(word), anchor=heading)
+    within = [lab for lab, _, t in _SPEEDUP_ROWS if lab in ours and ours[lab] is not None and ours[lab] <= t]
+    verdicts.claim("Table 4.5: plays to reach 8", "4.5", ", ".join(f"{lab} {t}" for lab, _, t in _SPEEDUP_ROWS),
+                   ", ".join(f"{lab} {'not reached' if ours[lab] is None else f'{ours[lab]:.0f}'}" for lab in ours),
+                   "the mean curve reaches 8 within the thesis's plays, every agent (no test of spread)",
+                   verdicts.REPRODUCED if len(within) == len(ours) else verdicts.PARTLY if within
+                   else verdicts.NOT_REPRODUCED, anchor=heading)
     if source == "survival-speedup":
         lines += [figure(out / source / "curve.png", doc, source), ""]
     return lines
@@ -235,14 +289,34 @@ def _planning(out: Path, doc: Path) -> list[str]:
     summary, recs = _load_records(out, "survival-planning")
     if summary is None:
         return []
-    lines = ["### Fig. 4.5: hypothetical actions per step (Study 2 -M agents)", "", _command(summary), "",
+    heading = "Fig. 4.5: hypothetical actions per step (Study 2 -M agents)"
+    lines = [f"### {heading}", "", _command(summary), "",
              "The thesis: planning drops quickly as the learning curves level off but not to zero (maximum 4).", "",
-             "| agent | plays 1-20 | plays 141-160 | last 20 plays |", "|---|---|---|---|"]
+             "| agent | plays 1-20 | plays 141-160 | last 20 plays | drops (plays 1-20 vs last 20) |",
+             "|---|---|---|---|---|"]
+    words, ours = [], []
     for label, rs in _by_variant(recs).items():
-        h = np.mean([r["extra"]["hypothetical_per_step"] for r in rs], axis=0)
+        per = [np.asarray(r["extra"]["hypothetical_per_step"], float) for r in rs]
+        h = np.mean(per, axis=0)
         mid = f"{np.mean(h[140:160]):.2f}" if h.size >= 160 else "—"
-        lines.append(f"| {label} | {np.mean(h[:20]):.2f} | {mid} | {np.mean(h[-20:]):.2f} |")
-    return lines + ["", figure(out / "survival-planning" / "curve.png", doc, "survival-planning"), ""]
+        first, last = [float(np.mean(x[:20])) for x in per], [float(np.mean(x[-20:])) for x in per]
+        drop, p = checks.better_runs(first, last, higher_is_better=False)
+        not_zero = min(last) >= PLANNING_FLOOR
+        word = checks.AGREES if drop == "yes" and not_zero else \
+            checks.CONTRADICTED if drop == "no" or not not_zero else checks.OPEN
+        words.append(word)
+        kind = label.split("(")[-1].split()[0]
+        ours.append(f"{label.split()[0]} ({kind}) {np.mean(first):.2f} → {np.mean(last):.2f}")
+        shown = {"yes": "drops", "no": "**rises**"}.get(drop, "not separated") + ("" if p is None else f", p = {p:.2g}")
+        lines.append(f"| {label} | {np.mean(h[:20]):.2f} | {mid} | {np.mean(h[-20:]):.2f} | {shown} |")
+    lines += ["", f"Rule: per agent, the last 20 plays' mean below plays 1-20's (one-sided Welch over runs at 0.05) "
+              f"and every run's last-20 mean at least {PLANNING_FLOOR:g} (a tenth of the maximum 4: \"not close to "
+              f"zero\"). {checks.tally(words)}.", ""]
+    verdicts.claim("Fig. 4.5: planning drops as learning levels off, not to zero", "4.4.3",
+                   "drops quickly, not close to zero (max 4)", "; ".join(ours),
+                   f"per -M agent: plays 1-20 > last 20 (one-sided Welch at 0.05), every run's last 20 ≥ "
+                   f"{PLANNING_FLOOR:g}", checks.claim_verdict(words), anchor=heading)
+    return lines + [figure(out / "survival-planning" / "curve.png", doc, "survival-planning"), ""]
 
 
 def _evaluation(out: Path, doc: Path) -> list[str]:
@@ -268,7 +342,15 @@ def _evaluation(out: Path, doc: Path) -> list[str]:
               "|---|" + "---|" * 16, "| thesis | " + " | ".join(f"{v:.1f}" for v in THESIS_HISTOGRAM) + " |",
               "| ours | " + " | ".join(f"{v:.1f}" for v in hist) + " |", ""]
     ok = np.mean(m["eval_food"]) >= 12.1 and np.mean(m["eval_all_food_pct"]) >= 39.9
-    lines += [f"Acceptance (≥ 12.1 food per play and ≥ 39.9% all food): {'met' if ok else '**not met**'}.", ""]
+    lines += [f"Acceptance (the mean over runs ≥ 12.1 food per play and ≥ 39.9% all food; no test of spread): "
+              f"{'met' if ok else '**not met**'}.", ""]
+    verdicts.claim("4.3.4: QCON-T on 8000 random environments", "4.3.4", "12.1 food per play, 39.9% all food",
+                   f"{np.mean(m['eval_food']):.2f} food, {np.mean(m['eval_all_food_pct']):.1f}% all food "
+                   f"(mean of {len(recs)} run(s), {summary['profile']} profile)",
+                   "the mean over runs at least the thesis's numbers, both (no test of spread)",
+                   verdicts.REPRODUCED if ok else verdicts.NOT_REPRODUCED,
+                   "" if summary["profile"] == "full" else f"{summary['profile']} profile, not the protocol",
+                   anchor="4.3.4: QCON-T after 300 plays on random environments")
     if recs and recs[0]["extra"].get("example_play"):
         png = render_play(recs[0]["extra"]["example_play"], doc.parent / "figures" / "survival-play.png")
         lines += ["One evaluation play of the first run (`connrl.report.survival.render_play`):", "",
@@ -335,21 +417,55 @@ def _tuning(out: Path) -> list[str]:
              "performance. (P_t = 0 indeed gave poor performance.)\"", "", *table]
     if min(len(x) for x in final.values()) < 2:
         return lines + [""]
+    heading = "4.2.7: replay thresholds P_t (Study 1)"
     ahc = sorted((k for k in final if k.startswith("AHCON-R")), key=lambda k: -np.mean(final[k]))
     ref = ahc[1] if ahc[0] == "AHCON-R P_t=0.2" else ahc[0]  # 0.2 against the best other threshold tried
-    d, two_se, same = about_the_same(final[ref], final["AHCON-R P_t=0.2"])
-    pairs = [about_the_same(final[f"QCON-R P_t={a}"], final[f"QCON-R P_t={b}"])
+    best_word, best_text = _roughly_best(final[ref], final["AHCON-R P_t=0.2"])
+    qr = {t: final[f"QCON-R P_t={t}"] for t in ("0.1", "0.01", "0.001")}
+    pairs = [(a, b, checks.compare_runs(qr[a], qr[b]))
              for a, b in (("0.1", "0.01"), ("0.01", "0.001"), ("0.1", "0.001"))]
-    spread = max(abs(x[0]) for x in pairs)
-    d0, two_se0, same0 = about_the_same(final["QCON-R P_t=0.01"], final["QCON-R P_t=0"])
+    similar = [{verdicts.SAME: checks.AGREES, verdicts.DIFFERENT: checks.CONTRADICTED}.get(
+        c.verdict if c else "", checks.OPEN) for *_, c in pairs]
+    poor, p0 = checks.better_runs(final["QCON-R P_t=0.01"], final["QCON-R P_t=0"])
+    d0 = float(np.mean(final["QCON-R P_t=0"]) - np.mean(final["QCON-R P_t=0.01"]))
     rel0 = d0 / np.mean(final["QCON-R P_t=0.01"])
-    word = {True: "holds", False: "**does not hold**"}
-    poor = "not shown" if same0 else ("holds" if d0 < 0 else "**does not hold**")
-    return lines + ["", f"**Verdicts** (\"about the same\": within 2 SE of the difference, Welch, or within 10 %): "
-                    f"AHCON-R P_t = 0.2 roughly the best: {word[d >= 0 or same]} (0.2 is {d:+.2f} against "
-                    f"{ref.split()[-1]}, 2 SE {two_se:.2f}); QCON-R similar at 0.1, 0.01 and 0.001: "
-                    f"{word[all(x[2] for x in pairs)]} (largest difference {spread:.2f}); QCON-R poor at P_t = 0: "
-                    f"{poor} (0 is {d0:+.2f}, {rel0:+.0%}, against 0.01; 2 SE {two_se0:.2f}).", ""]
+    poor_word = {"no": checks.AGREES, "yes": checks.CONTRADICTED}.get(poor, checks.OPEN)
+    out = lines + ["", f"**Verdicts** ({checks.RULE_SAME}; the thesis gives no margin, so the page's default ±10 % "
+                   "of the reference is used):", "",
+                   f"- AHCON-R P_t = 0.2 roughly the best (the same as, or better than, the best other threshold, "
+                   f"{ref.split()[-1]}): **{best_word}** — {best_text}.",
+                   "- QCON-R similar at 0.1, 0.01 and 0.001 (every pair the same): "
+                   f"**{checks.claim_verdict(similar)}** — " + "; ".join(
+                       f"{b} against {a}: {checks.comparison_text(c, qr[a], qr[b])}" for a, b, c in pairs) + ".",
+                   f"- QCON-R poor at P_t = 0 (worse than 0.01, one-sided Welch at 0.05): **{poor_word}** — 0 is "
+                   f"{d0:+.2f} ({rel0:+.0%}) against 0.01" + ("" if p0 is None else f", p (0 better) = {p0:.2g}")
+                   + "; the thesis's \"poor\" suggests more than a few per cent.", ""]
+    verdicts.claim("4.2.7: AHCON-R P_t = 0.2 roughly the best", "4.2.7", "0.2 roughly the best of those tried",
+                   f"0.2: {np.mean(final['AHCON-R P_t=0.2']):.2f}, best other ({ref.split()[-1]}) "
+                   f"{np.mean(final[ref]):.2f}", "same within ±10 % (TOST) or significantly better than the best "
+                   "other threshold", checks.claim_verdict([best_word]), anchor=heading)
+    verdicts.claim("4.2.7: QCON-R similar at P_t = 0.1, 0.01, 0.001", "4.2.7", "similar performance",
+                   ", ".join(f"{t}: {np.mean(final[f'QCON-R P_t={t}']):.2f}" for t in ("0.1", "0.01", "0.001")),
+                   "every pair the same within ±10 % (TOST at 0.05)", checks.claim_verdict(similar), anchor=heading)
+    verdicts.claim("4.2.7: QCON-R poor at P_t = 0", "4.2.7", "poor performance",
+                   f"0: {np.mean(final['QCON-R P_t=0']):.2f} against 0.01: {np.mean(final['QCON-R P_t=0.01']):.2f} "
+                   f"({rel0:+.0%})", "worse than 0.01, one-sided Welch at 0.05", checks.claim_verdict([poor_word]),
+                   anchor=heading)
+    return out
+
+
+def _roughly_best(best_other, chosen) -> tuple[str, str]:
+    """"``chosen`` gave roughly the best performance": agrees when it is the same as the best other value tried
+    (TOST within 10 %) or significantly better; contradicted when it is significantly worse (Welch, two-sided)."""
+    c = checks.compare_runs(best_other, chosen)
+    up, p = checks.better_runs(best_other, chosen)
+    if c is not None and c.verdict == verdicts.SAME or up == "yes":
+        word = checks.AGREES
+    elif c is not None and c.verdict == verdicts.DIFFERENT and c.diff < 0:
+        word = checks.CONTRADICTED
+    else:
+        word = checks.OPEN
+    return word, checks.comparison_text(c, best_other, chosen)
 
 
 def _food(out: Path) -> list[str]:
@@ -365,7 +481,14 @@ def _food(out: Path) -> list[str]:
     if min(len(x) for x in final.values()) < 2:
         return lines + [""]
     best = max(final, key=lambda k: np.mean(final[k]))
-    d, two_se, same = about_the_same(final[best], final["food reward 0.4"])
-    return lines + ["", f"**Verdict** (within 2 SE of the difference, Welch, or within 10 %): 0.4 roughly the best: "
-                    f"{'holds' if same else '**does not hold**'} (the best tried is {best.split()[-1]}; 0.4 is "
-                    f"{d:+.2f} against it, 2 SE {two_se:.2f}).", ""]
+    chosen = final["food reward 0.4"]
+    if best == "food reward 0.4":  # 0.4 has the highest mean: set it against the next best
+        best = max((k for k in final if k != "food reward 0.4"), key=lambda k: np.mean(final[k]))
+    word, text = _roughly_best(final[best], chosen)
+    verdicts.claim("4.2.1: food reward 0.4 roughly the best for AHCON", "4.2.1", "0.4 roughly the best",
+                   f"0.4: {np.mean(chosen):.2f}, best other ({best.split()[-1]}) {np.mean(final[best]):.2f}",
+                   "same within ±10 % (TOST) or significantly better than the best other value",
+                   checks.claim_verdict([word]), anchor="4.2.1: the food reward (Study 1, AHCON)")
+    return lines + ["", f"**Verdict** ({checks.RULE_SAME}; the thesis gives no margin, so ±10 % of the best other "
+                    f"value's mean): 0.4 roughly the best (the same as, or better than, the best other value tried, "
+                    f"{best.split()[-1]}): **{word}** — {text}.", ""]

@@ -14,6 +14,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from connrl.experiments.survival import EXPERIMENTS, PROBE_SEED, PROBE_SIZE
+from connrl.report import verdicts
 from connrl.report.page import figure, run_rows, stored
 from connrl.report.plots import save_figure
 from connrl.tasks.survival_models import probe_experiences
@@ -176,5 +177,17 @@ def model_accuracy(out: Path, doc: Path) -> list[str]:
         + (f"; the last {BLOCK} plays' probe errors are {min(kept):.0%}-{max(kept):.0%} of those of plays "
            f"1-{BLOCK}." if kept else "."), ""]
     verdict += _scale_lines(probes)
+    heading = "4.4.3: the learned model's prediction accuracy (Studies 1 and 2)"
+    if probes:
+        verdicts.claim("4.4.3: model accuracy near its asymptote after ~50 plays", "4.4.3", "about 50 plays",
+                       f"{len(near)} of {len(probes)} probe-error curves settle by play {2 * THESIS_SETTLES}",
+                       f"every fixed-probe curve settles (within {BAND:.0%} or 2 SD of its level after play {TAIL}) "
+                       f"by play {2 * THESIS_SETTLES}; no test over runs", verdicts.REPRODUCED
+                       if len(near) == len(probes) else verdicts.NOT_REPRODUCED if not near else verdicts.PARTLY,
+                       anchor=heading)
+    verdicts.claim("4.4.3: the learned model never nearly perfect", "4.4.3", "never nearly perfect",
+                   "lowest last-10-play error of a run > 0" if never_zero else "some run's error reaches 0",
+                   "no run's error reaches 0 after 300 plays", verdicts.REPRODUCED if never_zero
+                   else verdicts.NOT_REPRODUCED, anchor=heading)
     return head + rows + verdict + [figure(_draw(panels, Path(out) / "survival-model-accuracy.png"), doc,
                                            "survival-model-accuracy"), ""]

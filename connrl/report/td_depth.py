@@ -9,6 +9,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 
 from connrl.experiments.td_depth import EXPERIMENTS, MARKS
+from connrl.report import verdicts
 from connrl.report.page import figure, fixed, run_rows, stored
 from connrl.report.plots import save_figure
 
@@ -46,6 +47,11 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     dev = summary["variants"][spec.variants[0].label]["quantities"]["max_rel_deviation"]["mean"]
     ok = dev is not None and dev < MATCH
     by_lam = {r["lam"]: r for r in rows}
+    verdicts.claim("Fig. 5.2: D = -1/ln(lambda)", "5.1.1", "D = -1/ln(lambda)",
+                   f"largest relative deviation {dev:.1e}" if dev is not None else "—",
+                   f"every lambda's D within {MATCH:g} of the formula (deterministic)",
+                   verdicts.REPRODUCED if ok else verdicts.NOT_REPRODUCED,
+                   anchor=f"{spec.name}: {spec.title} (thesis {spec.section})")
     lines = [f"### {spec.name}: {spec.title} (thesis {spec.section})", "",
              f"`connrl run {spec.name} --profile {summary['profile']}` — deterministic, 1 run, "
              f"{len(rows)} lambdas, lessons of {recs[0]['params']['steps']} steps, "

@@ -1,14 +1,10 @@
 """5.5's noise experiment (connrl.experiments.robot_noise): its noisy runs are Exp. 1's, its noise-free world has no
-noise, and the "about the same" reading by hand."""
+noise (its verdict rule is connrl.report.verdicts, tested in tests/report)."""
 
 import json
 from pathlib import Path
 
-import numpy as np
-import pytest
-
 from connrl.experiments.robot_noise import EXPERIMENTS, RobotNoiseParams
-from connrl.experiments.spec import about_the_same
 from connrl.tasks.robot import make_env
 
 GOLDEN = json.loads((Path(__file__).parents[1] / "data" / "tiny_e172482.json").read_text())
@@ -33,15 +29,3 @@ def test_noise_off_means_exact_moves_and_readings():
 def test_the_variants_cover_each_task_both_ways():
     labels = [v.label for v in EXPERIMENTS[0].variants]
     assert labels == ["DP, noisy", "DP, noise-free", "DK, noisy", "DK, noise-free", "WFL, noisy", "WFL, noise-free"]
-
-
-def test_about_the_same_by_hand():
-    # means 4 and 4.5: difference 0.5; variances 1 and 1 over 4 runs each: SE = sqrt(1/4 + 1/4) = 0.7071
-    noisy, free = [3.0, 5.0, 3.0, 5.0], [3.5, 5.5, 3.5, 5.5]
-    var = np.var(noisy, ddof=1)  # 4/3
-    diff, two_se, same = about_the_same(noisy, free)
-    assert diff == pytest.approx(0.5) and two_se == pytest.approx(2 * np.sqrt(2 * var / 4)) and same
-    diff, two_se, same = about_the_same([4.0, 4.1, 3.9, 4.0], [5.0, 5.1, 4.9, 5.0])  # +1.0, 25 % and far past 2 SE
-    assert diff == pytest.approx(1.0) and not same
-    assert about_the_same([10.0], [10.5])[2]  # one run each: no SE, judged by the 10 % rule alone
-    assert not about_the_same([10.0], [100.0])[2]

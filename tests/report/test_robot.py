@@ -62,3 +62,12 @@ def test_chapter_6_section_shows_the_shipped_library_and_its_q_maps(tmp_path):
     assert (tmp_path / "docs" / "figures" / "recharge-behaviours-rooms.png").exists()
     for name in ("behaviour-dp-q-map", "behaviour-dk-q-map"):
         assert (tmp_path / "docs" / "figures" / f"{name}.png").exists()
+
+
+def test_speedup_bound_and_verdict():
+    assert robot.speedup_bound(280, 10, 300) == (28.0, False)
+    assert robot.speedup_bound(None, 180, 300) == (300 / 180, True)  # the reference never reached: a lower bound
+    assert robot.speedup_bound(280, None, 300) == (None, False)
+    assert robot._speedup_verdict(280, [("a", 20, 14), ("b", 10, 28)], 300)[0] == "reproduced"
+    assert robot._speedup_verdict(None, [("a", 190, 14)], 300)[0] == "undetermined"  # bound 1.6 < 14: open
+    assert robot._speedup_verdict(200, [("a", 190, 14)], 300)[0] == "not reproduced"

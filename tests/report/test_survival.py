@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from connrl.experiments.survival import EXPERIMENTS
-from connrl.report.survival import agreement, crossing, relation, render_play, results_section
+from connrl.report.survival import _roughly_best, crossing, render_play, results_section
 
 NAMES = [s.name for s in EXPERIMENTS]
 
@@ -39,12 +39,15 @@ def test_render_play_draws_a_readable_png(tmp_path):
     assert img.shape[0] > 300 and img.shape[1] > 900  # three panels side by side
 
 
-def test_relation_symbols_and_agreement():
-    assert relation([5, 5.1, 4.9], [1, 1.1, 0.9]) == ">"
-    assert relation([1, 2, 3], [1, 2, 3]) == "~"
-    assert relation([1, 1.1, 0.9], [5, 5.1, 4.9]) == "<"
-    assert agreement(">", ">") == "agrees" and agreement(">=", ">") == "roughly"
-    assert agreement("<", ">") == "**disagrees**" and agreement("~", ">") == "**disagrees**"
+def test_roughly_the_best_needs_the_same_or_better_not_just_no_difference():
+    best = [10.0, 10.1, 9.9, 10.0, 10.05, 9.95]
+    assert _roughly_best(best, [x + 0.1 for x in best])[0] == "agrees"  # same within 10 %
+    assert _roughly_best(best, [x + 3 for x in best])[0] == "agrees"  # significantly better
+    assert _roughly_best(best, [x - 3 for x in best])[0] == "contradicted"
+    assert _roughly_best([10, 14, 6, 12], [9, 13, 4, 11])[0] == "undetermined"  # noisy: decides neither
+
+
+def test_crossing():
     assert crossing([0, 20, 40], [2.0, 6.0, 10.0], 8.0) == 30.0
     assert crossing([0, 20], [1.0, 2.0], 8.0) is None
     assert np.isclose(crossing([0, 20], [9.0, 10.0], 8.0), 0.0)

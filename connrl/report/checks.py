@@ -1,0 +1,166 @@
+"""The page's verdict rules (``connrl.report.verdicts``) applied to the claims of Chs. 4 and 5: small helpers the
+survival and robot sections share. Each returns the words it printed, so a section can put the claim on the
+scoreboard with the same verdict its text gives."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from connrl.report import verdicts
+from connrl.report.verdicts import DIFFERENT, SAME, Comparison
+
+RULE_SAME = (f"same = equivalence within ±{verdicts.REL_MARGIN:.0%} of the reference's mean, two one-sided t-tests "
+             f"(TOST) at {verdicts.ALPHA:g}; different = Welch t-test at {verdicts.ALPHA:g}; otherwise undetermined")
+RULE_BETTER = f"one-sided Welch t-test at {verdicts.ALPHA:g}"
+
+
+def finite(xs) -> list[float]:
+    return [float(x) for x in xs if x is not None and np.isfinite(float(x))]
+
+
+def compare_runs(reference, other, **kwargs) -> Comparison | None:
+    """``verdicts.compare`` on per-run values (None runs left out); None when a side has fewer than 2 runs."""
+    a, b = finite(reference), finite(other)
+    if min(len(a), len(b)) < 2:
+        return None
+    return verdicts.compare(a, b, **kwargs)
+
+
+def better_runs(reference, other, higher_is_better: bool = True) -> tuple[str, float | None]:
+    """``verdicts.better`` on per-run values; ("undetermined", None) when a side has fewer than 2 runs."""
+    a, b = finite(reference), finite(other)
+    if min(len(a), len(b)) < 2:
+        return verdicts.UNDETERMINED, None
+    return verdicts.better(a, b, higher_is_better=higher_is_better)
+
+
+def comparison_text(c: Comparison | None, reference, other) -> str:
+    """``Comparison.text``, or why there is no test."""
+    if c is None:
+        return (f"no test: {len(finite(reference))} and {len(finite(other))} run(s), a test needs at least 2 a "
+                "side (undetermined)")
+    return c.text()
+
+
+def same_word(c: Comparison | None) -> str:
+    """same / different / undetermined with N runs (and the runs a side that would decide it)."""
+    if c is None:
+        return verdicts.UNDETERMINED + " (fewer than 2 runs a side)"
+    if c.verdict == SAME:
+        return "same"
+    if c.verdict == DIFFERENT:
+        return "different"
+    need = f"about {c.runs_needed} a side would decide" if c.runs_needed else \
+        f"more than {verdicts.MAX_RUNS_NEEDED} a side would be needed"
+    return f"undetermined with {min(c.n)} runs ({need})"
+
+
+AGREES, CONTRADICTED, OPEN = "agrees", "contradicted", verdicts.UNDETERMINED
+
+
+def relation_check(xs, ys, symbol: str) -> tuple[str, str]:
+    """Does X (``xs``, per run) stand to Y (``ys``) as the thesis's symbol says (higher is better)? ">" / "<": X
+    significantly better / worse (one-sided Welch); "~": the same within 10 % of Y's mean (TOST); ">=" / "<=":
+    slightly better / worse, i.e. not significantly the other way and either significantly this way or the same
+    within 10 %. Returns (agrees | contradicted | undetermined, our account in a few words)."""
+    if symbol == "~":
+        c = compare_runs(ys, xs)
+        word = {SAME: AGREES, DIFFERENT: CONTRADICTED}.get(c.verdict, OPEN) if c is not None else OPEN
+        return word, same_word(c)
+    up = symbol in (">", ">=")
+    verdict, p = better_runs(ys, xs, higher_is_better=up)
+    shown = "" if p is None else f" (p = {p:.2g})"
+    if verdict == "yes":
+        return AGREES, ("better" if up else "worse") + shown
+    if verdict == "no":
+        return CONTRADICTED, ("worse" if up else "better") + f" (p = {1 - p:.2g})"
+    if symbol in (">=", "<="):
+        c = compare_runs(ys, xs)
+        if c is not None and c.verdict == SAME:
+            return AGREES, "same"
+        return OPEN, "not separated" + shown
+    return OPEN, "not separated" + shown
+
+
+def claim_verdict(words) -> str:
+    """A scoreboard verdict from the verdicts of a claim's parts: all agree -> reproduced; none agree and some
+    contradicted -> not reproduced; none agree, none contradicted -> undetermined; otherwise partly."""
+    words = list(words)
+    if not words:
+        return verdicts.OPEN
+    agree = sum(w == AGREES for w in words)
+    if agree == len(words):
+        return verdicts.REPRODUCED
+    if agree == 0:
+        return verdicts.NOT_REPRODUCED if CONTRADICTED in words else verdicts.OPEN
+    return verdicts.PARTLY
+
+
+def tally(words) -> str:
+    words = list(words)
+    return ", ".join(f"{sum(w == k for w in words)} {k}" for k in (AGREES, CONTRADICTED, OPEN)) + \
+        f" (of {len(words)})"
+
+
+def ordering_check(samples: dict[str, list], expected: list[str], higher_is_better: bool = True
+                   ) -> tuple[str, list[str]]:
+    """``verdicts.ordering`` on per-run values (None runs left out); a pair with fewer than 2 runs a side is not
+    tested (undetermined)."""
+    clean = {k: finite(v) for k, v in samples.items()}
+    if all(len(clean[k]) >= 2 for k in expected):
+        return verdicts.ordering(clean, expected, higher_is_better=higher_is_better)
+    lines = [f"{a} before {b}: not tested ({len(clean[a])} and {len(clean[b])} run(s))"
+             for a, b in zip(expected[:-1], expected[1:], strict=True)]
+    return verdicts.UNDETERMINED, lines
+
+
+def ordering_verdict(word: str) -> str:
+    """The scoreboard's verdict for an ordering's: agrees -> reproduced, contradicted -> not reproduced."""
+    return {"agrees": verdicts.REPRODUCED, "contradicted": verdicts.NOT_REPRODUCED}.get(word, verdicts.OPEN)
+
+
+def value_at(xs, ys, x) -> float:
+    """ys at the x in xs (NaN when x is not one of them)."""
+    xs = [float(v) for v in xs]
+    return float(ys[xs.index(float(x))]) if float(x) in xs else float("nan")
+
+
+def matched_passes(copy_xs, copy_runs, rl_xs, rl_runs) -> list[tuple[int, float, float, Comparison | None]]:
+    """The copy after k epochs (k passes over the taught lessons) beside QCON-T after k trials (it replays each
+    taught lesson once a trial, so also k passes), at every k both curves were measured at (k >= 1): (k, copy mean,
+    QCON-T mean, ``compare`` of QCON-T against the copy over runs, or None with fewer than 2 runs a side)."""
+    copy_xs, rl_xs = [float(x) for x in copy_xs], [float(x) for x in rl_xs]
+    out = []
+    for k in sorted(set(copy_xs) & set(rl_xs)):
+        if k < 1:
+            continue
+        a = [float(r[copy_xs.index(k)]) for r in copy_runs if len(r) == len(copy_xs)]
+        b = [float(r[rl_xs.index(k)]) for r in rl_runs if len(r) == len(rl_xs)]
+        if a and b:
+            out.append((int(k), float(np.mean(a)), float(np.mean(b)), compare_runs(a, b)))
+    return out
+
+
+def meets_claims(summary: dict, item: str, section: str, anchor: str, labels=None) -> list[verdicts.Claim]:
+    """A scoreboard claim per quantity of ``summary`` with a thesis number (``meets_thesis``): our mean over runs
+    against it (a run that never reaches a level fails the claim). ``labels`` limits the variants."""
+    out = []
+    runs = summary["runs_per_variant"]
+    for label, v in summary["variants"].items():
+        if labels is not None and label not in labels:
+            continue
+        for name, q in v["quantities"].items():
+            if q.get("thesis") is None:
+                continue
+            word = "≤" if q.get("better") == "lower" else "≥"
+            met = q.get("meets_thesis")
+            verdict = (verdicts.REPRODUCED if met else verdicts.NOT_REPRODUCED) if met is not None else verdicts.OPEN
+            mean = "—" if q.get("mean") is None else f"{q['mean']:.4g}"
+            reached = q.get("runs_reaching", len(q["per_run"]))
+            ours = f"{mean} (mean of {reached}/{len(q['per_run'])} runs reaching; {summary['profile']} profile)"
+            cause = "" if summary["profile"] == "full" else f"{summary['profile']} profile, not the protocol"
+            out.append(verdicts.claim(
+                f"{item}: {label}, {name}", section, f"{q['thesis']:g}", ours,
+                f"mean over {runs} run(s) {word} the thesis's number, every run reaching (no test of spread)",
+                verdict, cause, anchor))
+    return out
