@@ -33,6 +33,10 @@ THESIS = {
                            "with grouping comparable to Exp. 3; about 11 states per group.",
     "recharge-together": "Thesis (6.6.5): little progress in the first 50 trials, then rapid; slightly below Exp. 3, "
                          "and docking from any room at the end.",
+    "recharge-own-library": "Thesis (6.7, 8.5): Exp. 3's robot spent about 40,000 primitive steps in all, its "
+                            "behaviours' training included; 8.5 puts the behaviours' share at 2,000 (DK) + 2,000 (DP) "
+                            "+ 1,500 (WFL) + 1,500 (WFR). Here each run trains its own behaviours within those steps "
+                            "(ours: the thesis gives no other number for them), then learns as Exp. 3.",
 }
 
 WHERE_USED = {"DK": "docks from within 24 in of subgoal 2", "DP": "passes the door from subgoals 3-6",
