@@ -21,7 +21,7 @@ from connrl.core.rollout import run_trial
 from connrl.envs.robot import Layout
 from connrl.envs.robot.recharge import ROOMS, sample_in_room
 from connrl.envs.robot.teachers import teach_chg
-from connrl.experiments.behaviours import pretrain_behaviours
+from connrl.experiments.behaviours import THESIS_BEHAVIOUR_STEPS, budget_split, pretrain_behaviours, train_within_budget
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
 from connrl.tasks.behaviours import Behaviour, library_digest
@@ -181,6 +181,42 @@ def run_recharge(p: RechargeParams, rng: np.random.Generator, progress=lambda do
     return result
 
 
+@dataclass(frozen=True)
+class OwnLibraryParams(RechargeParams):
+    """Exp. 3 over behaviours each run trains for itself within ``library_steps`` primitive steps (shared in 8.5's
+    proportions, ``connrl.experiments.behaviours.budget_split``) before the high-level learning, instead of the
+    shipped library (1,500 trials a behaviour, one draw shared by every run). A class of its own so that the other
+    Ch. 6 experiments' parameters, and so their run folders, stay as they are."""
+
+    library_steps: int = sum(THESIS_BEHAVIOUR_STEPS.values())  # 8.5: 2,000 + 2,000 + 1,500 + 1,500
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_types(self, {**RANGES, "library_steps": ">=1"}, target_max=TARGET_MAX)
+        if self.pretrain_steps:
+            raise ValueError("parameter pretrain_steps (Exp. 5) does not apply: these behaviours are trained first, "
+                             "then frozen")
+
+
+def run_own_library(p: OwnLibraryParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
+    """The Ch. 6 protocol (``run_rooms``; the same test tasks as Exp. 3 on the same seed) over a library this run
+    trains first (``train_within_budget``), frozen during the high-level learning as the shipped one is."""
+    world = {"max_steps": p.max_steps, "step_scale": p.step_scale, "success_reward": p.success_reward}
+    made = {}
+
+    def make_env(p):  # run_rooms makes the training world first (training the behaviours), then the test one
+        if not made:
+            made["lib"], made["trials"], made["spent"] = train_within_budget(budget_split(p.library_steps), rng)
+        return BehaviourEnv(made["lib"], **world)
+
+    result, _ = run_rooms(p, rng, make_env, make_high_level_agent, progress)
+    result.metrics.update({f"library_trials_{t}": float(k) for t, k in made["trials"].items()})
+    result.metrics.update({f"library_steps_{t}": float(k) for t, k in made["spent"].items()})
+    result.metrics["library_steps"] = float(sum(made["spent"].values()))
+    result.metrics["total_steps"] = result.metrics["library_steps"] + result.metrics["train_steps"]
+    return result
+
+
 def _q(name, text, better="higher"):
     return Quantity(name, text, better, "6.6")
 
@@ -193,6 +229,14 @@ QUANTITIES = (_q("final_performance", "reinforcement per primitive step, mean of
               Quantity("train_steps", "primitive steps of the learning trials (6.7's experimental steps)",
                        section="6.7"))
 GROUPING = Quantity("mean_group_size", "primitive steps per group in replay (thesis: about 11)", section="6.6.4")
+
+OWN_LIBRARY = (*(Quantity(f"library_trials_{t}", f"{t}'s training trials within its budget", section="8.5")
+                 for t in THESIS_BEHAVIOUR_STEPS),
+               *(Quantity(f"library_steps_{t}", f"{t}'s training steps (budget: 8.5's {n:,})", section="8.5")
+                 for t, n in THESIS_BEHAVIOUR_STEPS.items()),
+               Quantity("library_steps", "primitive steps of the four behaviours' training", section="6.7"),
+               Quantity("total_steps", "behaviours' training + high-level learning steps (6.7: about 40,000)",
+                        section="6.7"))
 
 PROFILES = {"tiny": {"runs": 1, "trials": 2, "test_every": 1, "tests_per_room": 1, "lessons_per_trial": 2,
                      "max_steps": 20},
@@ -233,4 +277,15 @@ EXPERIMENTS = [
         description="Exp. 3's learner over fresh behaviours (10/10/5/5 taught lessons, about 300 primitive steps "
                     "each), which go on learning from their own reinforcement; thesis: little progress for 50 "
                     "trials, then slightly below Exp. 3, docking from every room by the end"),
+    ExperimentSpec(
+        name="recharge-own-library", title="Exp. 3 over behaviours each run trains within the thesis's budget "
+        "(8.5: 7,000 steps in all)", section="6.6.3, 6.7, 8.5", run="connrl.experiments.recharge:run_own_library",
+        params=override(OwnLibraryParams(), {"paths": 1}, "experiment recharge-own-library"),
+        profiles={**PROFILES, "tiny": {**PROFILES["tiny"], "library_steps": 140}},
+        variants=(Variant("Exp. 3, own behaviours within 7,000 steps", {}),),
+        quantities=(*QUANTITIES, *OWN_LIBRARY), x_label="trials",
+        y_label="reinforcement per primitive step (greedy tests)",
+        description="Exp. 3 (persistence rule) over a library each run trains first, from scratch, as the shipped one "
+                    "was but within 8.5's steps (DK 2,000, DP 2,000, WFL 1,500, WFR 1,500), then frozen; 6.7's "
+                    "equal-cost comparison with Exp. 1 (about 40,000 steps each, behaviours included)"),
 ]

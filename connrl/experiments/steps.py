@@ -43,6 +43,32 @@ def steps_to_good(runs: list[list[dict]], fraction: float = GOOD_FRACTION) -> tu
     return float(runs[0][k]["trials"]), float(steps[k])
 
 
+# "A good policy" at a fixed level (8.5 gives none: "the number of action executions that the robot took to learn a
+# good policy for a task"): this share of the scripted teacher's reinforcement per step on the same test tasks (R).
+# Half, because a policy over the behaviours cannot drive the teacher's routes: a hand-written one that docks from
+# nearly every start needs 1.6-2x the teacher's steps (scripts/ch6/behaviour_bound.py), about half its reinforcement
+# per step; one share for every row
+GOOD_SHARE = 0.5
+
+
+def steps_to_level(runs: list[list[dict]], level: float) -> tuple[float | None, float | None]:
+    """(trials, mean experimental steps) at the first test where the mean curve over ``runs`` reaches ``level``
+    (a fixed reinforcement per step); (None, None) without runs or when it never does."""
+    if not runs:
+        return None, None
+    perf = np.mean([[r["performance"] for r in rows] for rows in runs], axis=0)
+    steps = np.mean([[r["train_steps"] for r in rows] for rows in runs], axis=0)
+    if not (perf >= level).any():
+        return None, None
+    k = int(np.argmax(perf >= level))
+    return float(runs[0][k]["trials"]), float(steps[k])
+
+
+def run_steps_to_level(rows: list[dict], level: float) -> float | None:
+    """One run's experimental steps before its first test at or above ``level`` (None: never)."""
+    return next((float(r["train_steps"]) for r in rows if r["performance"] >= level), None)
+
+
 def run_steps(p: RobotParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
     result, run = robot_run(p, rng, progress)
     teacher, _ = teacher_score(run.test_env, run.tests, run.test_seeds)

@@ -2,16 +2,40 @@
 from tiny runs (claims, Fig. 8.2's paths, the hidden-state figure, the story picture, the 8.5 table)."""
 
 import numpy as np
-import pytest
 
 from connrl.report import integration as ri
 from connrl.report import integration_probe as rp
 from tests.tiny_runs import run_tiny
 
 
-def test_margin_by_hand():
-    d, two_se = ri.margin([0.6, 0.8, 0.7], [0.1, 0.1, 0.1])
-    assert d == pytest.approx(0.6) and two_se == pytest.approx(2 * np.sqrt(0.01 / 3))
+def _curve(perfs, steps_per_test=100.0):
+    return [{"trials": 10.0 * k, "performance": p, "train_steps": steps_per_test * k} for k, p in enumerate(perfs)]
+
+
+def test_good_is_a_fixed_level_so_an_early_plateau_does_not_count():
+    from connrl.experiments.steps import run_steps_to_level, steps_to_good, steps_to_level
+
+    plateau = [_curve([0.0, 0.35, 0.36, 0.36, 0.36, 0.36]) for _ in range(3)]
+    assert steps_to_good(plateau) == (10.0, 100.0)  # the old rule: 90 % of its own final level at trial 10
+    assert steps_to_level(plateau, 1.0) == (None, None)  # half a teacher of 2.0: never reached
+    rising = [_curve([0.0, 0.4, 0.8, 1.1, 1.3, 1.4]) for _ in range(3)]
+    assert steps_to_level(rising, 1.0) == (30.0, 300.0) and run_steps_to_level(rising[0], 1.0) == 300.0
+    row = ri.StepsRow("DK", 100, 102.0, 2000, 1.0, *steps_to_level(plateau, 1.0), [None] * 3, 50.0, 0.18)
+    assert ri.step_verdict(row)[0] == ri.NOT_REPRODUCED
+    ok = ri.StepsRow("DK", 100, 102.0, 2000, 1.0, 30.0, 2100.0, [2000.0, 2100.0, 2200.0], 300.0, 0.7)
+    assert ri.step_verdict(ok)[0] == ri.REPRODUCED  # at most 1.5 x 2,000
+    table = ri.steps_table([ok, row])
+    assert "not reached in 50 trials" in table[3] and table[-1].startswith("| **total**") and "— (a row" in table[-1]
+
+
+def test_chapter_8_claims_use_the_verdict_rules():
+    q = {"final_docked_B": {"per_run": [0.11, 0.2, 0.05, 0.1]}, "final_performance": {"per_run": [0.3, 0.35, 0.4, 0.3]}}
+    summary = {"variants": {ri.RECURRENT: {"quantities": q},
+                            ri.MEMORYLESS: {"quantities": {"final_docked_B": {"per_run": [0.04, 0.0, 0.1, 0.02]}}},
+                            ri.CH6: {"quantities": {"final_performance": {"per_run": [0.7, 0.72, 0.69, 0.71]}}}}}
+    found = {c.claim: c for c in ri.checks(summary)}
+    assert found["without X-Y the memoryless robot generally fails from room B"].verdict == ri.REPRODUCED
+    assert found["recurrent-Q acceptably good after 150 trials"].verdict == ri.NOT_REPRODUCED
 
 
 def _samples(rng, n_trials, separable):

@@ -126,3 +126,19 @@ def test_training_env_files_each_run_of_one_behaviour_as_its_lesson():
     wfl, wfr = agents["WFL"].book.memory.lessons, agents["WFR"].book.memory.lessons
     assert len(wfl) == before["WFL"] + 2 and len(wfr) == before["WFR"] + 1
     assert [len(wfl[-2]), len(wfr[-1]), len(wfl[-1])] == [5, 4, 3] and wfl[-1].truncated
+
+
+def test_behaviours_trained_within_a_budget_stay_within_it():
+    """recharge-own-library: each behaviour trains only while a whole trial (at most 30 steps) still fits its budget;
+    8.5's budget is split in its own proportions."""
+    from connrl.experiments.behaviours import THESIS_BEHAVIOUR_STEPS, budget_split, train_within_budget
+    from connrl.tasks.behaviours import Behaviour
+
+    assert budget_split(7000) == THESIS_BEHAVIOUR_STEPS and budget_split(140) == {"DK": 40, "DP": 40, "WFL": 30,
+                                                                                   "WFR": 30}
+    budget = {"DK": 75, "DP": 40, "WFL": 60, "WFR": 29}
+    lib, trials, spent = train_within_budget(budget, np.random.default_rng(0))
+    assert all(spent[t] <= budget[t] for t in budget) and trials["WFR"] == 0 and trials["WFL"] == 2
+    assert spent["WFL"] == 60  # wall following never ends early: 30 steps a trial
+    assert all(isinstance(b, Behaviour) and b.meta == {"trials": trials[t], "steps": spent[t]} for t, b in lib.items())
+    assert trials["DK"] >= 2 and spent["DK"] > 30  # a second trial starts while 30 more steps fit
