@@ -6,6 +6,7 @@ and the quantities of its summary. The criteria that turn a thesis's words into 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -174,13 +175,18 @@ def checks(runs: dict[str, list[list[dict]]], per_run: dict[str, dict[str, list[
     values from the summaries; ``library_steps``: the shipped library's training steps (None: not known). An arm
     with no runs leaves its claims out."""
     r = {k: v for k, v in runs.items() if v}
-    q = per_run
+    return [*_checks_exps_2_3(r), *_checks_exps_1_4_5(r, per_run), *_equal_cost(r, per_run, library_steps)]
+
+
+def _arm_rooms(r: dict, arm: str, trial: int | None = None) -> str:
+    """A / B / C docked shares of an arm: at ``trial``, or over its last 3 tests."""
+    return " / ".join(_mean_text(run_end(r[arm], f"docked_{x}") if trial is None
+                                 else run_at(r[arm], f"docked_{x}", trial)) for x in ROOMS)
+
+
+def _checks_exps_2_3(r: dict) -> list[Check]:
     out = []
-
-    def rooms(arm, trial=None):
-        return " / ".join(_mean_text(run_end(r[arm], f"docked_{x}") if trial is None
-                                     else run_at(r[arm], f"docked_{x}", trial)) for x in ROOMS)
-
+    rooms = functools.partial(_arm_rooms, r)
     if "e3" in r:
         out.append(_done("Fig. 6.6, Exp. 3", "6.6.3", "Exp. 3 docks from most places in rooms A and C within 20 "
                          "trials", f"a fixed level: more than {MOST:.0%} of each room's test tasks (\"most\")",
@@ -208,6 +214,12 @@ def checks(runs: dict[str, list[list[dict]]], per_run: dict[str, dict[str, list[
                          "(Exp. 3, with the persistence rule, does)", "Exp. 3's final performance",
                          f"final perf. Exp. 2 {_mean_text(f2)}, Exp. 3 {_mean_text(f3)}",
                          [gain_test(f2, f3, "Exp. 3 above Exp. 2")]))
+    return out
+
+
+def _checks_exps_1_4_5(r: dict, q: dict) -> list[Check]:
+    out = []
+    rooms = functools.partial(_arm_rooms, r)
     if "e1" in r:
         tests = [level_test(run_end(r["e1"], f"docked_{x}"), MOST, above=False) for x in "BC"]
         if "e3" in r:
@@ -246,7 +258,6 @@ def checks(runs: dict[str, list[list[dict]]], per_run: dict[str, dict[str, list[
                           *(level_test(run_end(r["e5"], f"docked_{x}"), MOST) for x in ROOMS)],
                          "measured: behaviours pre-trained 300 steps are poor and learn on only from the few-step "
                          "segments in which they are chosen (docs/notes/recharge-status.md)"))
-    out += _equal_cost(r, q, library_steps)
     return out
 
 

@@ -80,6 +80,19 @@ def _variant_table(spec: ExperimentSpec, summary: dict, recs: list[dict], curves
     return lines
 
 
+def _solution_paths(spec, recs: list[dict], out_dir: Path, doc: Path) -> list[str]:
+    """Figs. 5.5-5.7: the learned greedy policies' paths of the best variant, when the experiment records them."""
+    if not spec.params.paths:
+        return []
+    task, best = spec.params.task, spec.variants[-1].label
+    f = draw_solution_paths([r for r in recs if r["variant"] == best], out_dir / spec.name / "solution-paths.png",
+                            task, {"DP": 4, "DK": 3, "WFL": 3}[task])
+    if f is None:
+        return []
+    return [f"Solution paths (Figs. 5.5-5.7) of the learned greedy policies, {best}:", "",
+            figure(Path(f), doc, f"{spec.name}-paths"), ""]
+
+
 def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     """Markdown for docs/RESULTS.md: our Ch. 5 numbers beside the thesis's, from OUT/robot-*/ records."""
     out_dir = Path(out_dir)
@@ -122,14 +135,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
         if link:
             lines += [f"Mean learning curves ({'one panel per geometry' if panels else 'shaded: min-max over runs'}):",
                       "", link, ""]
-        if spec.params.paths:
-            task = spec.params.task
-            best = spec.variants[-1].label
-            f = draw_solution_paths([r for r in recs if r["variant"] == best], out_dir / spec.name /
-                                    "solution-paths.png", task, {"DP": 4, "DK": 3, "WFL": 3}[task])
-            if f is not None:
-                lines += [f"Solution paths (Figs. 5.5-5.7) of the learned greedy policies, {best}:", "",
-                          figure(Path(f), doc, f"{spec.name}-paths"), ""]
+        lines += _solution_paths(spec, recs, out_dir, doc)
     if not any_found:
         return "\n".join(intro + ["No Ch. 5 results yet: run `connrl run robot-teaching-dp` etc.", ""])
     sim_png = out_dir / "robot-figure-5-3.png"
