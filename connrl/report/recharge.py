@@ -13,7 +13,7 @@ import numpy as np
 from connrl.envs.robot import Layout
 from connrl.envs.robot.recharge import ROOMS
 from connrl.envs.robot.render import draw_layout
-from connrl.experiments import recharge, recharge_flat
+from connrl.experiments import recharge, recharge_bound, recharge_flat
 from connrl.report.page import figure, load_summary, note, run_rows, stored, summary_table
 from connrl.report.plots import save_figure
 from connrl.report.recharge_claims import (
@@ -33,7 +33,8 @@ from connrl.tasks.behaviours import APPLICABLE_ABOVE, LIBRARY_DIR, load_library,
 from connrl.tasks.recharge import chg_lessons
 from connrl.tasks.robot import TAUGHT_COUNTS, taught_lessons
 
-EXPERIMENTS = [*recharge_flat.EXPERIMENTS, *recharge.EXPERIMENTS]  # the experiments this section covers: Exps 1-5
+# the experiments this section covers: Exps 1-5, and the bound of what the behaviours can do
+EXPERIMENTS = [*recharge_flat.EXPERIMENTS, *recharge.EXPERIMENTS, *recharge_bound.EXPERIMENTS]
 THESIS = {
     "recharge-flat": "Thesis (6.6.1, Fig. 6.5): after 300 trials generally unable to recharge from rooms B and C, "
                      "colliding on more than 5 % of steps; no systematic way learned whatever the reward function.",
@@ -100,6 +101,32 @@ def draw_room_curves(spec, summary: dict, out_dir: Path, file: Path) -> Path | N
     return file if drawn else None
 
 
+def bound_table(spec, summary: dict) -> list[str]:
+    """recharge-bound's rules beside the scripted teacher, per start room: share docked and steps of the dockings."""
+    def cell(qs, name, fmt):
+        v = qs.get(name, {}).get("mean")
+        return "—" if v is None else format(v, fmt)
+
+    lines = [f"### {spec.name}: {spec.title} (ours)", "",
+             f"`connrl run {spec.name} --profile {summary['profile']} --seed {summary['base_seed']}` "
+             f"({summary['runs_per_variant']} runs, the test tasks of the learning runs of the same seeds; "
+             "docs/RECONSTRUCTION.md, \"Ch. 6 bound\"). What the shipped behaviours achieve when the choice among "
+             "them is right: the yardstick for the learners above.", "",
+             "| rule | docked from A / B / C | steps to dock from A / B / C | share of the teacher's reinforcement "
+             "per step |", "|---|---|---|---|"]
+    teacher = None
+    for label, v in summary["variants"].items():
+        qs = v["quantities"]
+        docked = " / ".join(cell(qs, f"docked_{r}", ".2f") for r in ROOMS)
+        steps = " / ".join(cell(qs, f"steps_{r}", ".0f") for r in ROOMS)
+        lines.append(f"| {label} | {docked} | {steps} | {cell(qs, 'share_of_teacher', '.0%')} |")
+        teacher = qs
+    if teacher is not None:
+        lines.append(f"| scripted teacher | {' / '.join(cell(teacher, f'teacher_docked_{r}', '.2f') for r in ROOMS)} "
+                     f"| {' / '.join(cell(teacher, f'teacher_steps_{r}', '.0f') for r in ROOMS)} | 100% |")
+    return [*lines, ""]
+
+
 def read_library_index(path: Path) -> dict:
     """library.json (written by ``connrl train-behaviours``) checked field by field; a damaged index raises
     FileError (one line naming the file and the field) rather than a traceback in the middle of the page."""
@@ -158,6 +185,9 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
         if spec.name not in data:
             continue
         summary = data[spec.name][1]
+        if spec.name == "recharge-bound":
+            lines += bound_table(spec, summary)
+            continue
         lines += [f"### {spec.name}: {spec.title} (thesis {spec.section})", "", summary_table(summary), "",
                   THESIS[spec.name], "", figure(out_dir / spec.name / "curve.png", doc, spec.name), ""]
         rooms = draw_room_curves(spec, summary, out_dir, out_dir / spec.name / "rooms.png")

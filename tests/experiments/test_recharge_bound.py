@@ -44,3 +44,15 @@ def test_the_bound_reports_each_room_beside_the_teacher():
     for who in ("", "teacher_"):
         assert all(0 <= m[f"{who}docked_{r}"] <= 1 for r in "ABC")
     assert m["share_of_teacher"] == pytest.approx(m["performance"] / m["teacher_performance"])
+
+
+def test_the_best_wall_followers_are_never_worse_than_the_fixed_ones():
+    from connrl.experiments.recharge_bound import play, play_best_walls
+    from connrl.tasks.recharge import make_recharge_env
+
+    p = BoundParams(max_steps=120)
+    env = make_recharge_env(p)
+    tasks, seeds = fixed_test_tasks(1, np.random.default_rng(3))
+    for (_, start), s in zip(tasks, seeds, strict=True):
+        fixed, best = play(env, p, start, int(s)), play_best_walls(env, p, start, int(s))
+        assert (best[0], -best[1]) >= (fixed[0], -fixed[1])
