@@ -145,12 +145,7 @@ def read_library_index(path: Path) -> dict:
     return index
 
 
-def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
-    out_dir, doc = Path(out_dir), Path(doc)
-    index_file = LIBRARY_DIR / "library.json"
-    if not index_file.exists():
-        return ""
-    index = read_library_index(index_file)
+def library_table(index: dict) -> list[str]:
     lines = ["## Chapter 6: hierarchical learning (Exps 1-5, Figs. 6.3-6.7)", "",
              "The behaviours the high level coordinates are Ch. 5's QCON-T skills, trained by `connrl "
              "train-behaviours` and shipped in `connrl/data/behaviours/` (one seed each; docs/RECONSTRUCTION.md, "
@@ -160,7 +155,16 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
     for t, m in index.items():
         lines.append(f"| {t} | {m['trials']} | {m['lessons']} | {m['far_share']:.0%} | "
                      f"{m['final_test_performance']:.2f} | {WHERE_USED[t]} | {m['serve_rate']:.2f} |")
-    lines += [""]
+    return [*lines, ""]
+
+
+def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
+    out_dir, doc = Path(out_dir), Path(doc)
+    index_file = LIBRARY_DIR / "library.json"
+    if not index_file.exists():
+        return ""
+    index = read_library_index(index_file)
+    lines = library_table(index)
     layout, lib = Layout.load("default"), load_library()
     for task in ("DP", "DK"):
         xs, ys, grid = q_value_map(lib[task], layout)
