@@ -217,11 +217,12 @@ class LessonAgent:
         self.explore.begin(trial)
         self._x = self.encode(obs)
 
-    def end_trial(self) -> None:
+    def end_trial(self) -> Lesson | None:
+        """File the trial's lesson (learning trials only) and return it; a test trial's experiences are dropped."""
         if self.learning:
-            self.book.close_trial()
-        else:
-            self.book.recorder.finish(False, False)
+            return self.book.close_trial()
+        self.book.recorder.finish(False, False)
+        return None
 
     def add_taught_lessons(self, lessons: list[Lesson]) -> None:
         """Teaching (3.7): taught lessons are replayed like experienced ones, with P_t = 0 by default."""

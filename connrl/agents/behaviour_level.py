@@ -34,7 +34,8 @@ def _applicable(info: dict) -> np.ndarray:
 
 
 class BehaviourChoice:
-    """Eq. 6.6's weighted choice among behaviours, and what replay keeps of it.
+    """Eq. 6.6's weighted choice among behaviours, and what replay keeps of it. It holds the current trial's choices
+    (the active behaviour, each step's W): one per learner, never shared.
 
     ``persistence``: Experiment 3's W of ``persist_weight`` for the behaviour being followed (6.5.1).
     ``target_max``: "applicable" takes the Q target's max over the next state's applicable behaviours (on-line and in
@@ -135,11 +136,10 @@ class BehaviourQCON(QCON):
     def next_value(self, y: np.ndarray, info: dict | None) -> float:
         return self.choice.next_value(self.q.values(y), info)
 
-    def end_trial(self) -> None:
-        if not self.learning:
-            self.book.recorder.finish(False, False)
-            return
-        self.choice.file(self.book.close_trial())
+    def end_trial(self) -> Lesson | None:
+        lesson = super().end_trial()
+        self.choice.file(lesson)
+        return lesson
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
         """Replay with the W each step was chosen under and (``target_max="applicable"``) each state's applicable
@@ -172,11 +172,10 @@ class BehaviourRecurrentQ(RecurrentQ):
         self.choice.observed(info)
         super().observe(action, reward, next_obs, terminated, truncated, info)
 
-    def end_trial(self) -> None:
-        if not self.learning:
-            self.book.recorder.finish(False, False)
-            return
-        self.choice.file(self.book.close_trial())
+    def end_trial(self) -> Lesson | None:
+        lesson = super().end_trial()
+        self.choice.file(lesson)
+        return lesson
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
         w, ok = self.choice.replay_options(lesson, weights, allowed)

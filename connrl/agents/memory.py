@@ -273,13 +273,11 @@ class RecurrentModelQ(LessonAgent):
         self.book.recorder.add(self._x, int(action), float(reward), y)
         self.book.ended = (bool(terminated), bool(truncated))
 
-    def end_trial(self) -> None:
-        if self.learning:
-            lesson = self.book.close_trial()
-            if lesson is not None:
-                self.history.append(lesson)
-        else:
-            self.book.recorder.finish(False, False)
+    def end_trial(self) -> Lesson | None:
+        lesson = super().end_trial()
+        if lesson is not None:
+            self.history.append(lesson)
+        return lesson
 
     def train_model(self) -> float:
         """BPTT passes on lessons from all past trials: the latest, then uniform draws; returns mean loss."""

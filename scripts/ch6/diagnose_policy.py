@@ -45,11 +45,11 @@ def main() -> None:
         act = agent.act
 
         def logged_act(obs, info=None, *, greedy=False):
-            was, active = agent._was_applicable, agent._active
+            was, active = agent.choice._was_applicable, agent.choice._active
             b = act(obs, info, greedy=greedy)
             if not greedy:
                 log.append((agent.learning, np.array(info["applicable"]), None if was is None else was.copy(),
-                            active, b, agent._w.copy(), bool(info.get("behaviour_goal", False))))
+                            active, b, agent.choice._w.copy(), bool(info.get("behaviour_goal", False))))
             return b
 
         agent.act = logged_act
