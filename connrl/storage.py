@@ -128,11 +128,13 @@ def check_writable_dir(path) -> None:
 
 # --------------------------------------------------------------------------------------------------- reading
 
-def _reject_constant(name: str):
+def reject_constant(name: str):
+    """``json.loads``'s ``parse_constant`` for strict JSON: NaN / Infinity are refused (ValueError)."""
     raise ValueError(f"{name} is not JSON (JSON has no NaN or Infinity)")
 
 
-def _finite_float(text: str) -> float:
+def finite_float(text: str) -> float:
+    """``json.loads``'s ``parse_float`` refusing a number beyond a 64-bit float (ValueError)."""
     v = float(text)
     if not math.isfinite(v):  # 1e400 parses as inf
         raise ValueError(f"the number {text[:40]} is too large for a float")
@@ -159,8 +161,8 @@ def read_json(path, what: str = "file", max_bytes: int = MAX_JSON_BYTES, constan
     if depth > MAX_NESTING:
         raise FileError(path, f"nests {depth} levels deep; a {what} nests at most {MAX_NESTING}")
     try:
-        return json.loads(raw.decode("utf-8"), parse_constant=None if constants else _reject_constant,
-                          parse_float=_finite_float)
+        return json.loads(raw.decode("utf-8"), parse_constant=None if constants else reject_constant,
+                          parse_float=finite_float)
     except UnicodeDecodeError:
         raise FileError(path, f"is not text; a {what} holds JSON") from None
     except json.JSONDecodeError as exc:

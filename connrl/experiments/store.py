@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.storage import MAX_NESTING, atomic_write_text, max_depth, strict_json
+from connrl.storage import MAX_NESTING, atomic_write_text, finite_float, max_depth, reject_constant, strict_json
 
 # run record key -> allowed JSON types
 RECORD_KEYS = {"experiment": (str,), "variant": (str,), "seed": (int,), "params": (dict,), "metrics": (dict,),
@@ -40,21 +40,6 @@ class DamagedFile(ValueError):
         return type(self), (self.path, self.reason, self.fix)
 
 
-class _NotStrict(ValueError):
-    pass
-
-
-def _no_constant(token: str):
-    raise _NotStrict(f"holds {token}; connrl writes strict JSON, with null for a missing value")
-
-
-def _finite_float(text: str) -> float:
-    v = float(text)
-    if not math.isfinite(v):
-        raise _NotStrict(f"holds {text}, beyond a 64-bit float")
-    return v
-
-
 def read_json(path) -> object:
     """The JSON in ``path``; ``DamagedFile`` when it is empty, binary or not JSON."""
     raw = Path(path).read_bytes()
@@ -63,13 +48,13 @@ def read_json(path) -> object:
     if max_depth(raw) > MAX_NESTING:
         raise DamagedFile(path, "nested too deeply to be ours")
     try:
-        return json.loads(raw.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite_float)
-    except _NotStrict as exc:
-        raise DamagedFile(path, str(exc)) from None
+        return json.loads(raw.decode("utf-8"), parse_constant=reject_constant, parse_float=finite_float)
     except UnicodeDecodeError:
         raise DamagedFile(path, "not text") from None
     except json.JSONDecodeError as exc:
         raise DamagedFile(path, f"not JSON: {exc.msg} at line {exc.lineno}") from None
+    except ValueError as exc:  # NaN / Infinity, or a number beyond a float: connrl writes strict JSON
+        raise DamagedFile(path, str(exc)) from None
     except RecursionError:
         raise DamagedFile(path, "nested too deeply to be ours") from None
 
