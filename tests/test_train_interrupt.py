@@ -17,8 +17,11 @@ TRAIN = ["train", "CartPole-v1", "--steps", "200000", "--quiet", "--save", "agen
 
 
 def _start_training(cwd: Path) -> subprocess.Popen:
+    # SIGINT back to its default in the child: a test run started in the background inherits it ignored, and
+    # Python then never raises KeyboardInterrupt (as it would not for a user's backgrounded train)
     return subprocess.Popen([ft.PY, "-m", "connrl.cli", *TRAIN], cwd=cwd, env=ft.env(), stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 def _cpu_seconds(pid: int) -> float | None:
@@ -106,6 +109,7 @@ def test_a_signal_that_meets_a_checkpoint_waits_for_the_save_and_then_stops_trai
     from connrl.cli_task import _uninterrupted
 
     done = []
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a foreground process
     with pytest.raises(KeyboardInterrupt):
         with _uninterrupted(deliver=True):
             os.kill(os.getpid(), signal.SIGINT)  # arrives mid-save
@@ -114,3 +118,4 @@ def test_a_signal_that_meets_a_checkpoint_waits_for_the_save_and_then_stops_trai
     with _uninterrupted(deliver=False):  # the final save: already stopping, nothing more to do
         os.kill(os.getpid(), signal.SIGTERM)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    signal.signal(signal.SIGINT, before)
