@@ -83,17 +83,18 @@ def relation_check(xs, ys, symbol: str) -> tuple[str, str]:
 
 
 def claim_verdict(words) -> str:
-    """A scoreboard verdict from the verdicts of a claim's parts: all agree -> reproduced; none agree and some
-    contradicted -> not reproduced; none agree, none contradicted -> undetermined; otherwise partly."""
+    """A scoreboard verdict from the verdicts of a claim's parts: all agree -> reproduced; some agree and some
+    contradicted -> partly; none agree and some contradicted -> not reproduced; none contradicted but not all
+    decided -> undetermined (parts that agree do not outvote parts that decide nothing)."""
     words = list(words)
     if not words:
         return verdicts.OPEN
-    agree = sum(w == AGREES for w in words)
+    agree, contra = sum(w == AGREES for w in words), sum(w == CONTRADICTED for w in words)
     if agree == len(words):
         return verdicts.REPRODUCED
-    if agree == 0:
-        return verdicts.NOT_REPRODUCED if CONTRADICTED in words else verdicts.OPEN
-    return verdicts.PARTLY
+    if contra == 0:
+        return verdicts.OPEN
+    return verdicts.PARTLY if agree else verdicts.NOT_REPRODUCED
 
 
 def tally(words) -> str:
@@ -125,19 +126,23 @@ def value_at(xs, ys, x) -> float:
     return float(ys[xs.index(float(x))]) if float(x) in xs else float("nan")
 
 
-def matched_passes(copy_xs, copy_runs, rl_xs, rl_runs) -> list[tuple[int, float, float, Comparison | None]]:
+def matched_passes(copy_curves, rl_xs, rl_runs, margin: float | None = None
+                   ) -> list[tuple[int, float, float, Comparison | None]]:
     """The copy after k epochs (k passes over the taught lessons) beside QCON-T after k trials (it replays each
-    taught lesson once a trial, so also k passes), at every k both curves were measured at (k >= 1): (k, copy mean,
-    QCON-T mean, ``compare`` of QCON-T against the copy over runs, or None with fewer than 2 runs a side)."""
-    copy_xs, rl_xs = [float(x) for x in copy_xs], [float(x) for x in rl_xs]
+    taught lesson once a trial, so also k passes), at every k >= 1 some copy run and QCON-T were measured at:
+    (k, copy mean, QCON-T mean, ``compare`` of QCON-T against the copy over runs, or None with fewer than 2 runs a
+    side). ``copy_curves`` holds each copy run's own (x, y): a copy stops at full agreement, so its curves differ in
+    length. ``margin``: the equivalence margin (default ``verdicts.compare``'s, relative to the copy's mean)."""
+    rl_xs = [float(x) for x in rl_xs]
+    at = [{float(x): float(y) for x, y in zip(xs, ys, strict=True)} for xs, ys in copy_curves]
     out = []
-    for k in sorted(set(copy_xs) & set(rl_xs)):
+    for k in sorted(set().union(*at) & set(rl_xs)) if at else []:
         if k < 1:
             continue
-        a = [float(r[copy_xs.index(k)]) for r in copy_runs if len(r) == len(copy_xs)]
+        a = [run[k] for run in at if k in run]
         b = [float(r[rl_xs.index(k)]) for r in rl_runs if len(r) == len(rl_xs)]
         if a and b:
-            out.append((int(k), float(np.mean(a)), float(np.mean(b)), compare_runs(a, b)))
+            out.append((int(k), float(np.mean(a)), float(np.mean(b)), compare_runs(a, b, margin=margin)))
     return out
 
 

@@ -12,6 +12,7 @@ import numpy as np
 from connrl.experiments.hidden_state import EXPERIMENTS
 from connrl.report.page import figure, fixed, run_rows, stored
 from connrl.report.plots import save_figure
+from connrl.report.verdicts import claim
 
 _SPECS = {s.name: s for s in EXPERIMENTS}
 BLOCK = 10  # trials per point of the error curve
@@ -27,6 +28,10 @@ def _errors(rows: list[dict], column: str) -> np.ndarray:
     return np.array([r[column] for r in rows if column in r])
 
 
+HEADING_IMPERFECT = "The imperfect model of 7.5.1 (Task 1, recurrent-model, lambda = 0.8)"
+HEADING_FROZEN = "The fixed model of 7.5.2 (Task 2, recurrent-model)"
+
+
 def imperfect_model(out: Path, doc: Path) -> list[str]:
     """7.5.1: the recurrent model's errors on Task 1 (on its own lessons and on fixed random walks) beside the
     policy it supports."""
@@ -38,7 +43,7 @@ def imperfect_model(out: Path, doc: Path) -> list[str]:
     if not runs:
         return []
     optimal = summary["variants"][label]["quantities"]["optimal_last100"]["per_run"]
-    lines = ["### The imperfect model of 7.5.1 (Task 1, recurrent-model, lambda = 0.8)", "",
+    lines = [f"### {HEADING_IMPERFECT}", "",
              f"Command: {_cmd(summary)}. Two measures of the action model, neither of which it learns from: its "
              "error on each new training lesson before it learns from it (the agent's own path), and every 50 "
              "trials its error on 200 fixed random walks (`connrl.tasks.hidden_state.model_probe`). A step is "
@@ -65,6 +70,10 @@ def imperfect_model(out: Path, doc: Path) -> list[str]:
     k = len(runs)
     verdict = ("reproduced" if imperfect == unable == good == k else "partly" if imperfect and good else
                "**not reproduced**")
+    claim("7.5.1: the model is never perfect, yet the policy is optimal", "7.5.1",
+          "model never perfect; optimal policy found", f"model wrong on walks in {imperfect}/{k} runs, unable on "
+          f"unseen cups in {unable}/{k}, policy optimal in {good}/{k}", "all three in every run",
+          verdict.strip("*"), anchor=HEADING_IMPERFECT)
     lines += ["", f"**Verdict:** {verdict}. After 500 trials the model still errs on the random walks in {imperfect} "
               f"of {k} runs and mispredicts most cups that come into sight after 10 or more unseen steps in "
               f"{unable} of {k}; the greedy policy is optimal in at least {STABLE:.0%} of the last 100 tests in "
@@ -105,7 +114,7 @@ def frozen_model(out: Path, doc: Path) -> list[str]:
     summary, recs = stored(_SPECS["cup-task2-frozen"], Path(out))
     if summary is None or not recs:
         return []
-    lines = ["### The fixed model of 7.5.2 (Task 2, recurrent-model)", "", f"Command: {_cmd(summary)}.", "",
+    lines = [f"### {HEADING_FROZEN}", "", f"Command: {_cmd(summary)}.", "",
              "The thesis: without a fix the agent \"could not stabilize on the optimal policy; it oscillated\"; "
              "\"I fixed the model at some point of learning and allowed only changes to the Q-net. In such a "
              "setup, the agent found the optimal policy and indeed stuck to it.\"", "",
@@ -127,6 +136,10 @@ def frozen_model(out: Path, doc: Path) -> list[str]:
     stuck = sum(opt is not None and opt >= STABLE for opt, _ in long)
     verdict = ("—" if not long else "reproduced" if stuck == len(long) else "partly" if stuck else
                "**not reproduced**")
+    if long:
+        claim("7.5.2: fixing the model keeps the optimal policy", "7.5.2", "fixed model: optimal and stuck to it",
+              f"{stuck} of {len(long)} runs stay optimal (≥ {STABLE:.0%} of the last 100 tests)",
+              "every run fixed in time", verdict.strip("*"), anchor=HEADING_FROZEN)
     lines += ["", f"**Verdict:** {verdict}. Of the {len(long)} runs whose model was fixed at least 100 trials "
               f"before the end (so that the last 100 tests all come after it), {stuck} stay optimal in at least "
               f"{STABLE:.0%} of those tests. Mean share of optimal tests, last 100: "

@@ -204,6 +204,7 @@ def write_results(out: Path, doc: Path) -> Path:
     missing = sorted(set(specs) - covered)
     if missing:
         parts += ["## Not yet run", "", "No stored results for: " + ", ".join(f"`{m}`" for m in missing) + ".", ""]
-    parts[4:4] = verdicts.scoreboard(list(verdicts.BOARD))
+    board = verdicts.scoreboard(list(verdicts.BOARD))
+    parts[4:4] = board + (["## Quantities we tuned", "", note("tuned-quantities"), ""] if board else [])
     atomic_write_text(doc, "\n".join(parts))
     return doc

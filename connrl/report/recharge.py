@@ -209,5 +209,4 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
                       figure(png, doc, f"{spec.name}-paths"), ""]
     if data:
         lines += [note("recharge-status"), ""]
-    lines += ["### Quantities we tuned", "", note("tuned-quantities"), ""]
     return "\n".join(lines)

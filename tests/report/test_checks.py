@@ -26,7 +26,7 @@ def test_relation_check_per_symbol():
 
 def test_claim_verdict_and_tally():
     assert checks.claim_verdict([AGREES, AGREES]) == verdicts.REPRODUCED
-    assert checks.claim_verdict([AGREES, OPEN]) == verdicts.PARTLY
+    assert checks.claim_verdict([AGREES, OPEN]) == verdicts.OPEN  # agreeing parts do not outvote undecided ones
     assert checks.claim_verdict([AGREES, CONTRADICTED]) == verdicts.PARTLY
     assert checks.claim_verdict([CONTRADICTED, OPEN]) == verdicts.NOT_REPRODUCED
     assert checks.claim_verdict([OPEN, OPEN]) == verdicts.OPEN
@@ -52,13 +52,16 @@ def test_ordering_check_needs_two_runs_a_side():
 
 
 def test_matched_passes_pairs_copy_epochs_with_trials():
-    copy_xs, copy_runs = [0, 1, 2, 5, 10, 20], [[0, 0, 0, 0, -0.7, 1.0], [0, 0, 0, 0, -0.6, 1.2]]
+    copy_xs = [0, 1, 2, 5, 10, 20]
+    copy_curves = [(copy_xs, [0, 0, 0, 0, -0.7, 1.0]), (copy_xs, [0, 0, 0, 0, -0.6, 1.2]),
+                   (copy_xs + [21], [0, 0, 0, 0, -0.2, 1.4, 1.5])]  # stopped later: a longer curve still counts
     rl_xs, rl_runs = [0, 10, 20, 30], [[0, -0.8, 0.5, 1.0], [0, -0.9, 0.3, 1.1]]
-    rows = checks.matched_passes(copy_xs, copy_runs, rl_xs, rl_runs)
+    rows = checks.matched_passes(copy_curves, rl_xs, rl_runs)
     assert [k for k, *_ in rows] == [10, 20]  # 0 passes left out
     k, a, b, c = rows[0]
-    assert a == pytest.approx(-0.65) and b == pytest.approx(-0.85) and c.n == (2, 2)
-    assert checks.matched_passes(copy_xs, copy_runs[:1], rl_xs, rl_runs[:1])[0][3] is None
+    assert a == pytest.approx(-0.5) and b == pytest.approx(-0.85) and c.n == (3, 2)
+    assert checks.matched_passes(copy_curves, rl_xs, rl_runs, margin=2.0)[0][3].margin == 2.0
+    assert checks.matched_passes(copy_curves[:1], rl_xs, rl_runs[:1])[0][3] is None
 
 
 def test_meets_claims_put_one_claim_per_thesis_number():

@@ -47,3 +47,6 @@ def test_write_results_has_every_chapter_and_names_its_source(tmp_path):
         assert heading in text
     assert "connrl run pole-full --profile tiny" in text and "Command: `connrl run cup-task1" in text
     assert "## Not yet run" in text and "`survival-study1`" in text
+    # the scoreboard opens the page (pole-full and the cup tasks put claims on it), the tuned quantities follow it
+    board, tuned, first = (text.index(h) for h in ("## Scoreboard", "## Quantities we tuned", "## Pole balancing"))
+    assert board < tuned < first and "Fig. 7.5: 2-cup collection" in text[board:tuned]
