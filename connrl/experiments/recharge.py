@@ -34,7 +34,8 @@ LAYOUT = Layout.load("default")  # where the test tasks are drawn
 RANGES = {"hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1", "lam": "0..1",
           "t_start": ">0", "t_end": ">0", "lessons_per_trial": ">=0", "capacity": ">=1", "p_oldest": "0..<1",
           "trials": ">=1", "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1", "step_scale": ">0",
-          "success_reward": ">0", "mu_low": ">=0", "mu_high": ">=0", "pretrain_steps": ">=0", "paths": ">=0"}
+          "xy_scale": ">0", "output_init": ">=0", "success_reward": ">0", "mu_low": ">=0", "mu_high": ">=0",
+          "pretrain_steps": ">=0", "paths": ">=0"}
 
 
 @dataclass(frozen=True)
@@ -45,13 +46,18 @@ class RechargeParams:
     hidden: int = 8  # hidden units of each Q-net (6.6)
     lr: float = 0.05  # (6.6)
     momentum: float = 0.9  # (R, Ch. 5)
-    init_range: float = 0.1  # (R) Ch. 5's 0.5 lets untrained nets differ by tens of Q units: a behaviour falls
-    # below the others at once and is never tried again (docs/RECONSTRUCTION.md, "High-level learner")
+    init_range: float = 0.3  # (R) Ch. 5's 0.5 lets untrained nets differ by tens of Q units: a behaviour falls
+    # below the others at once and is never tried again; 0.3 learns room B faster than 0.1 (docs/RECONSTRUCTION.md,
+    # "High-level learner")
+    output_init: float = 0.0  # (R) hidden->output weights start at 0: every behaviour's Q starts at 0 everywhere, so
+    # none starts below the others and goes untried (docs/RECONSTRUCTION.md, "High-level learner")
     gamma: float = 0.99  # (6.6.2)
     lam: float = 0.8  # (6.6.2)
     t_start: float = 0.05  # T 0.05 -> 0.02 over the run, on Q / 100 (6.6; the scale as in Ch. 5)
     t_end: float = 0.02
     lessons_per_trial: int = 60  # "approximately 60 lessons" (6.6)
+    replay_from_start: bool = True  # (R) 60 replays from the first trial on, drawn from the lessons stored so far;
+    # False: no more replays than lessons stored (5.3.5's reading), which leaves the first trials nearly unlearnt
     capacity: int = 100  # latest lessons kept (App. A.2)
     p_oldest: float = 0.02  # P_l from 0 for the latest lesson to this for the oldest (6.6)
     online: bool = True  # Q-learning on each step as well as replay (R, as Ch. 5)
@@ -64,6 +70,8 @@ class RechargeParams:
     # Eq. 6.6). "all" reads nets never trained where their behaviour is inapplicable (docs/RECONSTRUCTION.md)
     target_max: str = "applicable"
     step_scale: float = 1.0  # primitive actions shrunk to this fraction (Exp. 4, 6.6.4: 1/5)
+    xy_scale: float = 8.0  # (R) the X-Y units in +-xy_scale/2: at +-0.5 the 8 hidden units barely tell places
+    # in a room apart (docs/RECONSTRUCTION.md, "High-level learner")
     success_reward: float = 100.0  # reinforcement for docking (6.4; Exp. 4: 500); Q-nets and T scale with it
     grouping: bool = False  # state grouping in replay (Exp. 4, 6.6.4) ...
     mu_low: float = 0.5  # ... with mu ~ U(mu_low, mu_high) per group (6.6.4)
@@ -161,7 +169,8 @@ def _path(env, agent, task, seed) -> dict:
 
 def run_recharge(p: RechargeParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
     if p.pretrain_steps:  # Exp. 5: fresh behaviours, pre-trained briefly, learning on beside the high level
-        world = {"max_steps": p.max_steps, "step_scale": p.step_scale, "success_reward": p.success_reward}
+        world = {"max_steps": p.max_steps, "step_scale": p.step_scale, "success_reward": p.success_reward,
+                 "xy_scale": p.xy_scale}
         made = {}
 
         def make_env(p):  # run_rooms makes the training world first (pre-training the behaviours), then the test one
@@ -201,7 +210,8 @@ class OwnLibraryParams(RechargeParams):
 def run_own_library(p: OwnLibraryParams, rng: np.random.Generator, progress=lambda done, total: None) -> RunResult:
     """The Ch. 6 protocol (``run_rooms``; the same test tasks as Exp. 3 on the same seed) over a library this run
     trains first (``train_within_budget``), frozen during the high-level learning as the shipped one is."""
-    world = {"max_steps": p.max_steps, "step_scale": p.step_scale, "success_reward": p.success_reward}
+    world = {"max_steps": p.max_steps, "step_scale": p.step_scale, "success_reward": p.success_reward,
+             "xy_scale": p.xy_scale}
     made = {}
 
     def make_env(p):  # run_rooms makes the training world first (training the behaviours), then the test one

@@ -53,6 +53,7 @@ class BoundParams:
     tests_per_room: int = 10  # as RechargeParams: the same test tasks for the same seed
     step_scale: float = 1.0
     success_reward: float = 100.0
+    xy_scale: float = 8.0  # as RechargeParams's, so the world is the learners' (the rule reads the true position)
     library: str = SHIPPED_LIBRARY
 
     def __post_init__(self):

@@ -48,6 +48,8 @@ class NetConfig:
     n_hidden: int = 30  # hidden units; 0 = single-layer perceptron (5.4.4, App. B)
     value_range: float = 1.0  # outputs span +-value_range (4.2.4: +-1; 5.3.1: +-100)
     init_range: float = 0.1  # initial weights uniform in +-init_range (4.2.7: 0.1; Ch. 5, 7: 0.5)
+    output_init: float | None = None  # hidden->output weights in +-output_init (None: init_range); 0 starts
+    # every net at the same output, so no action starts below the others (Ch. 6's high level, docs/RECONSTRUCTION.md)
     lr: float = 0.1  # back-propagation learning rate (Table 4.1, 5.3.3, Table B.1)
     momentum: float = 0.9  # momentum factor (4.2.7, 5.3.3, App. B)
     linear_output: bool = False  # perceptrons only: a linear output unit, Q = value_range * net (7.4, App. B)
@@ -60,6 +62,8 @@ class NetConfig:
         for name in ("value_range", "init_range"):
             if not 0 < getattr(self, name) < math.inf:
                 raise ValueError(f"{name} must be a finite number > 0, got {getattr(self, name)}")
+        if self.output_init is not None and not 0 <= self.output_init < math.inf:
+            raise ValueError(f"output_init must be None or a finite number >= 0, got {self.output_init}")
         if not 0 < self.lr < math.inf:
             raise ValueError(f"learning rate lr must be a finite number > 0, got {self.lr}")
         if not 0 <= self.momentum < 1:
@@ -89,7 +93,8 @@ class OAON:
         lo, hi = -c.init_range, c.init_range
         if c.n_hidden > 0:
             self.w1 = rng.uniform(lo, hi, (n_nets, c.n_hidden, c.n_inputs + 1))
-            self.w2 = rng.uniform(lo, hi, (n_nets, c.n_hidden + 1))
+            out = c.init_range if c.output_init is None else c.output_init
+            self.w2 = rng.uniform(-out, out, (n_nets, c.n_hidden + 1))
         else:
             self.w1 = np.zeros((n_nets, 0, c.n_inputs + 1))
             self.w2 = rng.uniform(lo, hi, (n_nets, c.n_inputs + 1))

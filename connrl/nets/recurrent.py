@@ -58,6 +58,8 @@ class RecurrentNetConfig:
     n_outputs: int = 1  # 1 = recurrent Q-net; >1 = recurrent action model: sensation + payoff (7.3)
     value_range: float = 1.0  # outputs span +-value_range (cf. connrl.nets.mlp)
     init_range: float = 0.5  # initial weights uniform in +-init_range (App. B: 0.5)
+    output_init: float | None = None  # hidden->output weights in +-output_init (None: init_range); 0 starts
+    # every net at the same output, so no action starts below the others (Ch. 6's high level, docs/RECONSTRUCTION.md)
     lr: float = 0.04  # learning rate (Table B.1: eta_q = 0.04 for recurrent-Q, Task 1)
     momentum: float = 0.9  # momentum factor (App. B: 0.9 for multilayer networks)
     feedback: float = 1.5  # constant feedback weight w from hidden to context units (7.4)
@@ -76,6 +78,8 @@ class RecurrentNetConfig:
         for name in ("value_range", "init_range"):
             if not 0 < getattr(self, name) < math.inf:
                 raise ValueError(f"{name} must be a finite number > 0, got {getattr(self, name)}")
+        if self.output_init is not None and not 0 <= self.output_init < math.inf:
+            raise ValueError(f"output_init must be None or a finite number >= 0, got {self.output_init}")
         if not 0 < self.lr < math.inf:
             raise ValueError(f"learning rate lr must be a finite number > 0, got {self.lr}")
         if not 0 <= self.momentum < 1:
@@ -295,7 +299,8 @@ class RecurrentOAON:
         lo, hi = -c.init_range, c.init_range
         n_out_nets = 1 if c.share_output else n_nets
         self.w1 = rng.uniform(lo, hi, (n_nets, c.n_hidden, c.n_inputs + c.n_context + 1))
-        self.w2 = rng.uniform(lo, hi, (n_out_nets, c.n_outputs, c.n_hidden + 1))
+        out = c.init_range if c.output_init is None else c.output_init
+        self.w2 = rng.uniform(-out, out, (n_out_nets, c.n_outputs, c.n_hidden + 1))
         self.d1 = np.zeros_like(self.w1)
         self.d2 = np.zeros_like(self.w2)
         self._g1 = np.zeros_like(self.w1)

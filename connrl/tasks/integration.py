@@ -48,6 +48,10 @@ class RecurrentAgentParams(LearnerParams, XYParams, Protocol):
     @property
     def p_oldest(self) -> float: ...
     @property
+    def output_init(self) -> float: ...
+    @property
+    def replay_from_start(self) -> bool: ...
+    @property
     def persistence(self) -> bool: ...
     @property
     def target_max(self) -> str: ...
@@ -66,21 +70,23 @@ def n_inputs(p: XYParams) -> int:
 
 def make_integration_env(p: IntegrationWorldParams, layout: str = "default") -> BehaviourEnv:
     return BehaviourEnv(_shipped_library(), max_steps=p.max_steps, step_scale=p.step_scale,
-                        success_reward=p.success_reward, xy=p.xy, layout=layout)
+                        success_reward=p.success_reward, xy=p.xy, layout=layout, xy_scale=p.xy_scale)
 
 
 def make_recurrent_agent(p: RecurrentAgentParams, rng: np.random.Generator) -> BehaviourRecurrentQ:
     """Experiment 2's learner (8.3): Ch. 6's choice over behaviours with recurrent Q-nets and batch replay."""
     net = RecurrentNetConfig(n_inputs(p), p.hidden, p.context, value_range=p.success_reward, init_range=p.init_range,
-                             lr=p.lr, momentum=p.momentum, share_output=p.share_output)
+                             lr=p.lr, momentum=p.momentum, share_output=p.share_output, output_init=p.output_init)
     replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
                                                                                 p.lessons_per_trial),
                           p_threshold=0.0, p_threshold_oldest=p.p_oldest, batch=True)
     cfg = RecurrentQConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials),
                            gamma=p.gamma, lam=p.lam, replay=replay)
-    return BehaviourRecurrentQ(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
-                                                                               target_max=p.target_max),
-                               merit_scale=p.success_reward)
+    agent = BehaviourRecurrentQ(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
+                                                                                target_max=p.target_max),
+                                merit_scale=p.success_reward)
+    agent.replay_at_most_stored = not p.replay_from_start  # as Ch. 6's learner (RechargeParams.replay_from_start)
+    return agent
 
 
 def make_integration_agent(p: IntegrationAgentParams, rng: np.random.Generator):

@@ -115,6 +115,8 @@ class BehaviourTaskParams(Protocol):
     def step_scale(self) -> float: ...
     @property
     def success_reward(self) -> float: ...
+    @property
+    def xy_scale(self) -> float: ...
 
 
 class LearnerParams(Protocol):
@@ -163,6 +165,10 @@ class HighLevelAgentParams(LearnerParams, Protocol):
     def persistence(self) -> bool: ...
     @property
     def target_max(self) -> str: ...
+    @property
+    def replay_from_start(self) -> bool: ...
+    @property
+    def output_init(self) -> float: ...
 
 
 class FlatWorldParams(Protocol):
@@ -194,7 +200,7 @@ class FlatAgentParams(LearnerParams, Protocol):
 def make_recharge_env(p: BehaviourTaskParams) -> BehaviourEnv:
     """The behaviour-level task of a Ch. 6 parameter set (``connrl.experiments.recharge.RechargeParams``)."""
     return BehaviourEnv(_shipped_library(), max_steps=p.max_steps, step_scale=p.step_scale,
-                        success_reward=p.success_reward)
+                        success_reward=p.success_reward, xy_scale=p.xy_scale)
 
 
 def make_high_level_agent(p: HighLevelAgentParams, rng: np.random.Generator,
@@ -202,16 +208,18 @@ def make_high_level_agent(p: HighLevelAgentParams, rng: np.random.Generator,
     """Q(state, behaviour) of 6.5-6.6 from a Ch. 6 parameter set (``n_inputs``: 14 without X-Y, Ch. 8)."""
     # Q in +-success_reward and T on Q / success_reward, so Exp. 4's reward of 500 keeps Exp. 3's choices (6.6.4)
     net = NetConfig(n_inputs, p.hidden, value_range=p.success_reward, init_range=p.init_range, lr=p.lr,
-                    momentum=p.momentum)
+                    momentum=p.momentum, output_init=p.output_init)
     replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
                                                                                 p.lessons_per_trial),
                           p_threshold=0.0, p_threshold_oldest=p.p_oldest,
                           grouping=(p.mu_low, p.mu_high) if p.grouping else None)
     cfg = QCONConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials), gamma=p.gamma,
                      lam=p.lam, online=p.online, replay=replay)
-    return BehaviourQCON(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
-                                                                         target_max=p.target_max),
-                         merit_scale=p.success_reward)
+    agent = BehaviourQCON(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
+                                                                          target_max=p.target_max),
+                          merit_scale=p.success_reward)
+    agent.replay_at_most_stored = not p.replay_from_start  # (R) RechargeParams.replay_from_start
+    return agent
 
 
 def make_chg_lessons(n: int = CHG_TAUGHT, seed: int = 0, max_tries: int = 100) -> list[Lesson]:

@@ -11,8 +11,9 @@ Observation (``obs="high"`` or ``"flat"``):
     - "high" (16, 6.4.2, :func:`high_level_inputs`): 8 sonar units in *global* coordinates (unit j averages the
       readings whose direction lies within +-22.5 deg of compass bearing 90 + 45 j deg, i.e. north first, then
       counter-clockwise, encoded as Ch. 5's sonar), 3 bits (any collision, any light, any door edge), 3 room bits
-      (A, B, C), 2 X-Y units (x / width - 0.5, y / height - 0.5). With ``xy=False`` (Ch. 8, 8.1) the 14 units
-      without the X-Y pair: the doorways from room C into A and into B then look nearly alike (a hidden state).
+      (A, B, C), 2 X-Y units (``xy_scale`` times (x / width - 0.5, y / height - 0.5)). With ``xy=False`` (Ch. 8,
+      8.1) the 14 units without the X-Y pair: the doorways from room C into A and into B then look nearly alike (a
+      hidden state).
     - "flat" (100, Exp. 1, 6.6.1): every elementary input once -- 24 robot-centred sonar, 24 light, 24 door-edge,
       4 collision, 2 parallelism, 6 clearance bits -- then the 16 (``xy=False``: 14) high-level units. The thesis
       counts 102; it does not list them, and ours holds each input once.
@@ -29,7 +30,9 @@ Episode End: ``terminated`` on docking; ``truncated`` after ``max_steps`` (200, 
 ``step_scale`` shrinks every primitive action (Experiment 4, 6.6.4: one fifth, "the robot could move 12 inches
 forward in a single step, while here it could only move 2.4 inches"; turns shrink alike).
 
-``xy=False`` drops the 2 X-Y units (Ch. 8, 8.1); ``layout="changed"`` is 8.4's changed environment.
+``xy=False`` drops the 2 X-Y units (Ch. 8, 8.1); ``xy_scale`` (default 1: each in +-0.5) stretches them, as the
+Ch. 6 learners' parameters do (docs/RECONSTRUCTION.md, "High-level learner"); ``layout="changed"`` is 8.4's changed
+environment.
 
 Differences from the thesis: the X-Y scaling, the global sonar sectors, the uniform choice of start room and the
 flat input's size (100, not 102) are ours (docs/RECONSTRUCTION.md, "Recharging (Ch. 6)").
@@ -64,7 +67,7 @@ def global_sonar(sonar: np.ndarray, heading: float) -> np.ndarray:
 
 
 def high_level_inputs(rd: Reading, x: float, y: float, layout: Layout, low: float = -0.5,
-                      xy: bool = True) -> np.ndarray:
+                      xy: bool = True, xy_scale: float = 1.0) -> np.ndarray:
     """The 16 units of 6.4.2 from one scan and the position, or the first 14 without X-Y (module docstring)."""
     high = low + 1.0
     w, h = layout.size
@@ -73,7 +76,7 @@ def high_level_inputs(rd: Reading, x: float, y: float, layout: Layout, low: floa
     out[8:11] = [high if rd.collision.any() else low, high if rd.light.any() else low,
                  high if rd.door_edge.any() else low]
     out[11:14] = [high if rd.room == r else low for r in ROOMS]
-    out[14:16] = [x / w - 0.5, y / h - 0.5]
+    out[14:16] = [xy_scale * (x / w - 0.5), xy_scale * (y / h - 0.5)]
     return out if xy else out[:HIGH_SIZE_NO_XY].copy()
 
 
@@ -107,7 +110,8 @@ class RechargeEnv(gym.Env):
     def __init__(self, layout: Layout | str = "default", obs: str = "high", max_steps: int = 200,
                  start_room: str | None = None, collision_penalty: float = 0.0, dock_tolerance: float = 30.0,
                  binary_low: float = -0.5, edge_jump: float = DOOR_EDGE_JUMP, noise: bool = True,
-                 step_scale: float = 1.0, success_reward: float = R_SUCCESS, xy: bool = True):
+                 step_scale: float = 1.0, success_reward: float = R_SUCCESS, xy: bool = True,
+                 xy_scale: float = 1.0):
         if obs not in ("high", "flat"):
             raise ValueError(f"obs must be 'high' (16 units, 6.4.2) or 'flat' (100, Exp. 1), got {obs!r}")
         if start_room is not None and start_room not in ROOMS:
@@ -120,7 +124,9 @@ class RechargeEnv(gym.Env):
             raise ValueError(f"success_reward must be a finite number > 0, got {success_reward!r}")
         if not isinstance(xy, bool):
             raise ValueError(f"xy must be True (X-Y inputs, Ch. 6) or False (none, Ch. 8), got {xy!r}")
-        self.success_reward, self.xy = float(success_reward), xy
+        if not (math.isfinite(xy_scale) and xy_scale > 0):
+            raise ValueError(f"xy_scale must be a finite number > 0, got {xy_scale!r}")
+        self.success_reward, self.xy, self.xy_scale = float(success_reward), xy, float(xy_scale)
         self.layout = layout if isinstance(layout, Layout) else Layout.load(layout)
         self.obs_mode, self.max_steps, self.start_room = obs, int(max_steps), start_room
         self.collision_penalty, self.dock_tolerance = float(collision_penalty), float(dock_tolerance)
@@ -129,7 +135,10 @@ class RechargeEnv(gym.Env):
                             edge_jump=edge_jump, step_scale=step_scale)
         n = (HIGH_SIZE if obs == "high" else FLAT_SIZE) - (0 if xy else HIGH_SIZE - HIGH_SIZE_NO_XY)
         lo, hi = min(self.binary_low, -0.5), max(self.binary_low + 1.0, 1.0)
-        self.observation_space = spaces.Box(np.full(n, lo, np.float32), np.full(n, hi, np.float32), dtype=np.float32)
+        low, high = np.full(n, lo, np.float32), np.full(n, hi, np.float32)
+        if xy:  # the X-Y pair closes the high-level inputs (and so the flat ones)
+            low[-2:], high[-2:] = min(lo, -self.xy_scale / 2), max(hi, self.xy_scale / 2)
+        self.observation_space = spaces.Box(low, high, dtype=np.float32)
         self.action_space = spaces.Discrete(N_ACTIONS)
         self._steps, self._room0, self._trace = 0, None, []
 
@@ -141,7 +150,7 @@ class RechargeEnv(gym.Env):
 
     def _observe(self, rd: Reading):
         x, y, _ = self.sim.pose
-        top = high_level_inputs(rd, x, y, self.layout, self.binary_low, self.xy)
+        top = high_level_inputs(rd, x, y, self.layout, self.binary_low, self.xy, self.xy_scale)
         tasks = task_observations(rd, self.binary_low)
         if self.obs_mode == "high":
             return top, tasks
