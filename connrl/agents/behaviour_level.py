@@ -111,7 +111,8 @@ class BehaviourChoice:
 class BehaviourQCON(QCON):
     """QCON over behaviours with W(b) of Eq. 6.6 (see the module docstring)."""
 
-    replay_at_most_stored = True  # "approximately 60 lessons" (6.6): fewer while fewer are stored, as in 5.3.5
+    replay_at_most_stored = True  # "approximately 60 lessons" (6.6): fewer while fewer are stored, as in 5.3.5;
+    # Ch. 6's builders turn it off (RechargeParams.replay_from_start: 60 from the first trial on)
 
     def __init__(self, config: QCONConfig, n_behaviours: int, rng: np.random.Generator,
                  choice: BehaviourChoice | None = None, *, merit_scale: float = 100.0):
@@ -150,7 +151,7 @@ class BehaviourQCON(QCON):
 class BehaviourRecurrentQ(RecurrentQ):
     """Recurrent-Q over behaviours (Ch. 8, 8.3; see the module docstring): no on-line learning, batch replay."""
 
-    replay_at_most_stored = True
+    replay_at_most_stored = True  # as BehaviourQCON's; Ch. 8's builder sets it from replay_from_start
 
     def __init__(self, config: RecurrentQConfig, n_behaviours: int, rng: np.random.Generator,
                  choice: BehaviourChoice | None = None, *, merit_scale: float = 100.0):

@@ -8,7 +8,9 @@ same number from each room; performance = reinforcement per primitive step over 
 Experiment 2 weights the choice by applicability only (W = 0 / 1); Experiment 3 adds the persistence rule (0 / 100 /
 1). The thesis's other settings (6.6): 16 inputs (6.4.2), 8 hidden units, lr 0.05, gamma 0.99, lambda 0.8,
 T 0.05 -> 0.02, about 60 lessons replayed per trial, P_l from 0 (latest) to 0.02 by recency. Values it does not give
-(momentum, initial weights, memory size, on-line learning, the test tasks) are Ch. 5's (R; docs/RECONSTRUCTION.md).
+are ours (R; docs/RECONSTRUCTION.md, "High-level learner"): Ch. 5's momentum, memory size, on-line learning; the
+initial weights, the X-Y inputs' scale and replay from the first trial, chosen on development seeds for room B; the
+test tasks.
 """
 
 from __future__ import annotations

@@ -58,7 +58,7 @@ class BoundParams:
 
     def __post_init__(self):
         check_types(self, {"near_door": ">0", "max_steps": ">=1", "tests_per_room": ">=1", "step_scale": ">0",
-                           "success_reward": ">0"}, wall_A=WALLS, wall_B=WALLS, wall_C=WALLS)
+                           "success_reward": ">0", "xy_scale": ">0"}, wall_A=WALLS, wall_B=WALLS, wall_C=WALLS)
         if self.library != SHIPPED_LIBRARY:
             raise ValueError(f"parameter library must be the shipped behaviour library's digest {SHIPPED_LIBRARY}, "
                              f"got {self.library!r}")

@@ -49,7 +49,8 @@ class NetConfig:
     value_range: float = 1.0  # outputs span +-value_range (4.2.4: +-1; 5.3.1: +-100)
     init_range: float = 0.1  # initial weights uniform in +-init_range (4.2.7: 0.1; Ch. 5, 7: 0.5)
     output_init: float | None = None  # hidden->output weights in +-output_init (None: init_range); 0 starts
-    # every net at the same output, so no action starts below the others (Ch. 6's high level, docs/RECONSTRUCTION.md)
+    # every net at the same output, so no action starts below the others (Ch. 6's high level, docs/RECONSTRUCTION.md);
+    # a perceptron (n_hidden=0) has no hidden->output layer and ignores it
     lr: float = 0.1  # back-propagation learning rate (Table 4.1, 5.3.3, Table B.1)
     momentum: float = 0.9  # momentum factor (4.2.7, 5.3.3, App. B)
     linear_output: bool = False  # perceptrons only: a linear output unit, Q = value_range * net (7.4, App. B)

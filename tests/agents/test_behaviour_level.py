@@ -172,3 +172,19 @@ def test_recurrent_replay_uses_the_kept_weights_and_applicability():
     assert not np.allclose(a.net.w1, plain.w1)
     with pytest.raises(ValueError, match="kept with each lesson"):
         a.replay_lesson(lesson, 0.0, weights=np.ones((3, 4)))
+
+
+@pytest.mark.parametrize("memory", ["none", "recurrent"])
+def test_replay_from_start_replays_the_full_count_after_the_first_trial(monkeypatch, memory):
+    from connrl.core.rollout import run_trial
+    from connrl.experiments.integration import IntegrationParams
+    from connrl.tasks.integration import make_integration_agent, make_integration_env
+
+    for from_start in (True, False):
+        p = IntegrationParams(memory=memory, max_steps=5, replay_from_start=from_start, online=memory == "none")
+        agent, env = make_integration_agent(p, np.random.default_rng(0)), make_integration_env(p)
+        calls: list = []
+        monkeypatch.setattr(agent, "replay_lesson", lambda lesson, *a, calls=calls, **k: calls.append(lesson))
+        run_trial(env, agent, trial=0, learning=True, seed=1)
+        # one lesson stored: the full count drawn from it, or (5.3.5's reading) no more replays than lessons
+        assert len(calls) == (p.lessons_per_trial if from_start else 1) and len({id(c) for c in calls}) == 1

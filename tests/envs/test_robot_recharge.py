@@ -138,3 +138,34 @@ def test_without_xy_the_inputs_are_the_first_14_and_the_two_doorways_look_nearly
     assert RechargeEnv(obs="flat", xy=False).observation_space.shape == (FLAT_SIZE - 2,)
     with pytest.raises(ValueError, match="xy must be"):
         RechargeEnv(xy="no")
+
+
+def test_xy_scale_stretches_the_xy_units_and_their_bounds():
+    L = Layout.load("default")
+    bits = np.zeros(24, np.uint8)
+    rd = Reading(np.full(24, 32.0), np.full(24, 32.0), bits, bits.copy(), np.zeros(4, np.uint8), 0.0, "B")
+    assert high_level_inputs(rd, 270.0, 105.0, L, xy_scale=8.0)[14:16].tolist() == [2.0, -2.0]  # 8 x (0.25, -0.25)
+    for obs, n in (("high", 16), ("flat", FLAT_SIZE)):
+        env = RechargeEnv(obs=obs, xy_scale=8.0)
+        space = env.observation_space
+        assert space.shape == (n,) and space.low[-2:].tolist() == [-4.0] * 2 and space.high[-2:].tolist() == [4.0] * 2
+        assert space.low[:-2].min() == -0.5 and space.high[:-2].max() == 1.0  # the other units keep their range
+        check_env(env, skip_render_check=True)
+        x, _ = env.reset(seed=1)
+        assert np.all(np.abs(x[-2:]) <= 4.0) and np.abs(x[-2:]).max() > 0.5  # stretched, inside the bounds
+    no_xy = RechargeEnv(xy=False, xy_scale=8.0).observation_space
+    assert no_xy.shape == (14,) and no_xy.high.max() == 1.0  # no X-Y, nothing stretched
+    for bad in (0, -1.0, float("nan"), float("inf"), True, "8"):
+        with pytest.raises(ValueError, match="xy_scale must be a finite number > 0"):
+            RechargeEnv(xy_scale=bad)
+
+
+def test_the_behaviour_level_learners_worlds_take_the_runs_xy_scale():
+    from connrl.experiments.integration import IntegrationParams
+    from connrl.experiments.recharge import RechargeParams
+    from connrl.tasks.integration import make_integration_env
+    from connrl.tasks.recharge import BehaviourEnv, make_recharge_env
+
+    assert make_recharge_env(RechargeParams()).world.xy_scale == RechargeParams().xy_scale == 8.0
+    assert make_integration_env(IntegrationParams(xy=True), "changed").world.xy_scale == 8.0
+    check_env(BehaviourEnv(xy_scale=8.0), skip_render_check=True)

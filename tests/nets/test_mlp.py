@@ -1,5 +1,7 @@
 """Networks: symmetric sigmoid, forward pass against NumPy, backprop against finite differences, momentum."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -149,3 +151,21 @@ def test_linear_perceptron_is_value_range_times_net_and_follows_the_delta_rule()
 def test_linear_output_needs_a_perceptron():
     with pytest.raises(ValueError, match="linear_output"):
         NetConfig(4, 3, linear_output=True)
+
+
+def test_output_init_sets_only_the_output_weights_range_and_keeps_the_random_stream():
+    from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
+
+    for make, cfg in ((OAON, NetConfig(5, 3, init_range=0.3)), (RecurrentOAON, RecurrentNetConfig(5, 3, 2,
+                                                                                                    init_range=0.3))):
+        a_rng, b_rng, c_rng = (np.random.default_rng(7) for _ in range(3))
+        a, b = make(cfg, 2, a_rng), make(dataclasses.replace(cfg, output_init=None), 2, b_rng)
+        zero = make(dataclasses.replace(cfg, output_init=0.0), 2, c_rng)
+        np.testing.assert_array_equal(a.w1, b.w1)
+        np.testing.assert_array_equal(a.w2, b.w2)  # None = init_range, bit for bit
+        np.testing.assert_array_equal(zero.w1, a.w1)  # the hidden weights are the same draws
+        assert not zero.w2.any() and a.w2.any()
+        assert a_rng.random() == c_rng.random()  # the same number of draws either way
+    for bad in (-0.1, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="output_init must be None or a finite number >= 0"):
+            NetConfig(5, 3, output_init=bad)

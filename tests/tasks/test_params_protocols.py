@@ -16,7 +16,8 @@ import pytest
 from connrl.experiments.hidden_state import CupParams, FrozenModelParams, PoleHiddenParams
 from connrl.experiments.integration import IntegrationParams
 from connrl.experiments.pole import PoleParams
-from connrl.experiments.recharge import RechargeParams
+from connrl.experiments.recharge import OwnLibraryParams, RechargeParams
+from connrl.experiments.recharge_bound import BoundParams
 from connrl.experiments.recharge_flat import FlatParams
 from connrl.experiments.robot import RobotParams
 from connrl.experiments.robot_bounds import CopyParams
@@ -35,7 +36,7 @@ PASSED = {
     hidden_state.make_agent: (CupParams, PoleHiddenParams, FrozenModelParams),
     robot.make_env: (RobotParams, RobotNoiseParams, CopyParams),
     robot.make_agent: (RobotParams, RobotNoiseParams, CopyParams),
-    recharge.make_recharge_env: (RechargeParams,),
+    recharge.make_recharge_env: (RechargeParams, OwnLibraryParams, BoundParams),
     recharge.make_high_level_agent: (RechargeParams, IntegrationParams),
     recharge.make_flat_env: (FlatParams,),
     recharge.make_flat_agent: (FlatParams,),

@@ -31,8 +31,8 @@ Episode End: ``terminated`` on docking; ``truncated`` after ``max_steps`` (200, 
 forward in a single step, while here it could only move 2.4 inches"; turns shrink alike).
 
 ``xy=False`` drops the 2 X-Y units (Ch. 8, 8.1); ``xy_scale`` (default 1: each in +-0.5) stretches them, as the
-Ch. 6 learners' parameters do (docs/RECONSTRUCTION.md, "High-level learner"); ``layout="changed"`` is 8.4's changed
-environment.
+behaviour-level learners' parameters do (Exps 2-5, Ch. 8 with X-Y: 8; docs/RECONSTRUCTION.md, "High-level
+learner"); ``layout="changed"`` is 8.4's changed environment.
 
 Differences from the thesis: the X-Y scaling, the global sonar sectors, the uniform choice of start room and the
 flat input's size (100, not 102) are ours (docs/RECONSTRUCTION.md, "Recharging (Ch. 6)").
@@ -124,7 +124,8 @@ class RechargeEnv(gym.Env):
             raise ValueError(f"success_reward must be a finite number > 0, got {success_reward!r}")
         if not isinstance(xy, bool):
             raise ValueError(f"xy must be True (X-Y inputs, Ch. 6) or False (none, Ch. 8), got {xy!r}")
-        if not (math.isfinite(xy_scale) and xy_scale > 0):
+        if isinstance(xy_scale, bool) or not isinstance(xy_scale, (int, float)) or not (
+                math.isfinite(xy_scale) and xy_scale > 0):
             raise ValueError(f"xy_scale must be a finite number > 0, got {xy_scale!r}")
         self.success_reward, self.xy, self.xy_scale = float(success_reward), xy, float(xy_scale)
         self.layout = layout if isinstance(layout, Layout) else Layout.load(layout)
