@@ -41,8 +41,8 @@ def _f(v, digits=2) -> str:
 CLAIMS_HEADING = "The claims of 8.2-8.4 beside ours"
 TABLE_HEADING = "The 8.5 table: steps to learn each task"
 STEPS_WITHIN = 1.5  # a row's steps "about the thesis's": at most 1.5x its number (its numbers are round) (R)
-CH8_B_CAUSE = ("measured: the recurrent nets stop the oscillation but do not tell the doorways apart (DP rare at "
-               "both), and Ch. 6's own slowness from B bounds the margin (docs/notes/integration.md)")
+CH8_B_CAUSE = ("measured: the recurrent nets choose DP at door B about as often as at door A, so the robot passes "
+               "back into B, though their context holds the doorway (the probe); docs/notes/integration.md")
 
 
 def per_run(summary: dict, label: str, name: str) -> list[float]:
