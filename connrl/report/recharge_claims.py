@@ -65,10 +65,10 @@ HEADING = "The claims of 6.6 and 6.7 beside ours"  # the page heading the scoreb
 MOST = 0.5  # "most places" / "generally able" read as docking from more than half of a room's test tasks (R)
 COMPARABLE = 0.25  # "comparable" / "slightly worse" read as within 25 % of Exp. 3's final performance (R)
 SHARE_MARGIN = 0.10  # two arms' docked shares "the same" within 10 percentage points (R)
-ROOM_B_CAUSE = ("measured: the greedy policy still dithers between WFL and WFR where their Q-values differ by less "
-                "than the nets' error (a choice on every primitive step makes the gap one step's worth), and the "
-                "behaviours' routes from B are long (about 120 primitive steps with the best wall followers, the "
-                "teacher's 75); room B is learnt by trial 150 (docs/notes/recharge-status.md)")
+ROOM_B_CAUSE = ("measured: in room B the two wall followers' Q-values differ by less than the nets' error (a choice "
+                "on every primitive step makes the gap one step's worth), so the greedy robot dithers and a sticky "
+                "one commits to the wrong one; the routes from B are long (about 120 primitive steps with the best "
+                "wall followers, the teacher's 75); room B is learnt by trial 150 (docs/notes/recharge-status.md)")
 
 
 @dataclass
