@@ -36,8 +36,8 @@ LAYOUT = Layout.load("default")  # where the test tasks are drawn
 RANGES = {"hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1", "lam": "0..1",
           "t_start": ">0", "t_end": ">0", "lessons_per_trial": ">=0", "capacity": ">=1", "p_oldest": "0..<1",
           "trials": ">=1", "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1", "step_scale": ">0",
-          "xy_scale": ">0", "output_init": ">=0", "success_reward": ">0", "mu_low": ">=0", "mu_high": ">=0",
-          "pretrain_steps": ">=0", "paths": ">=0"}
+          "xy_scale": ">0", "output_init": ">=0", "cool_trials": ">=1", "success_reward": ">0", "mu_low": ">=0",
+          "mu_high": ">=0", "pretrain_steps": ">=0", "paths": ">=0"}
 
 
 @dataclass(frozen=True)
@@ -57,6 +57,8 @@ class RechargeParams:
     lam: float = 0.8  # (6.6.2)
     t_start: float = 0.05  # T 0.05 -> 0.02 over the run, on Q / 100 (6.6; the scale as in Ch. 5)
     t_end: float = 0.02
+    cool_trials: int = 60  # (R) T cools from t_start to t_end over the first cool_trials trials, then holds; the
+    # thesis gives the range, not the pace (docs/RECONSTRUCTION.md, "High-level learner")
     lessons_per_trial: int = 60  # "approximately 60 lessons" (6.6)
     replay_from_start: bool = True  # (R) 60 replays from the first trial on, drawn from the lessons stored so far;
     # False: no more replays than lessons stored (5.3.5's reading), which leaves the first trials nearly unlearnt

@@ -50,6 +50,8 @@ class RecurrentAgentParams(LearnerParams, XYParams, Protocol):
     @property
     def output_init(self) -> float: ...
     @property
+    def cool_trials(self) -> int: ...
+    @property
     def replay_from_start(self) -> bool: ...
     @property
     def persistence(self) -> bool: ...
@@ -80,7 +82,8 @@ def make_recurrent_agent(p: RecurrentAgentParams, rng: np.random.Generator) -> B
     replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
                                                                                 p.lessons_per_trial),
                           p_threshold=0.0, p_threshold_oldest=p.p_oldest, batch=True)
-    cfg = RecurrentQConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials),
+    cfg = RecurrentQConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end,
+                                                                          min(p.cool_trials, p.trials)),
                            gamma=p.gamma, lam=p.lam, replay=replay)
     agent = BehaviourRecurrentQ(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
                                                                                 target_max=p.target_max),

@@ -169,6 +169,8 @@ class HighLevelAgentParams(LearnerParams, Protocol):
     def replay_from_start(self) -> bool: ...
     @property
     def output_init(self) -> float: ...
+    @property
+    def cool_trials(self) -> int: ...
 
 
 class FlatWorldParams(Protocol):
@@ -213,8 +215,8 @@ def make_high_level_agent(p: HighLevelAgentParams, rng: np.random.Generator,
                                                                                 p.lessons_per_trial),
                           p_threshold=0.0, p_threshold_oldest=p.p_oldest,
                           grouping=(p.mu_low, p.mu_high) if p.grouping else None)
-    cfg = QCONConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end, p.trials), gamma=p.gamma,
-                     lam=p.lam, online=p.online, replay=replay)
+    cool = TemperatureSchedule.direct(p.t_start, p.t_end, min(p.cool_trials, p.trials))
+    cfg = QCONConfig(net=net, temperature=cool, gamma=p.gamma, lam=p.lam, online=p.online, replay=replay)
     agent = BehaviourQCON(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
                                                                           target_max=p.target_max),
                           merit_scale=p.success_reward)
