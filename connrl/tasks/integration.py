@@ -12,7 +12,6 @@ import numpy as np
 from connrl.agents import LinearSchedule, ReplayConfig
 from connrl.agents.behaviour_level import BehaviourChoice, BehaviourRecurrentQ
 from connrl.agents.memory import RecurrentQConfig
-from connrl.core.exploration import TemperatureSchedule
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, HIGH_SIZE, HIGH_SIZE_NO_XY
 from connrl.nets.recurrent import RecurrentNetConfig
 from connrl.tasks.recharge import (
@@ -21,6 +20,7 @@ from connrl.tasks.recharge import (
     HighLevelAgentParams,
     LearnerParams,
     _shipped_library,
+    cooling,
     make_high_level_agent,
 )
 
@@ -82,9 +82,7 @@ def make_recurrent_agent(p: RecurrentAgentParams, rng: np.random.Generator) -> B
     replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
                                                                                 p.lessons_per_trial),
                           p_threshold=0.0, p_threshold_oldest=p.p_oldest, batch=True)
-    cfg = RecurrentQConfig(net=net, temperature=TemperatureSchedule.direct(p.t_start, p.t_end,
-                                                                          min(p.cool_trials, p.trials)),
-                           gamma=p.gamma, lam=p.lam, replay=replay)
+    cfg = RecurrentQConfig(net=net, temperature=cooling(p), gamma=p.gamma, lam=p.lam, replay=replay)
     agent = BehaviourRecurrentQ(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
                                                                                 target_max=p.target_max),
                                 merit_scale=p.success_reward)

@@ -205,6 +205,12 @@ def make_recharge_env(p: BehaviourTaskParams) -> BehaviourEnv:
                         success_reward=p.success_reward, xy_scale=p.xy_scale)
 
 
+def cooling(p: HighLevelAgentParams) -> TemperatureSchedule:
+    """The high level's T: from t_start to t_end over the first ``cool_trials`` trials, then held (6.6; the pace is
+    ours, docs/RECONSTRUCTION.md); Ch. 8's recurrent learner takes the same."""
+    return TemperatureSchedule.direct(p.t_start, p.t_end, min(p.cool_trials, p.trials))
+
+
 def make_high_level_agent(p: HighLevelAgentParams, rng: np.random.Generator,
                           n_inputs: int = HIGH_SIZE) -> BehaviourQCON:
     """Q(state, behaviour) of 6.5-6.6 from a Ch. 6 parameter set (``n_inputs``: 14 without X-Y, Ch. 8)."""
@@ -215,8 +221,7 @@ def make_high_level_agent(p: HighLevelAgentParams, rng: np.random.Generator,
                                                                                 p.lessons_per_trial),
                           p_threshold=0.0, p_threshold_oldest=p.p_oldest,
                           grouping=(p.mu_low, p.mu_high) if p.grouping else None)
-    cool = TemperatureSchedule.direct(p.t_start, p.t_end, min(p.cool_trials, p.trials))
-    cfg = QCONConfig(net=net, temperature=cool, gamma=p.gamma, lam=p.lam, online=p.online, replay=replay)
+    cfg = QCONConfig(net=net, temperature=cooling(p), gamma=p.gamma, lam=p.lam, online=p.online, replay=replay)
     agent = BehaviourQCON(cfg, len(BEHAVIOUR_TASKS), rng, BehaviourChoice(persistence=p.persistence,
                                                                           target_max=p.target_max),
                           merit_scale=p.success_reward)

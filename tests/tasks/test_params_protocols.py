@@ -38,6 +38,7 @@ PASSED = {
     robot.make_agent: (RobotParams, RobotNoiseParams, CopyParams),
     recharge.make_recharge_env: (RechargeParams, OwnLibraryParams, BoundParams),
     recharge.make_high_level_agent: (RechargeParams, IntegrationParams),
+    recharge.cooling: (RechargeParams, IntegrationParams),
     recharge.make_flat_env: (FlatParams,),
     recharge.make_flat_agent: (FlatParams,),
     integration.n_inputs: (IntegrationParams,),
