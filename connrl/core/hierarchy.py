@@ -22,7 +22,7 @@ import heapq
 import numba
 import numpy as np
 
-from connrl.core.model_learning import learn_model
+from connrl.core.model_learning import check_world, explore, learn_model
 
 
 @numba.njit(cache=True)
@@ -72,12 +72,13 @@ def single_level(succ: np.ndarray, centres: np.ndarray, l: int, seed: int = 0, r
     n = succ.shape[0]
     rng = np.random.default_rng(seed)
     actions = 0
+    succ, cost = check_world(succ)
     for c in centres:
         states, _ = ball(succ, int(c), int(l))
         target = np.zeros(n, dtype=bool)
         target[states] = True
-        actions += learn_model(succ, target=target, starts=states, episode=int(l), stop_at=int(c),
-                               seed=int(rng.integers(2**31)), rule=rule)
+        actions += explore(succ, cost, target=target, starts=states, episode=int(l), stop_at=int(c),
+                           seed=int(rng.integers(2**31)), rule=rule)
     a_succ, a_cost = abstract_graph(succ, centres, l)
     level = learn_model(a_succ, cost=a_cost, seed=int(rng.integers(2**31)), rule=rule)
     return {"abstract_actions": actions, "abstract_level": level, "total": actions + level}
@@ -126,23 +127,24 @@ def multi_level(succ: np.ndarray, levels: list[np.ndarray], spacing: list[int], 
     counts = []
     for i in range(1, len(levels)):
         if i == 1:
-            g_succ, g_cost, index = succ, np.ones_like(succ), np.arange(succ.shape[0])
+            g_succ, g_cost = check_world(succ)
+            index = np.arange(succ.shape[0])
         else:
-            g_succ, g_cost = abstract_graph(succ, levels[i - 1], spacing[i - 1])
+            g_succ, g_cost = check_world(*abstract_graph(succ, levels[i - 1], spacing[i - 1]))
             index = np.full(succ.shape[0], -1)
             index[levels[i - 1]] = np.arange(len(levels[i - 1]))
         top = i == len(levels) - 1
         count = 0
         for c in levels[i]:
             if top:
-                count += learn_model(g_succ, cost=g_cost, seed=int(rng.integers(2**31)), rule=rule)
+                count += explore(g_succ, g_cost, seed=int(rng.integers(2**31)), rule=rule)
                 continue
             states, _ = ball(succ, int(c), int(spacing[i]))
             mine = index[states]
             mine = mine[mine >= 0]
             target = np.zeros(g_succ.shape[0], dtype=bool)
             target[mine] = True
-            count += learn_model(g_succ, cost=g_cost, target=target, starts=mine, episode=int(spacing[i]),
-                                 stop_at=int(index[c]), seed=int(rng.integers(2**31)), rule=rule)
+            count += explore(g_succ, g_cost, target=target, starts=mine, episode=int(spacing[i]),
+                             stop_at=int(index[c]), seed=int(rng.integers(2**31)), rule=rule)
         counts.append(count)
     return counts

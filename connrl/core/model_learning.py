@@ -20,13 +20,14 @@ import numpy as np
 
 
 @numba.njit(cache=True)
-def _nearest_untried(known, tried, target, pos, budget, cost, dist, parent, queue):
+def _nearest_untried(known, tried, target, pos, budget, cost, dist, parent, queue, touched):
     """BFS over known transitions from ``pos``: the nearest target state with an untried action whose route plus
     the action fits ``budget`` (< 0: no limit). Returns the state, or -1; ``dist`` holds route costs, ``parent``
-    the route."""
-    n, n_actions = known.shape
-    for s in range(n):
-        dist[s] = -1
+    the route. ``dist`` is -1 except at the ``touched[0]`` states first in ``queue`` (the last call's search),
+    which are reset here: a search costs what it visits, not n (O(n^2) over a run otherwise)."""
+    n_actions = known.shape[1]
+    for i in range(touched[0]):
+        dist[queue[i]] = -1
     dist[pos] = 0
     parent[pos] = -1
     head, tail = 0, 1
@@ -37,6 +38,7 @@ def _nearest_untried(known, tried, target, pos, budget, cost, dist, parent, queu
         if target[s]:
             for a in range(n_actions):
                 if not tried[s, a] and (budget < 0 or dist[s] + cost[s, a] <= budget):
+                    touched[0] = tail
                     return s
         for a in range(n_actions):
             t = known[s, a]
@@ -45,6 +47,7 @@ def _nearest_untried(known, tried, target, pos, budget, cost, dist, parent, queu
                 parent[t] = s
                 queue[tail] = t
                 tail += 1
+    touched[0] = tail
     return -1
 
 
@@ -60,9 +63,10 @@ def _learn(succ, cost, target, starts, episode, stop_at, seed, max_executions, r
             for a in range(n_actions):
                 if not tried[s, a]:
                     remaining += 1
-    dist = np.empty(n, dtype=np.int64)
+    dist = np.full(n, -1, dtype=np.int64)
     parent = np.empty(n, dtype=np.int64)
     queue = np.empty(n, dtype=np.int64)
+    touched = np.zeros(1, dtype=np.int64)
     total = 0
     pos = starts[np.random.randint(starts.size)]
     while remaining > 0 and total < max_executions:
@@ -88,7 +92,7 @@ def _learn(succ, cost, target, starts, episode, stop_at, seed, max_executions, r
                 pos = succ[u, a]
                 continue
             u = _nearest_untried(known, tried, target, pos, episode - spent if episode > 0 else -1, cost, dist,
-                                 parent, queue)
+                                 parent, queue, touched)
             if u < 0:
                 break
             spent += dist[u]
@@ -110,22 +114,25 @@ def _learn(succ, cost, target, starts, episode, stop_at, seed, max_executions, r
 RULES = ("greedy", "random")
 
 
-def learn_model(succ: np.ndarray, cost: np.ndarray | None = None, target: np.ndarray | None = None,
-                starts: np.ndarray | None = None, episode: int = 0, stop_at: int = -1, seed: int = 0,
-                max_executions: int = 10**12, rule: str = "greedy") -> int:
-    """Action executions until every action of every ``target`` state (default: all) has been tried, starting from
-    a random state of ``starts`` (default: all), in episodes of ``episode`` executions from reset states when
-    ``episode`` > 0. ``rule``: "greedy" mapping (module docstring) or a "random" walk (each step a uniformly random
-    action, an uninformed explorer for comparison)."""
-    if rule not in RULES:
-        raise ValueError(f"rule must be one of {RULES}, got {rule!r}")
+def check_world(succ: np.ndarray, cost: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``succ`` and ``cost`` (default: 1 everywhere) as contiguous int64 tables, checked; a loop exploring one
+    table many times (``connrl.core.hierarchy``) checks it once and calls ``explore``."""
     succ = np.ascontiguousarray(succ, dtype=np.int64)
     if succ.ndim != 2 or succ.shape[0] < 1 or (succ >= succ.shape[0]).any():
         raise ValueError(f"succ must be an (n, actions) table of next states in -1..n-1, got shape {succ.shape}")
-    n = succ.shape[0]
     cost = np.ones_like(succ) if cost is None else np.ascontiguousarray(cost, dtype=np.int64)
     if cost.shape != succ.shape or (cost[succ >= 0] < 1).any():
         raise ValueError("cost must have succ's shape and be >= 1 wherever an action exists")
+    return succ, cost
+
+
+def explore(succ: np.ndarray, cost: np.ndarray, target: np.ndarray | None = None, starts: np.ndarray | None = None,
+            episode: int = 0, stop_at: int = -1, seed: int = 0, max_executions: int = 10**12,
+            rule: str = "greedy") -> int:
+    """``learn_model`` on tables ``check_world`` returned."""
+    if rule not in RULES:
+        raise ValueError(f"rule must be one of {RULES}, got {rule!r}")
+    n = succ.shape[0]
     target = np.ones(n, dtype=np.bool_) if target is None else np.ascontiguousarray(target, dtype=np.bool_)
     starts = np.arange(n) if starts is None else np.ascontiguousarray(starts, dtype=np.int64)
     if target.shape != (n,) or starts.size == 0 or not ((starts >= 0) & (starts < n)).all():
@@ -135,3 +142,13 @@ def learn_model(succ: np.ndarray, cost: np.ndarray | None = None, target: np.nda
     if remaining:
         raise RuntimeError(f"{remaining} target actions still untried after {total} executions")
     return int(total)
+
+
+def learn_model(succ: np.ndarray, cost: np.ndarray | None = None, target: np.ndarray | None = None,
+                starts: np.ndarray | None = None, episode: int = 0, stop_at: int = -1, seed: int = 0,
+                max_executions: int = 10**12, rule: str = "greedy") -> int:
+    """Action executions until every action of every ``target`` state (default: all) has been tried, starting from
+    a random state of ``starts`` (default: all), in episodes of ``episode`` executions from reset states when
+    ``episode`` > 0. ``rule``: "greedy" mapping (module docstring) or a "random" walk (each step a uniformly random
+    action, an uninformed explorer for comparison)."""
+    return explore(*check_world(succ, cost), target, starts, episode, stop_at, seed, max_executions, rule)
