@@ -32,11 +32,11 @@ def weighted_boltzmann_probabilities(merits: np.ndarray, weights: np.ndarray, te
     """Eq. 6.6: ``P(b) = W(b) exp(Q(b)/T) / sum_k W(b_k) exp(Q(b_k)/T)``. A weight of 0 rules a choice out; T = 0
     gives the greedy choice among the allowed ones (ties share the mass, whatever their weights)."""
     m, w = np.asarray(merits, dtype=np.float64), np.asarray(weights, dtype=np.float64)
-    if m.shape != w.shape or not np.all(w >= 0) or not np.any(w > 0):
+    allowed = w > 0  # array methods, not np.all / np.any: this runs on every step of Ch. 6 and 8
+    if m.shape != w.shape or not (w >= 0).all() or not allowed.any():
         raise ValueError(f"weights must be >= 0, one per choice, not all 0; got {w.tolist()} for {m.size} choices")
     if temperature < 0:
         raise ValueError(f"temperature must be >= 0, got {temperature}")
-    allowed = w > 0
     top = m[allowed].max()
     if temperature == 0:
         best = allowed & (m == top)

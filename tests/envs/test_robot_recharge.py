@@ -7,7 +7,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import connrl.envs  # noqa: F401
-from connrl.envs.robot import MOVE_FORWARD, TURN_LEFT_15, Layout, RobotTaskEnv
+from connrl.envs.robot import MOVE_FORWARD, TURN_LEFT_15, Layout, RobotTaskEnv, encode_sonar
 from connrl.envs.robot.recharge import FLAT_SIZE, ROOMS, RechargeEnv, global_sonar, high_level_inputs
 from connrl.envs.robot.sim import Reading
 
@@ -24,6 +24,15 @@ def test_global_sonar_sectors_by_hand():
     assert global_sonar(s, 0.0).tolist() == [6, 9, 12, 15, 18, 21, 8, 3]
     assert global_sonar(s, 90.0).tolist() == [8, 3, 6, 9, 12, 15, 18, 21]
     assert global_sonar(s, 7.0).tolist() == global_sonar(s, 0.0).tolist()  # within a sector's half-width
+
+
+def test_compiled_sonar_units_equal_the_numpy_definition():
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        sonar, heading = rng.uniform(-5.0, 140.0, 24), float(rng.uniform(0.0, 360.0))
+        x = high_level_inputs(Reading(sonar, sonar, *[np.zeros(24, np.uint8)] * 2, np.zeros(4, np.uint8), heading,
+                                      "A"), 10.0, 10.0, Layout.load("default"))
+        np.testing.assert_array_equal(x[:8], encode_sonar(global_sonar(sonar, heading)).astype(np.float32))
 
 
 def test_high_level_inputs_by_hand():

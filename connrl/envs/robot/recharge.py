@@ -43,13 +43,14 @@ from __future__ import annotations
 import math
 
 import gymnasium as gym
+import numba as nb
 import numpy as np
 from gymnasium import spaces
 
-from connrl.envs.robot.constants import DOOR_EDGE_JUMP, MOVE_FORWARD, N_ACTIONS, ROBOT_RADIUS, SEG_CHARGER
+from connrl.envs.robot.constants import DOOR_EDGE_JUMP, MOVE_FORWARD, N_ACTIONS, ROBOT_RADIUS, SEG_CHARGER, SONAR_MAX
 from connrl.envs.robot.layout import Layout
 from connrl.envs.robot.sim import Reading, RobotSim
-from connrl.envs.robot.tasks import R_SUCCESS, _fill_obs, _rejection, _side_features, _uniform_heading, encode_sonar
+from connrl.envs.robot.tasks import R_SUCCESS, _fill_obs, _rejection, _side_features, _uniform_heading
 
 ROOMS = ("A", "B", "C")
 HIGH_SIZE = 16
@@ -66,15 +67,32 @@ def global_sonar(sonar: np.ndarray, heading: float) -> np.ndarray:
     return np.bincount(sector, weights=sonar, minlength=8) / np.bincount(sector, minlength=8)
 
 
+@nb.njit(cache=True)
+def _scan_units(sonar, heading, collision, light, door_edge, low, high, sonar_max, out):
+    """Hot-path twin of units 0-10 (module docstring): ``encode_sonar(global_sonar(sonar, heading))``, the same
+    arithmetic in the same order (tests/envs/test_robot_recharge.py compares them), then the three bits.
+    ``sonar_max`` is an argument, not the imported constant: a cached kernel would not see that constant change."""
+    sums, counts = np.zeros(8), np.zeros(8)
+    for k in range(sonar.size):
+        bearing = (heading + 15.0 * k) % 360.0
+        j = int(math.floor(((bearing - 90.0 + 22.5) % 360.0) / 45.0))
+        sums[j] += sonar[k]
+        counts[j] += 1.0
+    for j in range(8):
+        r = min(max(sums[j] / counts[j], 0.0), sonar_max)
+        out[j] = 1.0 - r / 64.0 if r <= 64.0 else -0.25 * (r - 64.0) / (sonar_max - 64.0)
+    out[8] = high if collision.any() else low
+    out[9] = high if light.any() else low
+    out[10] = high if door_edge.any() else low
+
+
 def high_level_inputs(rd: Reading, x: float, y: float, layout: Layout, low: float = -0.5,
                       xy: bool = True, xy_scale: float = 1.0) -> np.ndarray:
     """The 16 units of 6.4.2 from one scan and the position, or the first 14 without X-Y (module docstring)."""
     high = low + 1.0
     w, h = layout.size
     out = np.empty(HIGH_SIZE, dtype=np.float32)
-    out[:8] = encode_sonar(global_sonar(rd.sonar, rd.compass))
-    out[8:11] = [high if rd.collision.any() else low, high if rd.light.any() else low,
-                 high if rd.door_edge.any() else low]
+    _scan_units(rd.sonar, float(rd.compass), rd.collision, rd.light, rd.door_edge, low, high, SONAR_MAX, out)
     out[11:14] = [high if rd.room == r else low for r in ROOMS]
     out[14:16] = [xy_scale * (x / w - 0.5), xy_scale * (y / h - 0.5)]
     return out if xy else out[:HIGH_SIZE_NO_XY].copy()
