@@ -55,9 +55,9 @@ class BehaviourChoice:
         self._trial_weights: list[np.ndarray] = []
         self._trial_applicable = [_applicable(info)] if info is not None and "applicable" in info else []
 
-    def weights(self, info: dict) -> np.ndarray:
+    def weights(self, info: dict, applicable: np.ndarray | None = None) -> np.ndarray:
         """W(b) for the state of ``info`` (applicability, and the persistence rule when on)."""
-        applicable = _applicable(info)
+        applicable = _applicable(info) if applicable is None else applicable
         if not self.persistence:
             return applicable.astype(np.float64)
         return persistence_weights(applicable, self._was_applicable, self._active,
@@ -69,10 +69,11 @@ class BehaviourChoice:
         if info is None or "applicable" not in info:
             raise ValueError("a behaviour-level learner needs info['applicable'] from a behaviour-level environment "
                              "(connrl.tasks.recharge.BehaviourEnv)")
-        w = self.weights(info)
+        applicable = _applicable(info)
+        w = self.weights(info, applicable)
         p = weighted_boltzmann_probabilities(q, w, t)
-        b = int(np.argmax(p)) if t == 0 else int(rng.choice(p.size, p=p))
-        self._active, self._was_applicable, self._w = b, _applicable(info), w
+        b = int(p.argmax()) if t == 0 else int(rng.choice(p.size, p=p))
+        self._active, self._was_applicable, self._w = b, applicable, w
         return b, p
 
     def observed(self, info: dict | None) -> None:

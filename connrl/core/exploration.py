@@ -54,7 +54,7 @@ def persistence_weights(applicable: np.ndarray, was_applicable: np.ndarray | Non
     w = app.astype(np.float64)
     if active is None or not app[active] or goal_reached:
         return w
-    if was_applicable is not None and np.any(app & ~np.asarray(was_applicable, dtype=bool)):
+    if was_applicable is not None and (app & ~np.asarray(was_applicable, dtype=bool)).any():
         return w  # a significant change: a behaviour became applicable
     w[active] = persist
     return w

@@ -152,3 +152,32 @@ def learn_model(succ: np.ndarray, cost: np.ndarray | None = None, target: np.nda
     ``episode`` > 0. ``rule``: "greedy" mapping (module docstring) or a "random" walk (each step a uniformly random
     action, an uninformed explorer for comparison)."""
     return explore(*check_world(succ, cost), target, starts, episode, stop_at, seed, max_executions, rule)
+
+
+def greedy_mapping_reference(succ: np.ndarray, start: int) -> int:
+    """Greedy mapping read top to bottom (``learn_model`` from one start, every action of every state, unit costs,
+    no episodes): a fresh BFS over known transitions for every try, the first untried action by index. The compiled
+    ``_learn`` is its fast path; tests compare the two over whole runs, benchmarks/bench_recharge.py times them."""
+    n, n_actions = succ.shape
+    known, tried, pos, total = {}, set(), start, 0
+    while len(tried) < n * n_actions:
+        dist, queue, head = {pos: 0}, [pos], 0
+        while True:
+            if head == len(queue):
+                raise ValueError(f"{n * n_actions - len(tried)} actions cannot be reached from state {start}")
+            s = queue[head]
+            head += 1
+            untried = [a for a in range(n_actions) if (s, a) not in tried]
+            if untried:
+                break
+            for a in range(n_actions):
+                t = known[s, a]
+                if t not in dist:
+                    dist[t] = dist[s] + 1
+                    queue.append(t)
+        tried.add((s, untried[0]))
+        known[s, untried[0]] = int(succ[s, untried[0]])
+        total += dist[s] + 1
+        pos = known[s, untried[0]]
+    return total
+

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 # ------------------------------------------------------------------------------- one net: forward and update
 
@@ -142,6 +143,14 @@ def _values_any(w1, w2, x, h, scale, q, linear):
 
 
 @numba.njit(cache=True, fastmath=True)
+def _value_any(w1, w2, a, x, h, scale, linear):
+    """Net a's value: the same arithmetic as entry a of ``_values_any``."""
+    if w1.shape[1] > 0:
+        return scale * _mlp_forward(w1, w2, a, x, h)
+    return scale * _perceptron_forward(w2, a, x, linear)
+
+
+@numba.njit(cache=True, fastmath=True)
 def _policy_probability(q, a, temperature):
     """Eq. 3.6 probability of action a (greedy, ties shared, at T = 0)."""
     m = q.max()
@@ -218,19 +227,32 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
     used = 0
     e_next = 0.0
     next_policy = False
+    # The policy test's values of inputs[t] serve as step t-1's next-state values: only the net updated at step t
+    # has changed since (``changed``; -1 none, -2 all, after a repair), so only it is computed again.
+    cached = np.empty(q.size)
+    have_cache, changed = False, -1
     for t in range(n - 1, -1, -1):
         if t == n - 1 and terminated:
             u = 0.0
         else:
-            _values_any(w1, w2, inputs[t + 1], h, scale, q, linear)
+            if have_cache and changed != -2:
+                for k in range(q.size):
+                    q[k] = cached[k]
+                if changed >= 0:
+                    q[changed] = _value_any(w1, w2, changed, inputs[t + 1], h, scale, linear)
+            else:
+                _values_any(w1, w2, inputs[t + 1], h, scale, q, linear)
             u = _allowed_max(q, allowed[t + 1]) if allowed.shape[0] > 0 else q.max()
         lam_t = lam if (t < n - 1 and next_policy) else 0.0
         e = rewards[t] + discounts[t] * ((1.0 - lam_t) * u + lam_t * e_next)
         if has_clip and e > clip:
             e = clip
         a = actions[t]
+        have_cache, changed = p_threshold > 0.0, -1
         if p_threshold > 0.0:
             _values_any(w1, w2, inputs[t], h, scale, q, linear)
+            for k in range(q.size):
+                cached[k] = q[k]
             if weights.shape[0] > 0:
                 next_policy = _weighted_policy_probability(q, weights[t], a, temperature) >= p_threshold
             else:
@@ -240,7 +262,9 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
         if next_policy:
             _update_any(w1, w2, d1, d2, a, inputs[t], h, e, scale, lr, momentum, linear)
             used += 1
+            changed = a
         if repair != 0:
+            changed = -2
             _values_any(w1, w2, inputs[t], h, scale, q, linear)
             qa = q[a]
             if repair == 1:

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from connrl.core.model_learning import check_world, explore, learn_model
+from connrl.core.model_learning import check_world, explore, greedy_mapping_reference, learn_model
 from connrl.envs.grid import GridWorld
 
 
@@ -56,36 +56,11 @@ def test_a_random_walk_needs_far_more_executions_than_greedy_mapping():
         learn_model(g.next_state, rule="smart")
 
 
-def _greedy_reference(succ, start):
-    """Greedy mapping in plain Python: a fresh BFS over known transitions for every try (no state kept between
-    searches), first untried action by index."""
-    n, n_actions = succ.shape
-    known, tried, pos, total = {}, set(), start, 0
-    while len(tried) < n * n_actions:
-        dist, queue, head = {pos: 0}, [pos], 0
-        while True:  # every state is reachable on these grids, so an untried action is always found
-            s = queue[head]
-            head += 1
-            untried = [a for a in range(n_actions) if (s, a) not in tried]
-            if untried:
-                break
-            for a in range(n_actions):
-                t = known[s, a]
-                if t not in dist:
-                    dist[t] = dist[s] + 1
-                    queue.append(t)
-        tried.add((s, untried[0]))
-        known[s, untried[0]] = int(succ[s, untried[0]])
-        total += dist[s] + 1
-        pos = known[s, untried[0]]
-    return total
-
-
 @pytest.mark.parametrize("side,start", [(4, 0), (6, 17), (7, 48)])
 def test_greedy_mapping_matches_a_plain_reference_over_a_whole_run(side, start):
     # the compiled search resets only the states its last search visited; a stale distance would change the count
     g = GridWorld(side, 2)
-    assert learn_model(g.next_state, starts=np.array([start])) == _greedy_reference(g.next_state, start)
+    assert learn_model(g.next_state, starts=np.array([start])) == greedy_mapping_reference(g.next_state, start)
 
 
 def test_explore_on_checked_tables_equals_learn_model():
