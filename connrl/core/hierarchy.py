@@ -22,7 +22,7 @@ import heapq
 import numba
 import numpy as np
 
-from connrl.core.model_learning import check_world, explore, learn_model
+from connrl.core.model_learning import LocalWorld, explore, learn_model
 
 
 @numba.njit(cache=True)
@@ -69,16 +69,12 @@ def abstract_graph(succ: np.ndarray, centres: np.ndarray, l: int) -> tuple[np.nd
 
 def single_level(succ: np.ndarray, centres: np.ndarray, l: int, seed: int = 0, rule: str = "greedy") -> dict:
     """Executions to learn the k abstract actions and then the abstract level (module docstring)."""
-    n = succ.shape[0]
     rng = np.random.default_rng(seed)
     actions = 0
-    succ, cost = check_world(succ)
+    world = LocalWorld(succ)
     for c in centres:
-        states, _ = ball(succ, int(c), int(l))
-        target = np.zeros(n, dtype=bool)
-        target[states] = True
-        actions += explore(succ, cost, target=target, starts=states, episode=int(l), stop_at=int(c),
-                           seed=int(rng.integers(2**31)), rule=rule)
+        states, _ = ball(world.succ, int(c), int(l))
+        actions += world.explore(states, states, int(l), int(c), seed=int(rng.integers(2**31)), rule=rule)
     a_succ, a_cost = abstract_graph(succ, centres, l)
     level = learn_model(a_succ, cost=a_cost, seed=int(rng.integers(2**31)), rule=rule)
     return {"abstract_actions": actions, "abstract_level": level, "total": actions + level}
@@ -127,12 +123,13 @@ def multi_level(succ: np.ndarray, levels: list[np.ndarray], spacing: list[int], 
     counts = []
     for i in range(1, len(levels)):
         if i == 1:
-            g_succ, g_cost = check_world(succ)
+            world = LocalWorld(succ)
             index = np.arange(succ.shape[0])
         else:
-            g_succ, g_cost = check_world(*abstract_graph(succ, levels[i - 1], spacing[i - 1]))
+            world = LocalWorld(*abstract_graph(succ, levels[i - 1], spacing[i - 1]))
             index = np.full(succ.shape[0], -1)
             index[levels[i - 1]] = np.arange(len(levels[i - 1]))
+        g_succ, g_cost = world.succ, world.cost
         top = i == len(levels) - 1
         count = 0
         for c in levels[i]:
@@ -142,9 +139,7 @@ def multi_level(succ: np.ndarray, levels: list[np.ndarray], spacing: list[int], 
             states, _ = ball(succ, int(c), int(spacing[i]))
             mine = index[states]
             mine = mine[mine >= 0]
-            target = np.zeros(g_succ.shape[0], dtype=bool)
-            target[mine] = True
-            count += explore(g_succ, g_cost, target=target, starts=mine, episode=int(spacing[i]),
-                             stop_at=int(index[c]), seed=int(rng.integers(2**31)), rule=rule)
+            count += world.explore(mine, mine, int(spacing[i]), int(index[c]), seed=int(rng.integers(2**31)),
+                                   rule=rule)
         counts.append(count)
     return counts

@@ -137,11 +137,87 @@ def explore(succ: np.ndarray, cost: np.ndarray, target: np.ndarray | None = None
     starts = np.arange(n) if starts is None else np.ascontiguousarray(starts, dtype=np.int64)
     if target.shape != (n,) or starts.size == 0 or not ((starts >= 0) & (starts < n)).all():
         raise ValueError("target must be one bool per state and starts a non-empty list of states")
+    if episode > 0 and ((succ[target] >= 0) & (cost[target] > episode)).any():
+        raise ValueError(f"a target action costs more than an episode's {episode} executions: it can never be tried")
     total, remaining = _learn(succ, cost, target, starts, int(episode), int(stop_at), int(seed), int(max_executions),
                               RULES.index(rule))
     if remaining:
         raise RuntimeError(f"{remaining} target actions still untried after {total} executions")
     return int(total)
+
+
+@numba.njit(cache=True)
+def _within_budget(succ, cost, starts, budget, dist, queued, queue, found):
+    """The states within ``budget`` (summed cost) of any start, in the order first reached (a label-correcting
+    search: with costs above 1 a state's label can drop after it was expanded, and it is expanded again).
+    ``dist`` (n,) must be -1 and ``queued`` False everywhere, and are left so; ``queue``, ``found``: n of scratch."""
+    n = succ.shape[0]
+    m = head = tail = count = 0  # queue: a ring of n entries, each state in it at most once
+    for s in starts:
+        if dist[s] < 0:
+            dist[s], queued[s], found[m], queue[tail] = 0, True, s, s
+            m, tail, count = m + 1, (tail + 1) % n, count + 1
+    while count > 0:
+        s = queue[head]
+        head, count, queued[s] = (head + 1) % n, count - 1, False
+        for a in range(succ.shape[1]):
+            t = succ[s, a]
+            if t < 0 or dist[s] + cost[s, a] > budget or (dist[t] >= 0 and dist[s] + cost[s, a] >= dist[t]):
+                continue
+            if dist[t] < 0:
+                found[m] = t
+                m += 1
+            dist[t] = dist[s] + cost[s, a]
+            if not queued[t]:
+                queued[t], queue[tail] = True, t
+                tail, count = (tail + 1) % n, count + 1
+    out = found[:m].copy()
+    for s in out:
+        dist[s] = -1
+    return out
+
+
+class LocalWorld:
+    """One table explored many times in short episodes (6.2.2's abstract actions): each ``explore`` runs on the
+    part of the table its episodes can reach, so a run costs what it visits, not the table's size.
+
+    Exact: with episodes of at most ``episode`` executions from ``starts``, every state the agent stands on lies
+    within ``episode`` of a start, so it acts and plans only there; an action leading out of that part leads to one
+    extra state with no actions, which keeps the action present (so it is drawn, and found too dear, exactly as on
+    the whole table) and untried. ``tests/core/test_model_learning.py`` compares the counts with ``explore``'s."""
+
+    def __init__(self, succ: np.ndarray, cost: np.ndarray | None = None):
+        self.succ, self.cost = check_world(succ, cost)
+        n = self.succ.shape[0]
+        self._dist, self._queued = np.full(n, -1, dtype=np.int64), np.zeros(n, dtype=np.bool_)
+        self._queue, self._found = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+        self._index = np.full(n, -1, dtype=np.int64)
+
+    def explore(self, target_states: np.ndarray, starts: np.ndarray, episode: int, stop_at: int = -1,
+                seed: int = 0, rule: str = "greedy") -> int:
+        """``explore`` on the whole table with ``target`` = ``target_states``, from episodes of ``episode`` >= 1."""
+        if episode < 1:
+            raise ValueError(f"episode must be >= 1 (short episodes are what make a world local), got {episode}")
+        starts = np.ascontiguousarray(starts, dtype=np.int64)
+        part = _within_budget(self.succ, self.cost, starts, int(episode), self._dist, self._queued, self._queue,
+                              self._found)
+        m = part.size
+        self._index[part] = np.arange(m)
+        try:
+            rows = self.succ[part]
+            local = np.where(rows >= 0, self._index[np.maximum(rows, 0)], -1)
+            local[(rows >= 0) & (local < 0)] = m  # out of reach: the extra state
+            succ = np.vstack([local, np.full((1, rows.shape[1]), -1, dtype=np.int64)])
+            cost = np.vstack([self.cost[part], np.ones((1, rows.shape[1]), dtype=np.int64)])
+            mine = self._index[np.asarray(target_states, dtype=np.int64)]
+            if (mine < 0).any():
+                raise ValueError(f"target states out of reach of the starts within {episode} executions")
+            target = np.zeros(m + 1, dtype=np.bool_)
+            target[mine] = True
+            inside = self._index[stop_at] if 0 <= stop_at < self._index.size else -1
+            return explore(succ, cost, target, self._index[starts], episode, int(inside), seed, rule=rule)
+        finally:
+            self._index[part] = -1
 
 
 def learn_model(succ: np.ndarray, cost: np.ndarray | None = None, target: np.ndarray | None = None,

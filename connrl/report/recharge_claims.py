@@ -67,8 +67,9 @@ COMPARABLE = 0.25  # "comparable" / "slightly worse" read as within 25 % of Exp.
 SHARE_MARGIN = 0.10  # two arms' docked shares "the same" within 10 percentage points (R)
 ROOM_B_CAUSE = ("measured: in room B the two wall followers' Q-values differ by less than the nets' error (a choice "
                 "on every primitive step makes the gap one step's worth), so the greedy robot dithers and a sticky "
-                "one commits to the wrong one; the routes from B are long (about 120 primitive steps with the best "
-                "wall followers, the teacher's 75); room B is learnt by trial 150 (docs/notes/recharge-status.md)")
+                "one commits to the wrong one; many failed tests from B cross into room C and end at or past door "
+                "A; the routes from B are long (about 120 primitive steps with the best wall followers, the "
+                "teacher's 75) (docs/notes/recharge-status.md)")
 
 
 @dataclass

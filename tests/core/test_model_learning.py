@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from connrl.core.model_learning import check_world, explore, greedy_mapping_reference, learn_model
+from connrl.core.hierarchy import abstract_graph, ball
+from connrl.core.model_learning import RULES, LocalWorld, check_world, explore, greedy_mapping_reference, learn_model
 from connrl.envs.grid import GridWorld
 
 
@@ -71,3 +72,35 @@ def test_explore_on_checked_tables_equals_learn_model():
     target[:20] = True
     kw = {"target": target, "starts": np.arange(20), "episode": 4, "stop_at": 10, "seed": 7}
     assert explore(succ, cost, **kw) == learn_model(g.next_state, **kw)
+
+
+@pytest.mark.parametrize("rule", RULES)
+@pytest.mark.parametrize("dim,side,l", [(1, 40, 3), (2, 12, 3), (2, 9, 1)])
+def test_a_local_world_counts_what_the_whole_table_counts(rule, dim, side, l):
+    g = GridWorld(side, dim)
+    world = LocalWorld(g.next_state)
+    for seed, c in enumerate(range(0, g.n, max(1, g.n // 7))):
+        states, _ = ball(g.next_state, c, l)
+        target = np.zeros(g.n, bool)
+        target[states] = True
+        whole = learn_model(g.next_state, target=target, starts=states, episode=l, stop_at=c, seed=seed, rule=rule)
+        assert world.explore(states, states, l, c, seed=seed, rule=rule) == whole
+
+
+@pytest.mark.parametrize("rule", RULES)
+def test_a_local_world_with_costly_actions_counts_what_the_whole_table_counts(rule):
+    # an abstract level (6.2.3): actions cost their path lengths (3 or 6), so a route may not fit what is left of
+    # an episode and the part within reach ends at actions that lead out of it
+    g = GridWorld(40, 1)
+    succ, cost = abstract_graph(g.next_state, np.arange(1, 40, 3), 6)
+    world = LocalWorld(succ, cost)
+    for seed, c in enumerate(range(succ.shape[0])):
+        mine = np.array(sorted({c, max(c - 1, 0)}))
+        target = np.zeros(succ.shape[0], bool)
+        target[mine] = True
+        whole = learn_model(succ, cost, target=target, starts=mine, episode=7, stop_at=c, seed=seed, rule=rule)
+        assert world.explore(mine, mine, 7, c, seed=seed, rule=rule) == whole
+    with pytest.raises(ValueError, match="episode must be >= 1"):
+        world.explore(mine, mine, 0)
+    with pytest.raises(ValueError, match="can never be tried"):  # an action dearer than an episode
+        learn_model(succ, cost, target=target, starts=mine, episode=5)
