@@ -1,6 +1,6 @@
 """Sum the wall times that the stored full-profile summaries record, per chapter and in all (README, "Experiments").
 
-    python scripts/thesis_time.py [--out runs]
+    python scripts/thesis_time.py [--out runs] [--chapters 6] [--per-experiment]
 
 Each summary's time is that of the `connrl run` that wrote it (on 2 cores unless it says otherwise), so the sum is an
 estimate of `connrl reproduce --profile full`, not a measurement of it. A `connrl run` that reused stored runs records
@@ -18,9 +18,14 @@ from connrl.experiments.registry import CHAPTERS, by_chapter
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="runs")
+    ap.add_argument("--chapters", default=None, help="comma-separated chapters (default: all)")
+    ap.add_argument("--per-experiment", action="store_true", help="each experiment's wall time and commit too")
     args = ap.parse_args()
     total = 0.0
-    for chapter in sorted(set(CHAPTERS.values())):
+    chapters = sorted(set(CHAPTERS.values()))
+    if args.chapters:
+        chapters = [c for c in chapters if str(c) in args.chapters.split(",")]
+    for chapter in chapters:
         seconds, missing, reused = 0.0, [], []
         for spec in by_chapter([chapter]):
             f = Path(args.out) / spec.name / "summary.json"
@@ -33,6 +38,9 @@ def main() -> None:
                 wall = sum(runs) / 2
                 reused.append(spec.name)
             seconds += wall
+            if args.per_experiment:
+                print(f"  {spec.name}: {wall:.0f} s ({sum(runs):.0f} s of run time, commit "
+                      f"{(s['environment'].get('git_commit') or '?')[:7]})")
         total += seconds
         print(f"chapter {chapter}: {seconds / 60:.1f} min"
               + (f" (no full summary: {', '.join(missing)})" if missing else "")

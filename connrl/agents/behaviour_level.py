@@ -71,8 +71,13 @@ class BehaviourChoice:
                              "(connrl.tasks.recharge.BehaviourEnv)")
         applicable = _applicable(info)
         w = self.weights(info, applicable)
-        p = weighted_boltzmann_probabilities(q, w, t)
-        b = int(p.argmax()) if t == 0 else int(rng.choice(p.size, p=p))
+        if t == 0 and applicable.any():  # Eq. 6.6 at T = 0 (every greedy test step): W acts only as W > 0, which is
+            # applicability, so the first best applicable one, without the general function's checks
+            best = applicable & (q == q[applicable].max())
+            b, p = int(best.argmax()), best / best.sum()
+        else:
+            p = weighted_boltzmann_probabilities(q, w, t)
+            b = int(p.argmax()) if t == 0 else int(rng.choice(p.size, p=p))
         self._active, self._was_applicable, self._w = b, applicable, w
         return b, p
 
