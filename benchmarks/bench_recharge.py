@@ -2,10 +2,11 @@
 
     python benchmarks/bench_recharge.py [--trials 60]
 
-Prints: the 8 sonar units of the high-level inputs by the compiled kernel (``high_level_inputs``) against their NumPy
-definition (``encode_sonar(global_sonar(...))``); steps/s of ``BehaviourEnv.step`` with ``BehaviourQCON.act`` (greedy,
-the test phase's loop); the wall time of one Exp. 3 run (``run_recharge``, tests included) and the Ch. 6 full profile's
-core-minutes that follow from it; and greedy mapping (``learn_model``) on a 2-D grid against a plain-Python loop.
+Prints: the high-level inputs (``high_level_inputs``: all 16 units, its 8 sonar units by a compiled kernel) against
+the NumPy definition of those 8 units alone (``encode_sonar(global_sonar(...))``, what they cost before); steps/s of
+``BehaviourEnv.step`` with ``BehaviourQCON.act`` (greedy, the test phase's loop); the wall time of one Exp. 3 run
+(``run_recharge``, tests included); and greedy mapping (``learn_model``) on a 2-D grid against its plain-Python
+reference (``greedy_mapping_reference``).
 """
 
 from __future__ import annotations
@@ -59,8 +60,8 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=60)
     args = ap.parse_args()
     kernel, numpy_def = bench_inputs()
-    print(f"sonar units of the high-level inputs: kernel (all 16 units) {kernel * 1e6:5.1f} us   NumPy definition "
-          f"(8 units) {numpy_def * 1e6:5.1f} us   ratio {numpy_def / kernel:.1f}x")
+    print(f"high-level inputs, all 16 units (compiled sonar part): {kernel * 1e6:5.1f} us   NumPy definition of the 8 "
+          f"sonar units alone: {numpy_def * 1e6:5.1f} us   ratio {numpy_def / kernel:.1f}x")
     print(f"BehaviourEnv.step + BehaviourQCON.act (greedy): {bench_steps():,.0f} steps/s")
     run_recharge(RechargeParams(trials=1, tests_per_room=1), np.random.default_rng(0))  # compile / load kernels
     t = time.perf_counter()

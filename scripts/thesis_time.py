@@ -24,7 +24,11 @@ def main() -> None:
     total = 0.0
     chapters = sorted(set(CHAPTERS.values()))
     if args.chapters:
-        chapters = [c for c in chapters if str(c) in args.chapters.split(",")]
+        asked = args.chapters.split(",")
+        if not set(asked) <= {str(c) for c in chapters}:
+            raise SystemExit(f"thesis_time: --chapters takes a comma-separated list of {chapters}, "
+                             f"got {args.chapters!r}")
+        chapters = [c for c in chapters if str(c) in asked]
     for chapter in chapters:
         seconds, missing, reused = 0.0, [], []
         for spec in by_chapter([chapter]):
@@ -40,7 +44,7 @@ def main() -> None:
             seconds += wall
             if args.per_experiment:
                 print(f"  {spec.name}: {wall:.0f} s ({sum(runs):.0f} s of run time, commit "
-                      f"{(s['environment'].get('git_commit') or '?')[:7]})")
+                      f"{(s.get('environment', {}).get('git_commit') or '?')[:7]})")
         total += seconds
         print(f"chapter {chapter}: {seconds / 60:.1f} min"
               + (f" (no full summary: {', '.join(missing)})" if missing else "")

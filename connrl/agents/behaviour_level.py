@@ -56,7 +56,8 @@ class BehaviourChoice:
         self._trial_applicable = [_applicable(info)] if info is not None and "applicable" in info else []
 
     def weights(self, info: dict, applicable: np.ndarray | None = None) -> np.ndarray:
-        """W(b) for the state of ``info`` (applicability, and the persistence rule when on)."""
+        """W(b) for the state of ``info`` (applicability, and the persistence rule when on); ``applicable``: that
+        state's applicability if the caller already read it."""
         applicable = _applicable(info) if applicable is None else applicable
         if not self.persistence:
             return applicable.astype(np.float64)
@@ -71,8 +72,9 @@ class BehaviourChoice:
                              "(connrl.tasks.recharge.BehaviourEnv)")
         applicable = _applicable(info)
         w = self.weights(info, applicable)
-        if t == 0 and applicable.any():  # Eq. 6.6 at T = 0 (every greedy test step): W acts only as W > 0, which is
-            # applicability, so the first best applicable one, without the general function's checks
+        if t == 0 and applicable.any() and q.shape == applicable.shape:  # Eq. 6.6 at T = 0 (every greedy test
+            # step): W acts only as W > 0, which is applicability (persist_weight > 0 is checked in __init__), so the
+            # first best applicable one, without the general function's checks
             best = applicable & (q == q[applicable].max())
             b, p = int(best.argmax()), best / best.sum()
         else:

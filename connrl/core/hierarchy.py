@@ -8,8 +8,9 @@ centres:
    any of them to c stays inside, so the model there yields the optimal abstract action);
 2. the abstract level is learnt by executing abstract actions between neighbouring centres (each costs its path
    length in executions) until every one has been tried from every centre.
-Each phase explores with ``connrl.core.model_learning.learn_model``. Resets cost nothing (6.2.2 counts executions).
-The flat learner is ``learn_model`` on the whole table (6.2.1).
+Each phase explores with ``connrl.core.model_learning``: the abstract actions on the part of the table their short
+episodes can reach (``LocalWorld``, exact), the abstract level with ``learn_model``. Resets cost nothing (6.2.2
+counts executions). The flat learner is ``learn_model`` on the whole table (6.2.1).
 
 ``overhead`` measures what the hierarchy costs the policy: paths must pass through subgoals (6.2.2: "solution
 paths found in this way may not be optimal").

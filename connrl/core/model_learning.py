@@ -21,10 +21,11 @@ import numpy as np
 
 @numba.njit(cache=True)
 def _nearest_untried(known, tried, target, pos, budget, cost, dist, parent, queue, touched):
-    """BFS over known transitions from ``pos``: the nearest target state with an untried action whose route plus
-    the action fits ``budget`` (< 0: no limit). Returns the state, or -1; ``dist`` holds route costs, ``parent``
-    the route. ``dist`` is -1 except at the ``touched[0]`` states first in ``queue`` (the last call's search),
-    which are reset here: a search costs what it visits, not n (O(n^2) over a run otherwise)."""
+    """BFS over known transitions from ``pos``: the nearest target state (in moves) with an untried action whose
+    route plus the action fits ``budget`` (< 0: no limit). Returns the state, or -1; ``dist`` holds route costs,
+    ``parent`` the route (kept for inspection; the count needs only ``dist``). ``dist`` is -1 except at the
+    ``touched[0]`` states first in ``queue`` (the last call's search), which are reset here: a search costs what it
+    visits, not n (O(n^2) over a run otherwise)."""
     n_actions = known.shape[1]
     for i in range(touched[0]):
         dist[queue[i]] = -1
@@ -138,7 +139,8 @@ def explore(succ: np.ndarray, cost: np.ndarray, target: np.ndarray | None = None
     if target.shape != (n,) or starts.size == 0 or not ((starts >= 0) & (starts < n)).all():
         raise ValueError("target must be one bool per state and starts a non-empty list of states")
     if episode > 0 and ((succ[target] >= 0) & (cost[target] > episode)).any():
-        raise ValueError(f"a target action costs more than an episode's {episode} executions: it can never be tried")
+        raise ValueError(f"a target action costs more than a whole episode's {episode} executions: it can never be "
+                         "tried")
     total, remaining = _learn(succ, cost, target, starts, int(episode), int(stop_at), int(seed), int(max_executions),
                               RULES.index(rule))
     if remaining:
@@ -195,9 +197,16 @@ class LocalWorld:
 
     def explore(self, target_states: np.ndarray, starts: np.ndarray, episode: int, stop_at: int = -1,
                 seed: int = 0, rule: str = "greedy") -> int:
-        """``explore`` on the whole table with ``target`` = ``target_states``, from episodes of ``episode`` >= 1."""
+        """``explore`` on the whole table with ``target`` the states listed in ``target_states`` (indices, not a
+        mask), from episodes of ``episode`` >= 1."""
         if episode < 1:
             raise ValueError(f"episode must be >= 1 (short episodes are what make a world local), got {episode}")
+        n = self.succ.shape[0]
+        for name, states in (("starts", starts), ("target_states", target_states)):
+            states = np.asarray(states)
+            if states.dtype == np.bool_ or states.ndim != 1 or states.size == 0 or not (
+                    np.issubdtype(states.dtype, np.integer) and ((states >= 0) & (states < n)).all()):
+                raise ValueError(f"{name} must be a non-empty list of state indices in 0..{n - 1}")
         starts = np.ascontiguousarray(starts, dtype=np.int64)
         part = _within_budget(self.succ, self.cost, starts, int(episode), self._dist, self._queued, self._queue,
                               self._found)
@@ -234,6 +243,8 @@ def greedy_mapping_reference(succ: np.ndarray, start: int) -> int:
     """Greedy mapping read top to bottom (``learn_model`` from one start, every action of every state, unit costs,
     no episodes): a fresh BFS over known transitions for every try, the first untried action by index. The compiled
     ``_learn`` is its fast path; tests compare the two over whole runs, benchmarks/bench_recharge.py times them."""
+    if (succ < 0).any():
+        raise ValueError("the reference takes tables where every action exists (no -1 entries)")
     n, n_actions = succ.shape
     known, tried, pos, total = {}, set(), start, 0
     while len(tried) < n * n_actions:

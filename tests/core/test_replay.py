@@ -322,6 +322,20 @@ def test_kernel_equals_reference_replay(hidden, terminated, p_threshold):
     _assert_same_nets(fast, ref)
 
 
+@pytest.mark.parametrize("hidden", [5, 0])
+def test_kernel_reusing_the_policy_tests_values_is_exact(hidden):
+    # with P_t > 0 the kernel takes each next state's values from the policy test one step later and computes only
+    # the updated net again; a threshold every step passes updates exactly as P_t = 0 (values computed afresh), so
+    # the two nets must agree to the last bit (the reference comparison above allows 1e-12)
+    rng = np.random.default_rng(4)
+    lesson = _lesson(rng, n=40, terminated=False)
+    fresh, reused = _pair(hidden)
+    assert replay_oaon(fresh, lesson, ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=0.0)) == 40
+    assert replay_oaon(reused, lesson, ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=1e-300)) == 40
+    for a, b in ((fresh.w1, reused.w1), (fresh.w2, reused.w2), (fresh.d1, reused.d1), (fresh.d2, reused.d2)):
+        np.testing.assert_array_equal(a, b)
+
+
 @pytest.mark.parametrize("repair", ["lower", "raise"])
 @pytest.mark.parametrize("hidden", [5, 0])
 @pytest.mark.parametrize("terminated, p_threshold", [(True, 0.0), (False, 0.0), (True, 0.2), (False, 0.2)])
