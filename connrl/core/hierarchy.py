@@ -130,12 +130,11 @@ def multi_level(succ: np.ndarray, levels: list[np.ndarray], spacing: list[int], 
             world = LocalWorld(*abstract_graph(succ, levels[i - 1], spacing[i - 1]))
             index = np.full(succ.shape[0], -1)
             index[levels[i - 1]] = np.arange(len(levels[i - 1]))
-        g_succ, g_cost = world.succ, world.cost
         top = i == len(levels) - 1
         count = 0
         for c in levels[i]:
             if top:
-                count += explore(g_succ, g_cost, seed=int(rng.integers(2**31)), rule=rule)
+                count += explore(world.succ, world.cost, seed=int(rng.integers(2**31)), rule=rule)
                 continue
             states, _ = ball(succ, int(c), int(spacing[i]))
             mine = index[states]

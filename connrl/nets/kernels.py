@@ -227,15 +227,15 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
     used = 0
     e_next = 0.0
     next_policy = False
-    # The policy test's values of inputs[t] serve as step t-1's next-state values: only the net updated at step t
-    # has changed since (``changed``; -1 none, -2 all, after a repair), so only it is computed again.
+    # With P_t > 0 the policy test's values of inputs[t] serve as step t-1's next-state values: only the net updated
+    # at step t has changed since (``changed``; -1 none, -2 all, after a repair), so only it is computed again.
     cached = np.empty(q.size)
-    have_cache, changed = False, -1
+    changed = -1
     for t in range(n - 1, -1, -1):
         if t == n - 1 and terminated:
             u = 0.0
         else:
-            if have_cache and changed != -2:
+            if p_threshold > 0.0 and t < n - 1 and changed != -2:
                 for k in range(q.size):
                     q[k] = cached[k]
                 if changed >= 0:
@@ -248,7 +248,7 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
         if has_clip and e > clip:
             e = clip
         a = actions[t]
-        have_cache, changed = p_threshold > 0.0, -1
+        changed = -1
         if p_threshold > 0.0:
             _values_any(w1, w2, inputs[t], h, scale, q, linear)
             for k in range(q.size):
