@@ -13,9 +13,13 @@ learning run of the same seed and ``tests_per_room`` is tested on:
   100-106, docs/RECONSTRUCTION.md, "Ch. 6 bound").
 
 The variant without position takes DP wherever it is applicable outside room A: what a rule that knows only its room
-can do, the hidden state 6.4.2 adds X-Y against. The variant with the best wall followers plays every one of the 8
-choices of (``wall_A``, ``wall_B``, ``wall_C``) on each task and keeps the best (docked first, then fewest steps): an
-oracle that knows which way round each room is shorter from where it starts, as a learner reading X-Y could.
+can do, the hidden state 6.4.2 adds X-Y against. The variant with room history (Ch. 8's counterpart, 8.1) has no
+position either, but remembers the room it came from: in room C it refuses DP while the door it came in by is still
+in sight (DP has stayed applicable since it entered), so a robot out of room B does not pass straight back. It is what
+a memory of a few steps can add where the two doorways of room C look alike. The variant with the best wall followers
+plays every one of the 8 choices of (``wall_A``, ``wall_B``, ``wall_C``) on each task and keeps the best (docked
+first, then fewest steps): an oracle that knows which way round each room is shorter from where it starts, as a
+learner reading X-Y could.
 Reported per start room: the share of test tasks docked, the mean primitive steps of those that dock, reinforcement
 per step, and the scripted teacher's on the same tasks.
 """
@@ -44,6 +48,7 @@ class BoundParams:
     """The fixed rule's settings and the recharging task's (as ``RechargeParams``'s)."""
 
     position: bool = True  # DP only near the door that leads on (needs X-Y); False: DP wherever applicable
+    history: bool = False  # without position: in room C, no DP while the door it came in by is in sight (Ch. 8)
     near_door: float = 60.0  # inches from the door's centre within which DP is taken (ours)
     best_walls: bool = False  # per task, the best of the 8 wall-follower choices (an oracle) instead of wall_A/B/C
     wall_A: str = "WFL"  # wall follower per room (ours: development seeds 100-106)
@@ -59,6 +64,8 @@ class BoundParams:
     def __post_init__(self):
         check_types(self, {"near_door": ">0", "max_steps": ">=1", "tests_per_room": ">=1", "step_scale": ">0",
                            "success_reward": ">0", "xy_scale": ">0"}, wall_A=WALLS, wall_B=WALLS, wall_C=WALLS)
+        if self.history and self.position:
+            raise ValueError("parameter history applies without position only: use position=false with history=true")
         if self.library != SHIPPED_LIBRARY:
             raise ValueError(f"parameter library must be the shipped behaviour library's digest {SHIPPED_LIBRARY}, "
                              f"got {self.library!r}")
@@ -72,13 +79,31 @@ def fixed_test_tasks(tests_per_room: int, rng: np.random.Generator) -> tuple[lis
     return tasks, task_rng.integers(2**31, size=len(tasks))
 
 
-def choose(p: BoundParams, info: dict) -> str:
-    """The rule's behaviour in the state of ``info`` (module docstring)."""
+class RoomHistory:
+    """What the history rule remembers along a trial: the current room, and whether the door it came in by has gone
+    out of sight (DP inapplicable) since it entered. A trial's start counts as having no door in sight."""
+
+    def __init__(self):
+        self.room, self.door_in_sight = None, False
+
+    def update(self, info: dict) -> None:
+        dp = bool(info["applicable"][BEHAVIOUR_TASKS.index("DP")])
+        if self.room is not None and info["room"] != self.room:
+            self.door_in_sight = dp  # just came through a door
+        self.room = info["room"]
+        self.door_in_sight &= dp
+
+
+def choose(p: BoundParams, info: dict, history: RoomHistory | None = None) -> str:
+    """The rule's behaviour in the state of ``info`` (module docstring); ``history``, updated with ``info`` already,
+    for the history rule."""
     applicable = dict(zip(BEHAVIOUR_TASKS, info["applicable"], strict=True))
     room = info["room"]
     if applicable["DK"]:
         return "DK"
     if applicable["DP"] and room in LEADS_ON:
+        if p.history and room == "C" and history.door_in_sight:
+            return p.wall_C
         if not p.position:
             return "DP"
         (x0, y0, x1, y1) = LAYOUT.doors[LEADS_ON[room]].segment
@@ -90,9 +115,10 @@ def choose(p: BoundParams, info: dict) -> str:
 def play(env, p: BoundParams, start, seed: int) -> tuple[bool, int, float]:
     """One test task under the rule: (docked, primitive steps, total reinforcement)."""
     _, info = env.reset(seed=seed, options={"start": start})
-    total, steps = 0.0, 0
+    total, steps, history = 0.0, 0, RoomHistory()
     while True:
-        _, r, terminated, truncated, info = env.step(BEHAVIOUR_TASKS.index(choose(p, info)))
+        history.update(info)
+        _, r, terminated, truncated, info = env.step(BEHAVIOUR_TASKS.index(choose(p, info, history)))
         total, steps = total + r, steps + 1
         if terminated or truncated:
             return bool(info["success"]), steps, total
@@ -152,6 +178,7 @@ EXPERIMENTS = [
                   "full": {"runs": 7}},
         variants=(Variant("rule with position", {"position": True}),
                   Variant("rule without position", {"position": False}),
+                  Variant("rule without position, with room history", {"position": False, "history": True}),
                   Variant("rule with position, best wall followers per task", {"position": True,
                                                                                 "best_walls": True})),
         quantities=QUANTITIES, x_label="start room (0 = A, 1 = B, 2 = C)", y_label="share of test tasks docked",

@@ -56,3 +56,23 @@ def test_the_best_wall_followers_are_never_worse_than_the_fixed_ones():
     for (_, start), s in zip(tasks, seeds, strict=True):
         fixed, best = play(env, p, start, int(s)), play_best_walls(env, p, start, int(s))
         assert (best[0], -best[1]) >= (fixed[0], -fixed[1])
+
+
+def test_the_history_rule_does_not_pass_back_through_the_door_it_came_in_by():
+    from connrl.experiments.recharge_bound import RoomHistory
+
+    p, h = BoundParams(position=False, history=True), RoomHistory()
+    steps = [(info("B", *DOOR_B, dp=True), "DP"),  # room B: its only door leads on
+             (info("C", DOOR_B[0], DOOR_B[1] + 20, dp=True), "WFR"),  # just out of B, door B still in sight
+             (info("C", DOOR_B[0] - 30, DOOR_B[1] + 20, dp=True), "WFR"),  # still the same door
+             (info("C", 180, 330), "WFR"),  # door out of sight
+             (info("C", DOOR_A[0], DOOR_A[1] + 20, dp=True), "DP")]  # the next door seen: through it
+    for state, expected in steps:
+        h.update(state)
+        assert choose(p, state, h) == expected
+    fresh = RoomHistory()  # a trial starting in room C has come through no door: DP where it applies
+    state = info("C", DOOR_B[0], DOOR_B[1] + 20, dp=True)
+    fresh.update(state)
+    assert choose(p, state, fresh) == "DP"
+    with pytest.raises(ValueError, match="history applies without position"):
+        BoundParams(history=True)
