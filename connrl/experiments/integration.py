@@ -180,7 +180,13 @@ EXPERIMENTS = [
                   # diagnostics (not in the thesis): the recurrent learner with nothing hidden, and at the thesis's
                   # learning rate (batch steps summed over a lesson of up to 200 steps)
                   Variant("recurrent-Q with X-Y (diagnostic)", {**RECURRENT, "xy": True}),
-                  Variant("recurrent-Q, no X-Y, the thesis's lr 0.08 (diagnostic)", {**RECURRENT, "lr": 0.08})),
+                  Variant("recurrent-Q, no X-Y, the thesis's lr 0.08 (diagnostic)", {**RECURRENT, "lr": 0.08}),
+                  # does the memory pay with more replay? three times the thesis's ~100 lessons, with and without
+                  # the context units (docs/notes/integration.md)
+                  Variant("recurrent-Q, no X-Y, 300 lessons per trial (diagnostic)",
+                          {**RECURRENT, "lessons_per_trial": 300}),
+                  Variant("no context units, no X-Y, 300 lessons per trial (diagnostic)",
+                          {**RECURRENT, "lessons_per_trial": 300, "context": 0})),
         quantities=(*QUANTITIES, *FINAL, *LEGS), x_label="trials",
         y_label="reinforcement per primitive step (greedy tests)",
         description="Ch. 6 Exp. 3's protocol and parameters on the 14 inputs without X-Y; Exp. 2: recurrent Q-nets, lr "

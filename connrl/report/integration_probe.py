@@ -74,7 +74,7 @@ def probe_table(by_label: dict[str, list[list[dict]]]) -> list[str]:
         runs = [r for r in runs if r]
         if not runs:
             continue
-        has_context = "context" in runs[0][0]
+        has_context = len(runs[0][0].get("context", ())) > 0  # a recurrent net without context units has none
 
         def f(v):
             return "—" if v is None else f"{v:.2f}"
