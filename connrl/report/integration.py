@@ -30,7 +30,9 @@ from connrl.report.story import draw_story
 from connrl.report.verdicts import NOT_REPRODUCED, OPEN, REPRODUCED, claim
 
 EXPERIMENTS = [*integration.EXPERIMENTS, *steps.EXPERIMENTS]
-CH6, MEMORYLESS, RECURRENT = (v.label for v in integration.EXPERIMENTS[0].variants[:3])  # the rest: diagnostics
+_LABELS = [v.label for v in integration.EXPERIMENTS[0].variants]
+CH6, MEMORYLESS, RECURRENT = _LABELS[:3]  # the thesis's three curves; the rest are diagnostics, of which
+SAME_REPLAYS, NO_CONTEXT = _LABELS[5:7]  # the two that isolate the memory (integration.py's variant list)
 ACCEPTABLE = 0.8  # "acceptably good" read as: at least 80 % of Ch. 6 Exp. 3's final performance (with X-Y) (R)
 
 
@@ -89,6 +91,19 @@ def claims(summary: dict, found: list[Check] | None = None) -> list[str]:
              "|---|---|---|---|---|"]
     for c in found:
         lines.append(f"| {c.claim} ({c.section}) | {c.baseline} | {c.ours} | {c.tests} | {c.verdict} |")
+    return lines
+
+
+def memory_table(summary: dict) -> list[str]:
+    """What the context units add, against learners with the recurrent robot's replays and no memory (ours)."""
+    lines = ["| recurrent-Q against | room B docked, last 3 tests | final perf. | passes from C back into B per "
+             "room-B task (final tests) |", "|---|---|---|---|"]
+    for label in (SAME_REPLAYS, NO_CONTEXT, MEMORYLESS):
+        cells = []
+        for name, higher in (("final_docked_B", True), ("final_performance", True), ("default_B_returns", False)):
+            rec, other = per_run(summary, RECURRENT, name), per_run(summary, label, name)
+            cells.append(gain_test(other, rec, "recurrent vs it", higher)[1] if rec and other else "—")
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return lines
 
 
@@ -262,6 +277,9 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
                   "of the docked tasks (mean over runs):", "", *layouts_table(summary), ""]
         lines += ["Where room B's tests fail (the same final tests, original layout; mean over runs):", "",
                   *legs_table(summary), ""]
+        lines += ["What the memory adds (ours): the recurrent robot against the memoryless learner given the same "
+                  "replays per trial, the same recurrent nets without context units, and Exp. 1 (one-sided Welch "
+                  "over runs, per quantity):", "", *memory_table(summary), ""]
         picked = solution_paths(records, RECURRENT)
         if picked:
             png = draw_paths({"extra": {"changed_paths": picked}}, out_dir / spec.name / "changed-paths.png",
