@@ -166,7 +166,7 @@ FINAL = tuple(_q(f"{layout}_{what}_{r}", f"{text} from room {r}, {where}, learni
 
 CH8 = {"xy": False, "paths": 1}
 # 8.3, except lr and the replays (R, docs/RECONSTRUCTION.md, "Integration (Ch. 8)"): the thesis's 0.08 on a gradient
-# summed over a lesson ends at a quarter of Ch. 6's learner even given X-Y, and batch replay moves values only about
+# summed over a lesson ends at half of Ch. 6's learner even given X-Y, and batch replay moves values only about
 # a lambda-horizon per replay (5.1.2), so the recurrent nets need about ten times the thesis's ~100 lessons per trial;
 # both chosen on development seeds 100-105
 RECURRENT = {"memory": "recurrent", "lr": 0.03, "hidden": 12, "context": 8, "lessons_per_trial": 1000,

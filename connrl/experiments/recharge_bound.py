@@ -14,12 +14,12 @@ learning run of the same seed and ``tests_per_room`` is tested on:
 
 The variant without position takes DP wherever it is applicable outside room A: what a rule that knows only its room
 can do, the hidden state 6.4.2 adds X-Y against. The variant with room history (Ch. 8's counterpart, 8.1) has no
-position either, but remembers the room it came from: in room C it refuses DP while the door it came in by is still
-in sight (DP has stayed applicable since it entered), so a robot out of room B does not pass straight back. It is what
-a memory of a few steps can add where the two doorways of room C look alike. The variant with the best wall followers
-plays every one of the 8 choices of (``wall_A``, ``wall_B``, ``wall_C``) on each task and keeps the best (docked
-first, then fewest steps): an oracle that knows which way round each room is shorter from where it starts, as a
-learner reading X-Y could.
+position either, but remembers the room it came from: in room C, come from room B, it refuses DP while door B is
+still in sight (DP has stayed applicable since it entered), so a robot out of room B does not pass straight back. It
+is what a memory of a few steps can add where the two doorways of room C look alike. The variant with the best wall
+followers plays every one of the 8 choices of (``wall_A``, ``wall_B``, ``wall_C``) on each task and keeps the best
+(docked first, then fewest steps): an oracle that knows which way round each room is shorter from where it starts,
+as a learner reading X-Y could.
 Reported per start room: the share of test tasks docked, the mean primitive steps of those that dock, reinforcement
 per step, and the scripted teacher's on the same tasks.
 """
@@ -48,7 +48,7 @@ class BoundParams:
     """The fixed rule's settings and the recharging task's (as ``RechargeParams``'s)."""
 
     position: bool = True  # DP only near the door that leads on (needs X-Y); False: DP wherever applicable
-    history: bool = False  # without position: in room C, no DP while the door it came in by is in sight (Ch. 8)
+    history: bool = False  # without position: in room C come from B, no DP while door B is in sight (Ch. 8)
     near_door: float = 60.0  # inches from the door's centre within which DP is taken (ours)
     best_walls: bool = False  # per task, the best of the 8 wall-follower choices (an oracle) instead of wall_A/B/C
     wall_A: str = "WFL"  # wall follower per room (ours: development seeds 100-106)
@@ -80,16 +80,17 @@ def fixed_test_tasks(tests_per_room: int, rng: np.random.Generator) -> tuple[lis
 
 
 class RoomHistory:
-    """What the history rule remembers along a trial: the current room, and whether the door it came in by has gone
-    out of sight (DP inapplicable) since it entered. A trial's start counts as having no door in sight."""
+    """What the history rule remembers along a trial: the room it is in, the room it came from, and whether the door
+    it came in by is still in sight (DP has stayed applicable since it entered). A trial's start has come from no
+    room."""
 
     def __init__(self):
-        self.room, self.door_in_sight = None, False
+        self.room, self.came_from, self.door_in_sight = None, None, False
 
     def update(self, info: dict) -> None:
         dp = bool(info["applicable"][BEHAVIOUR_TASKS.index("DP")])
         if self.room is not None and info["room"] != self.room:
-            self.door_in_sight = dp  # just came through a door
+            self.came_from, self.door_in_sight = self.room, dp  # just came through a door
         self.room = info["room"]
         self.door_in_sight &= dp
 
@@ -102,8 +103,11 @@ def choose(p: BoundParams, info: dict, history: RoomHistory | None = None) -> st
     if applicable["DK"]:
         return "DK"
     if applicable["DP"] and room in LEADS_ON:
-        if p.history and room == "C" and history.door_in_sight:
-            return p.wall_C
+        if p.history:
+            if history is None:
+                raise ValueError("the history rule (history=True) needs the trial's RoomHistory, updated with info")
+            if room == "C" and history.came_from == "B" and history.door_in_sight:
+                return p.wall_C  # not straight back into room B
         if not p.position:
             return "DP"
         (x0, y0, x1, y1) = LAYOUT.doors[LEADS_ON[room]].segment

@@ -70,9 +70,40 @@ def test_the_history_rule_does_not_pass_back_through_the_door_it_came_in_by():
     for state, expected in steps:
         h.update(state)
         assert choose(p, state, h) == expected
-    fresh = RoomHistory()  # a trial starting in room C has come through no door: DP where it applies
-    state = info("C", DOOR_B[0], DOOR_B[1] + 20, dp=True)
-    fresh.update(state)
-    assert choose(p, state, fresh) == "DP"
+    for first in (None, info("A", DOOR_A[0], DOOR_A[1] - 20, dp=True)):  # a start in C, or come from A (a mistake):
+        h = RoomHistory()  # DP where it applies, door A's way back included
+        if first is not None:
+            h.update(first)
+        state = info("C", DOOR_A[0], DOOR_A[1] + 20, dp=True)
+        h.update(state)
+        assert choose(p, state, h) == "DP"
     with pytest.raises(ValueError, match="history applies without position"):
         BoundParams(history=True)
+    with pytest.raises(ValueError, match="needs the trial's RoomHistory"):
+        choose(p, info("C", *DOOR_A, dp=True))
+
+
+def test_the_history_rule_remembers_along_a_played_trial(monkeypatch):
+    """play() updates the memory before each choice: the rule sees the room change on the step it happens."""
+    import connrl.experiments.recharge_bound as rb
+
+    seen = []
+
+    class World:
+        def __init__(self):
+            self.states = [info("B", *DOOR_B, dp=True), info("C", DOOR_B[0], DOOR_B[1] + 20, dp=True),
+                           info("C", 180, 330)]
+
+        def reset(self, seed, options):
+            self.k = 0
+            return None, self.states[0]
+
+        def step(self, b):
+            seen.append(BEHAVIOUR_TASKS[b])
+            self.k += 1
+            return None, 0.0, False, self.k == len(self.states), {**self.states[min(self.k, 2)], "success": False}
+
+    from connrl.envs.robot.recharge import BEHAVIOUR_TASKS
+
+    rb.play(World(), BoundParams(position=False, history=True), None, 0)
+    assert seen == ["DP", "WFR", "WFR"]

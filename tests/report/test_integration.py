@@ -51,6 +51,30 @@ def _samples(rng, n_trials, separable):
     return out
 
 
+def test_the_memory_table_compares_the_right_learners_per_entry_into_room_c():
+    from connrl.experiments import integration
+
+    spec = {v.label: v.params for v in integration.EXPERIMENTS[0].variants}
+    rec = spec[ri.RECURRENT]
+    assert rec["memory"] == "recurrent" and rec["context"] > 0
+    assert spec[ri.SAME_REPLAYS] == {"lessons_per_trial": rec["lessons_per_trial"]}  # memoryless, the same replays
+    assert spec[ri.NO_CONTEXT] == {**rec, "context": 0}
+    assert spec[ri.MEMORYLESS] == {} and "xy" not in rec
+
+    def runs(b, returns, reached):
+        return {"quantities": {"final_docked_B": {"per_run": b}, "final_performance": {"per_run": [0.5, 0.6, 0.7]},
+                               "default_B_returns": {"per_run": returns}, "default_B_reached_C": {"per_run": reached}}}
+
+    summary = {"variants": {ri.RECURRENT: runs([0.6, 0.7, 0.8], [0.5, 0.5, 0.5], [1.0, 1.0, 1.0]),
+                            # never leaving B gives 0 passes back per test; per entry into C it has no value
+                            ri.SAME_REPLAYS: runs([0.0, 0.05, 0.1], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]),
+                            ri.NO_CONTEXT: runs([0.2, 0.3, 0.25], [2.0, 2.5, 1.5], [1.0, 1.0, 0.5])}}
+    table = ri.memory_table(summary)
+    same, none = table[2], table[3]
+    assert "better? yes" in same.split("|")[2] and same.split("|")[4].strip() == "—"
+    assert "0.50 vs 2.50, better? yes" in none.split("|")[4]  # 2.0, 2.5 and 1.5 / 0.5 = 3 per entry
+
+
 def test_probe_tells_the_doorways_apart_only_when_the_features_carry_them():
     rng = np.random.default_rng(0)
     s = _samples(rng, 40, separable=True)
