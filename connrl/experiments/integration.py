@@ -5,8 +5,8 @@ Protocol: Ch. 6's (``connrl.experiments.recharge.run_rooms``: 150 trials, greedy
 before the first trial and after every 10) on the behaviour-level task with the 14 high-level inputs, the X-Y pair
 dropped (8.1). Experiment 1 is Ch. 6 Experiment 3's learner and parameters unchanged (8.2). Experiment 2 (8.3) uses
 recurrent Q-nets (``connrl.agents.behaviour_level.BehaviourRecurrentQ``): 12 hidden and 8 context units, batch-mode
-replay (one BPTT step per replayed lesson), gamma 0.99, lambda 0.8; lr 0.03 and 1000 lessons per trial (R: the
-thesis's 0.08 and about 100 learn far more slowly here, docs/RECONSTRUCTION.md). A third curve, Ch. 6 Experiment 3
+replay (one BPTT step per replayed lesson), gamma 0.99, lambda 0.8; lr 0.03 and 1000 lessons per trial (R: with the
+thesis's 0.08 and about 100 it learns far more slowly here, docs/RECONSTRUCTION.md). A third curve, Ch. 6 Experiment 3
 itself (with X-Y), is run on the same seeds, as Fig. 8.1 shows it.
 
 After the last trial, learning off (Experiment 3, 8.4): the final policy on ``final_tests_per_room`` fresh tasks per
@@ -166,9 +166,8 @@ FINAL = tuple(_q(f"{layout}_{what}_{r}", f"{text} from room {r}, {where}, learni
 
 CH8 = {"xy": False, "paths": 1}
 # 8.3, except lr and the replays (R, docs/RECONSTRUCTION.md, "Integration (Ch. 8)"): the thesis's 0.08 on a gradient
-# summed over a lesson ends at half of Ch. 6's learner even given X-Y, and batch replay moves values only about
-# a lambda-horizon per replay (5.1.2), so the recurrent nets need about ten times the thesis's ~100 lessons per trial;
-# both chosen on development seeds 100-105
+# summed over a lesson ends at half of Ch. 6's learner even given X-Y, and room B rose steadily with the replays up to
+# ten times the thesis's ~100 lessons per trial; both chosen on development seeds 100-105
 RECURRENT = {"memory": "recurrent", "lr": 0.03, "hidden": 12, "context": 8, "lessons_per_trial": 1000,
              "online": False}
 THESIS_RECURRENT = {**RECURRENT, "lr": 0.08, "lessons_per_trial": 100}  # as 8.3 states them

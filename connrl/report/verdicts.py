@@ -134,22 +134,19 @@ def _stats(reference, other) -> tuple[np.ndarray, np.ndarray, float, float, floa
 
 
 def _runs_needed(a: np.ndarray, b: np.ndarray, diff: float, margin: float, alpha: float) -> int | None:
-    """Runs a side at which, with these means and spreads, either test would decide (normal approximation)."""
+    """Runs a side at which, with these means and spreads, either test would decide: the smallest n whose t quantile
+    (2n - 2 degrees of freedom) the observed difference, or its distance to the margin, would clear; always more than
+    the runs there are, since with them it did not decide."""
     s2 = a.var(ddof=1) + b.var(ddof=1)
     if s2 == 0:
         return None
-    z_diff, z_equiv = _z(1 - alpha / 2), _z(1 - alpha)
-    options = []
-    if diff != 0:
-        options.append(math.ceil(s2 * (z_diff / abs(diff)) ** 2))
+    gaps = [(abs(diff), 1 - alpha / 2)] if diff != 0 else []
     if abs(diff) < margin:
-        options.append(math.ceil(s2 * (z_equiv / (margin - abs(diff))) ** 2))
-    n = min(options) if options else None
-    return n if n is not None and n <= MAX_RUNS_NEEDED else None
-
-
-def _z(p: float) -> float:
-    return t_quantile(p, 1e6)
+        gaps.append((margin - abs(diff), 1 - alpha))
+    for n in range(max(len(a), len(b)) + 1, MAX_RUNS_NEEDED + 1):
+        if any(n >= s2 * (t_quantile(p, 2 * n - 2) / gap) ** 2 for gap, p in gaps):
+            return n
+    return None
 
 
 def compare(reference, other, *, margin: float | None = None, rel_margin: float = REL_MARGIN,

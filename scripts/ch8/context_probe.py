@@ -118,8 +118,8 @@ def main() -> None:
         prev_1hot = np.eye(len(BEHAVIOUR_TASKS))[prev[has_prev]]
         in_c = room[:, ROOMS.index("C")] == 1
         decode = [accuracy(x[in_c], from_b[in_c], fit[in_c]) for x in (ctx, inputs, np.hstack([ctx, inputs]))]
-        same_trial = trials[1:] == trials[:-1]
-        switches = float(np.mean(prev[1:][same_trial] != prev[:-1][same_trial]))
+        pairs = (trials[1:] == trials[:-1]) & (prev[:-1] >= 0)  # consecutive choices within one trial
+        switches = float(np.mean(prev[1:][pairs] != prev[:-1][pairs]))
         print(f"{seed} | {r2(prev_1hot, ctx[has_prev], fit[has_prev]):.2f} | {r2(room, ctx, fit):.2f} | "
               f"{in_c.sum()} ({from_b[in_c].sum()}) | " + " | ".join(map(_f, decode)) + f" | {switches:.2f}")
 

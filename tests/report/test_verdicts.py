@@ -57,3 +57,21 @@ def test_an_ordering_is_checked_pair_by_pair():
     assert verdict == "contradicted" and "reversed" in lines[1]
     runs["tie"] = runs["mid"] + 0.001
     assert ordering(runs, ["fast", "mid", "tie"])[0] == UNDETERMINED
+
+
+@pytest.mark.parametrize("shift", [0.02, 0.15, 0.3])  # toward "same", toward "different"
+def test_the_runs_said_to_decide_do_decide_and_no_fewer_would(shift):
+    """runs_needed: samples of that many runs a side, with the same means and spreads, decide; one run fewer does
+    not (t quantiles, not the normal approximation that once said 6 where 7 did not decide)."""
+    a = np.array([1.0, 1.6, 0.7, 1.3, 0.9, 1.5, 1.1])
+    b = a[::-1] + shift
+    c = compare(a, b)
+    assert c.verdict == UNDETERMINED and c.runs_needed > a.size
+
+    def like(x, n):  # n runs with x's mean and standard deviation
+        z = np.linspace(-1.0, 1.0, n)
+        return x.mean() + x.std(ddof=1) * (z - z.mean()) / z.std(ddof=1)
+
+    assert compare(like(a, c.runs_needed), like(b, c.runs_needed)).verdict != UNDETERMINED
+    if c.runs_needed - 1 > a.size:
+        assert compare(like(a, c.runs_needed - 1), like(b, c.runs_needed - 1)).verdict == UNDETERMINED
