@@ -118,9 +118,9 @@ def memory_table(summary: dict) -> list[str]:
              "room-B final test that reached C |", "|---|---|---|---|"]
     for label in (SAME_REPLAYS, NO_CONTEXT, MEMORYLESS):
         cells = []
-        for name, higher in (("final_docked_B", True), ("final_performance", True), (None, False)):
-            rec, other = ((per_run(summary, x, name) for x in (RECURRENT, label)) if name else
-                          (_returns_per_entry(summary, x) for x in (RECURRENT, label)))
+        for name, higher in (("final_docked_B", True), ("final_performance", True), ("returns per entry", False)):
+            rec, other = (_returns_per_entry(summary, x) if name == "returns per entry" else per_run(summary, x, name)
+                          for x in (RECURRENT, label))
             cells.append(gain_test(other, rec, "recurrent vs it", higher)[1] if rec and other else "—")
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return lines

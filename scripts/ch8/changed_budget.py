@@ -20,6 +20,7 @@ from connrl.envs.robot.recharge import ROOMS, sample_in_room
 from connrl.experiments.integration import EXPERIMENTS, greedy_trial
 from connrl.experiments.recharge import run_rooms
 from connrl.experiments.sweep import parse_seeds
+from connrl.report.integration import RECURRENT
 from connrl.tasks.integration import make_integration_agent, make_integration_env
 
 LIMITS = (200, 300, 400)
@@ -28,7 +29,7 @@ LIMITS = (200, 300, 400)
 def _one(job) -> list[list[float]]:
     seed, n_tasks = job
     spec = EXPERIMENTS[0]
-    p = spec.variant_params(spec.params, next(v for v in spec.variants if v.label == "Exp. 2: recurrent-Q, no X-Y"))
+    p = spec.variant_params(spec.params, next(v for v in spec.variants if v.label == RECURRENT))
     _, agent = run_rooms(p, np.random.default_rng(seed), make_integration_env, make_integration_agent)
     out = []
     for limit in LIMITS:

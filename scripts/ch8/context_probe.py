@@ -25,6 +25,7 @@ from connrl.experiments.integration import EXPERIMENTS, IntegrationParams
 from connrl.experiments.recharge import run_rooms
 from connrl.experiments.spec import override
 from connrl.experiments.sweep import parse_assignment, parse_seeds
+from connrl.report.integration import RECURRENT
 from connrl.tasks.integration import make_integration_agent, make_integration_env
 
 MIN_CLASS = 20  # steps of each class in each half for a classifier score
@@ -88,7 +89,7 @@ def main() -> None:
         if args.tests < 2:
             raise ValueError(f"--tests must be >= 2 (half the tests fit, half score), got {args.tests}")
         spec = EXPERIMENTS[0]
-        exp2 = next(v for v in spec.variants if v.label == "Exp. 2: recurrent-Q, no X-Y")
+        exp2 = next(v for v in spec.variants if v.label == RECURRENT)
         over = dict(parse_assignment(s) for s in args.set)
         p = override(override(spec.params, exp2.params, "Exp. 2"), over, "--set")
         if p.memory != "recurrent" or p.context < 1:

@@ -18,9 +18,9 @@ from pathlib import Path
 from connrl import cli
 from connrl.experiments.integration import EXPERIMENTS
 from connrl.experiments.sweep import parse_seeds, sweep_spec
+from connrl.report.integration import NO_CONTEXT, RECURRENT, SAME_REPLAYS
 from connrl.report.verdicts import better
 
-RECURRENT, SAME_REPLAYS, NO_CONTEXT = (EXPERIMENTS[0].variants[i].label for i in (2, 5, 6))
 QUANTITIES = ("final_docked_B", "final_performance")
 
 
