@@ -184,14 +184,43 @@ class _Scaled(gym.ObservationWrapper):
         self.scaler = scaler
         self.observation_space = spaces.Box(-np.inf, np.inf, (scaler.n_inputs,), np.float64)
         self.max_abs_reward = 0.0  # the largest |reward| it has passed on
+        self.limit, self.steps = None, 0  # a trial is truncated at ``limit`` steps (None: only by the env)
 
     def observation(self, observation):
         return self.scaler.encode(observation)
 
+    def reset(self, **kwargs):
+        self.steps = 0
+        return super().reset(**kwargs)
+
     def step(self, action):
         obs, r, terminated, truncated, info = super().step(action)
         self.max_abs_reward = max(self.max_abs_reward, abs(float(r)))
+        self.steps += 1
+        if self.limit is not None and self.steps >= self.limit and not terminated:
+            truncated = True  # a cut, not a failure: the learner bootstraps through it
         return obs, r, terminated, truncated, info
+
+
+MAX_EPISODE_STEPS = 1_000  # a trial's (and an evaluation episode's) steps when the env sets no time limit
+
+
+def episode_cap(env, max_steps: int | None = None) -> int:
+    """``max_steps`` if given, else the env's own time limit (its spec or a TimeLimit wrapper), else
+    ``MAX_EPISODE_STEPS``."""
+    if max_steps is not None:
+        if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
+            raise ValueError(f"max_episode_steps must be a whole number >= 1 or None, got {max_steps!r}")
+        return max_steps
+    spec = getattr(env, "spec", None)
+    if getattr(spec, "max_episode_steps", None):
+        return int(spec.max_episode_steps)
+    e = env
+    while e is not None:
+        if isinstance(e, gym.wrappers.TimeLimit):
+            return int(e._max_episode_steps)
+        e = getattr(e, "env", None)
+    return MAX_EPISODE_STEPS
 
 
 def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, float, list]:
@@ -249,17 +278,28 @@ class Agent:
         frac = min(self.steps_done / o.anneal_steps, 1.0)
         return (o.t_start + (o.t_end - o.t_start) * frac) * self.value_range
 
-    def learn(self, total_steps: int, callback=None, progress: bool = False, env=None) -> Agent:
-        """Train for at least ``total_steps`` environment steps (whole trials) in ``env`` (the one given to
-        ``make_agent`` by default); ``callback(agent, trial_return)`` after each trial, False from it stops."""
+    def learn(self, total_steps: int, callback=None, progress: bool = False, env=None,
+              max_trial_steps: int | None = None) -> Agent:
+        """Train for exactly ``total_steps`` environment steps in ``env`` (the one given to ``make_agent`` by
+        default). A trial the budget cuts is truncated, not failed, and replayed like any other (replay bootstraps
+        through it); so is a trial longer than ``max_trial_steps`` (default: the env's own time limit, else
+        ``MAX_EPISODE_STEPS``), so a task without a time limit is still learnt from. ``callback``: a
+        connrl.callbacks.Callback (evaluation, checkpoints, a log), a list of them, or ``f(agent, trial_return)``
+        after each trial; False from it stops training."""
+        from connrl.callbacks import as_callback
+
         env = env if env is not None else self._env
         if env is None:
             raise ValueError("learn() needs the environment: make_agent(env, ...) keeps it, load(path, env) too")
         if isinstance(total_steps, bool) or not isinstance(total_steps, int) or total_steps < 1:
             raise ValueError(f"total_steps must be a whole number >= 1, got {total_steps!r}")
+        cap = episode_cap(env, max_trial_steps)
+        callbacks = as_callback(callback)
         self.check_env(env)
         scaled, end = _Scaled(env, self.scaler), self.steps_done + total_steps
+        callbacks.on_training_start(self, end)
         while self.steps_done < end:
+            scaled.limit = min(cap, end - self.steps_done)
             stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
                               seed=int(self.rng.integers(2**31)))
             self.steps_done += stats.steps
@@ -268,11 +308,22 @@ class Agent:
             if progress:
                 print(f"\rsteps {self.steps_done}/{end}  trial {self.trials_done}  return {stats.total_reward:.1f}",
                       end="", flush=True)
-            if callback is not None and callback(self, stats.total_reward) is False:
+            if callbacks.on_trial_end(self, stats) is False:
                 break
+        callbacks.on_training_end(self)
         if progress:
             print()
         return self
+
+    def evaluate(self, env, episodes: int = 10, seed: int = 0, max_episode_steps: int | None = None) -> list[float]:
+        """``connrl.evaluate(agent, ...)``."""
+        if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+            raise ValueError(f"episodes must be a whole number >= 1, got {episodes!r}")
+        cap = episode_cap(env, max_episode_steps)
+        self.check_env(env)
+        scaled = _Scaled(env, self.scaler)  # the learner's own greedy trial (T = 0, no random draws, nothing learnt)
+        return [run_trial(scaled, self.learner, trial=self.trials_done, learning=False, seed=seed + k,
+                          max_steps=cap).total_reward for k in range(episodes)]
 
     def check_env(self, env) -> None:
         """Refuse, in one line, an environment whose spaces are not the ones this agent was made for."""
@@ -435,13 +486,7 @@ def _input_width(agent: Agent) -> int:
     return int(net.config.n_inputs)
 
 
-def evaluate(agent: Agent, env, episodes: int = 10, seed: int = 0) -> list[float]:
-    """The greedy policy's return in each of ``episodes`` episodes (seeds ``seed``, ``seed + 1``, ...); nothing
-    learnt."""
-    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
-        raise ValueError(f"episodes must be a whole number >= 1, got {episodes!r}")
-    agent.check_env(env)
-    scaled = _Scaled(env, agent.scaler)  # the learner's own greedy trial (T = 0, no random draws, nothing learnt)
-    return [run_trial(scaled, agent.learner, trial=agent.trials_done, learning=False, seed=seed + k).total_reward
-            for k in range(episodes)]
-
+def evaluate(agent: Agent, env, episodes: int = 10, seed: int = 0, max_episode_steps: int | None = None) -> list[float]:
+    """The greedy policy's return in each of ``episodes`` episodes (seeds ``seed``, ``seed + 1``, ...), each at most
+    ``max_episode_steps`` long (default: the env's own time limit, else ``MAX_EPISODE_STEPS``); nothing learnt."""
+    return agent.evaluate(env, episodes, seed, max_episode_steps)

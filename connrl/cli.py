@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from connrl.cli_task import _positive_int, _seed, _writable, add_own_task_commands
+from connrl.cli_tune import add_tune_command
 from connrl.experiments.spec import PROFILES
 
 
@@ -155,6 +156,14 @@ def _print_summary(summary: dict) -> None:
 def cmd_plot(args) -> int:
     from connrl.report.plots import plot_from_disk
 
+    if (Path(args.name) / "progress.csv").exists():  # a `connrl train` folder: its training log
+        from connrl.cli_task import plot_training
+
+        try:
+            print(plot_training(Path(args.name)))
+        except (ValueError, OSError) as exc:
+            raise SystemExit(f"connrl: {exc}") from None
+        return 0
     spec = _get(args.name)
     from connrl.experiments.store import DamagedFile
 
@@ -265,6 +274,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_experiment_commands(sub)
     _add_tool_commands(sub)
     add_own_task_commands(sub)
+    add_tune_command(sub)
     return p
 
 
@@ -322,9 +332,10 @@ def _add_experiment_commands(sub) -> None:
     _executor_options(s)
     s.set_defaults(func=cmd_reproduce)
 
-    s = sub.add_parser("plot", help="redraw an experiment's plot", description="Redraw OUT/NAME/curve.png and "
-                       ".svg from the stored runs of the latest `connrl run NAME`.")
-    s.add_argument("name", help="experiment name")
+    s = sub.add_parser("plot", help="redraw an experiment's or a trained agent's plot", description="Redraw "
+                       "OUT/NAME/curve.png and .svg from the stored runs of the latest `connrl run NAME`, or, given "
+                       "the folder of a `connrl train` run, its curve.png from its progress.csv.")
+    s.add_argument("name", help="experiment name, or a `connrl train` folder")
     s.add_argument("--out", default="runs", help="output directory of the run (default ./runs)")
     s.set_defaults(func=cmd_plot)
 

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 MAX_STEPS = 10**10  # environment steps of one `connrl train`: months of compute at connrl's speed
+DEFAULT_TRAIN_STEPS = 50_000
 
 
 def _int_at_least(low: int, high: int | None = None):
@@ -32,6 +33,19 @@ def _int_at_least(low: int, high: int | None = None):
 _positive_int, _seed = _int_at_least(1), _int_at_least(0)
 
 
+def _finite_float(text: str) -> float:
+    import argparse
+    import math
+
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    return v
+
+
 def _writable(folder) -> None:
     """Refuse an output folder we cannot write in before any run starts (one line)."""
     from connrl.storage import check_writable_dir
@@ -44,24 +58,25 @@ def _writable(folder) -> None:
         raise SystemExit(f"connrl: cannot write to {folder}: {exc.strerror or exc}") from None
 
 
-def _make_env(env_id: str):
+def _make_env(env_id: str, env_kwargs: dict | None = None):
     import gymnasium as gym
 
     import connrl  # noqa: F401  (registers the thesis's worlds)
     try:
-        return gym.make(env_id)
+        return gym.make(env_id, **(env_kwargs or {}))
     except Exception as exc:  # an unknown id, a module that is not installed, bad registration: one line
         raise SystemExit(f"connrl: cannot make environment {env_id!r}: {type(exc).__name__}: {exc}") from None
 
 
-def _parse_options(items: list[str]) -> dict:
+def _parse_options(items: list[str], flag: str = "--option") -> dict:
+    """KEY=VALUE items as a dict, each value read as JSON where it is (numbers, true, null, lists) else a string."""
     import json
 
     options = {}
     for item in items:
         key, sep, value = item.partition("=")
-        if not sep:
-            raise SystemExit(f"connrl: --option expects key=value, got {item!r}")
+        if not sep or not key:
+            raise SystemExit(f"connrl: {flag} expects KEY=VALUE, got {item!r}")
         try:
             options[key] = json.loads(value)
         except json.JSONDecodeError:
@@ -103,13 +118,19 @@ def _uninterrupted(deliver: bool):
         raise KeyboardInterrupt if pending[0] == signal.SIGINT else _Terminated
 
 
-def cmd_train(args) -> int:
-    from connrl.api import TAUGHT_KINDS, make_agent, options_from
+def _train_settings(args) -> dict:
+    """What `connrl train` will do: the agent, steps, options and env kwargs from the settings file (shipped or
+    --hyperparams) overridden by the command line, all checked before anything is made."""
+    from connrl.api import TAUGHT_KINDS, options_from
     from connrl.core.lesson_files import load_lessons
+    from connrl.settings import task_settings
 
-    options = _parse_options(args.option)
     args.agent = args.agent or ("QCON-T" if args.teach else "QCON-R")
     try:
+        entry, source = task_settings(args.env_id, args.agent, args.hyperparams)
+        entry = entry or {"n_timesteps": None, "env_kwargs": {}, "options": {}}
+        options = {**entry["options"], **_parse_options(args.option)}
+        env_kwargs = {**entry["env_kwargs"], **_parse_options(args.env_kwargs, "--env-kwargs")}
         options_from(options)  # every option and the lesson file checked before the environment is made
         if args.teach and args.agent not in TAUGHT_KINDS:
             raise ValueError(f"--teach gives lessons to {' or '.join(TAUGHT_KINDS)}, not to {args.agent}")
@@ -117,38 +138,85 @@ def cmd_train(args) -> int:
             raise ValueError(f"{args.agent} needs --teach FILE (a lesson file, connrl.record_lessons)")
         if args.teach:
             load_lessons(args.teach, env_id=args.env_id)
+        if args.stop_at is not None and not args.eval_every:
+            raise ValueError("--stop-at stops when an evaluation reaches it: give --eval-every STEPS too")
+        if args.tensorboard:
+            import importlib.util
+
+            if importlib.util.find_spec("tensorboardX") is None:
+                raise ValueError("--tensorboard needs tensorboardX: pip install 'connrl[tensorboard]'")
     except (ValueError, TypeError) as exc:
         raise SystemExit(f"connrl: {exc}") from None
-    name = args.env_id.replace("/", "-").replace(":", "-")
-    out = Path(args.save or f"runs/train/{name}-{args.agent}-seed{args.seed}")
-    env = _make_env(args.env_id)
+    return {"env_id": args.env_id, "env_kwargs": env_kwargs, "agent": args.agent, "seed": args.seed,
+            "steps": args.steps or entry["n_timesteps"] or DEFAULT_TRAIN_STEPS, "options": options,
+            "teach": args.teach, "settings_from": source}
+
+
+def _resumed_settings(out: Path, settings: dict, args) -> dict:
+    """The settings of the run in ``out`` that --resume continues; the command may change only --steps."""
+    from connrl.storage import read_json
+
+    file = out / "settings.json"
+    if not (out / "agent.json").exists():
+        raise SystemExit(f"connrl: --resume: {out} holds no trained agent (agent.json) to continue")
+    try:
+        old = read_json(file, "connrl train settings file")
+    except ValueError as exc:
+        raise SystemExit(f"connrl: --resume: {exc}") from None
+    if not isinstance(old, dict):
+        raise SystemExit(f"connrl: --resume: {file} is not a connrl train settings file")
+    for key in ("env_id", "agent", "seed", "env_kwargs", "options", "teach"):
+        if old.get(key) != settings[key]:
+            raise SystemExit(f"connrl: --resume: {key} is {settings[key]!r} here but {old.get(key)!r} in {file}; a "
+                             "resumed run keeps its settings (only --steps may change)")
+    return {**old, "steps": settings["steps"]}
+
+
+def cmd_train(args) -> int:
+    import json
+
+    from connrl.api import load, make_agent
+    from connrl.callbacks import EvalCallback, ProgressLog, TensorBoardLog
+    from connrl.storage import atomic_write_text
+
+    out, settings = _train_folder(args, _train_settings(args))
+    env = _make_env(args.env_id, settings["env_kwargs"])
+    eval_env = _make_env(args.env_id, settings["env_kwargs"]) if args.eval_every else None
     fresh = not out.exists()
     _writable(out)
-    returns: list[tuple[int, float]] = []
     saved: list[int] = []  # the steps of the latest good save
+    evaluation = None if eval_env is None else EvalCallback(
+        eval_env, args.eval_every, args.eval_episodes, best_path=out / "best", stop_at=args.stop_at,
+        verbose=not args.quiet)
+    log = ProgressLog(out / "progress.csv", evaluation, resume=args.resume)
+    if evaluation is not None:  # a resumed run's best/ stays until an evaluation beats it
+        evaluation.best_mean = max((r["eval_mean"] for r in log.rows if r["eval_mean"] is not None),
+                                   default=evaluation.best_mean)
 
     def save(agent, deliver: bool = False) -> None:
         with _uninterrupted(deliver):
             agent.save(out)
-            _write_curve(out, returns, args)
+            atomic_write_text(out / "settings.json", json.dumps(settings, indent=1) + "\n")  # --resume reads it
+            log.flush()
+            _write_curve(out, log.rows, f"{args.env_id}, {settings['agent']}, seed {settings['seed']}")
             saved.append(agent.steps_done)
-
-    def checkpoint(agent, r) -> bool:
-        returns.append((agent.steps_done, r))
-        if agent.divergence():
-            return False
-        if args.checkpoint_every and agent.steps_done - (saved[-1] if saved else 0) >= args.checkpoint_every:
-            try:
-                save(agent, deliver=True)
-            except OSError:  # a full disk: stop here; the last save below says what was not saved
-                return False
-        return True
 
     agent, stopped = None, None
     with _stop_signals():
         try:
-            agent = make_agent(env, args.agent, seed=args.seed, lessons=args.teach, **options)
-            agent.learn(args.steps, callback=checkpoint, progress=not args.quiet)
+            if args.resume:
+                agent = load(out, env)
+                saved.append(agent.steps_done)
+            else:
+                agent = make_agent(env, settings["agent"], seed=settings["seed"], lessons=settings["teach"],
+                                   **settings["options"])
+            left = settings["steps"] - agent.steps_done
+            if left <= 0:
+                print(f"connrl: {out} is trained for {agent.steps_done} steps already (--steps {settings['steps']})")
+                return 0
+            board = TensorBoardLog(args.tensorboard, evaluation) if args.tensorboard else None
+            callbacks = [c for c in (evaluation, log, board, _checkpoints(args.checkpoint_every, saved, save)) if c]
+            agent.learn(left, callback=callbacks, progress=not args.quiet)
         except ValueError as exc:
             _remove_if_empty(out, fresh)
             raise SystemExit(f"connrl: {exc}") from None
@@ -156,7 +224,47 @@ def cmd_train(args) -> int:
             stopped = exc
             if not args.quiet and agent is not None:
                 print(flush=True)  # end the progress line
-    return _finish(agent, out, fresh, stopped, saved, save)
+    code = _finish(agent, out, fresh, stopped, saved, save)
+    if evaluation is not None and evaluation.results and code == 0:
+        steps, mean = max(evaluation.results, key=lambda e: e[1])[:2]
+        reached = " (--stop-at reached)" if args.stop_at is not None and evaluation.results[-1][1] >= args.stop_at \
+            else ""
+        print(f"best evaluation: mean return {mean:.2f} at step {steps}, kept in {out / 'best'}{reached}")
+    return code
+
+
+def _train_folder(args, settings: dict) -> tuple[Path, dict]:
+    """The folder `connrl train` saves in and the settings it trains with: a new run's, or with --resume the
+    saved run's; a folder holding an agent is never overwritten by a new run."""
+    name = args.env_id.replace("/", "-").replace(":", "-")
+    out = Path(args.save or f"runs/train/{name}-{args.agent}-seed{args.seed}")
+    if args.resume:
+        return out, _resumed_settings(out, settings, args)
+    if (out / "agent.json").exists():
+        raise SystemExit(f"connrl: {out} holds a trained agent already: --resume continues it, --save DIR trains "
+                         "a new one elsewhere")
+    if settings["settings_from"] and not args.quiet:
+        print(f"settings: {settings['settings_from']}")
+    return out, settings
+
+
+def _checkpoints(every: int, saved: list[int], save):
+    """`connrl train`'s own keeper: a diverged agent stops training; every ``every`` steps the agent, the log and
+    the curve are saved as one (a signal waits for the save, then stops as it would have)."""
+    from connrl.callbacks import Callback
+
+    class Checkpoints(Callback):
+        def on_trial_end(self, agent, stats):
+            if agent.divergence():
+                return False
+            if every and agent.steps_done - (saved[-1] if saved else 0) >= every:
+                try:
+                    save(agent, deliver=True)
+                except OSError:  # a full disk: stop here; the last save says what was not saved
+                    return False
+            return True
+
+    return Checkpoints()
 
 
 def _remove_if_empty(out: Path, fresh: bool) -> None:
@@ -192,11 +300,12 @@ def _finish(agent, out: Path, fresh: bool, stopped, saved: list[int], save) -> i
         print(f"connrl: {how}saved the agent trained for {agent.steps_done} steps in {out}; `connrl evaluate "
               f"{out}` tests it", file=sys.stderr)
         return code
-    print(f"saved: {out} (agent.json, agent.npz, curve.png); `connrl evaluate {out}` tests it")
+    print(f"saved: {out} (agent.json, agent.npz, progress.csv, curve.png); `connrl evaluate {out}` tests it")
     return 0
 
 
-def _write_curve(out: Path, returns: list[tuple[int, float]], args) -> None:
+def _write_curve(out: Path, rows: list[dict], title: str) -> Path:
+    """``out/curve.png``: each training trial's return and, where evaluated, the greedy mean (progress.csv's rows)."""
     import io
 
     import matplotlib.pyplot as plt
@@ -204,15 +313,36 @@ def _write_curve(out: Path, returns: list[tuple[int, float]], args) -> None:
     from connrl.storage import atomic_write_bytes
 
     fig, ax = plt.subplots(figsize=(6, 3.5), dpi=110)
-    ax.plot([s for s, _ in returns], [r for _, r in returns], lw=0.8)
+    ax.plot([r["steps"] for r in rows], [r["return"] for r in rows], lw=0.8, label="training trial")
+    ev = [r for r in rows if r["eval_mean"] is not None]
+    if ev:
+        ax.plot([r["steps"] for r in ev], [r["eval_mean"] for r in ev], "o-", ms=3, lw=1, label="greedy evaluation")
+        ax.legend(fontsize=8)
     ax.set_xlabel("environment steps")
-    ax.set_ylabel("return of each training trial")
-    ax.set_title(f"{args.env_id}, {args.agent}, seed {args.seed}", fontsize=9)
+    ax.set_ylabel("return")
+    ax.set_title(title, fontsize=9)
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png")
     plt.close(fig)
     atomic_write_bytes(out / "curve.png", buf.getvalue())
+    return out / "curve.png"
+
+
+def plot_training(folder: Path) -> Path:
+    """Redraw a trained agent's curve.png from its progress.csv (``connrl plot FOLDER``)."""
+    import json
+
+    from connrl.callbacks import read_progress
+
+    rows = read_progress(folder / "progress.csv")
+    title = str(folder)
+    try:
+        s = json.loads((folder / "settings.json").read_text())
+        title = f"{s['env_id']}, {s['agent']}, seed {s['seed']}"
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    return _write_curve(folder, rows, title)
 
 
 def _saved_env_id(path: str) -> str | None:
@@ -235,10 +365,27 @@ def _saved_env_id(path: str) -> str | None:
     return env_id
 
 
+def _saved_env_kwargs(path: Path) -> dict:
+    """The env kwargs of the `connrl train` run an agent folder (or its best/ agent) came from; {} without one."""
+    import json
+
+    for folder in (path, path.parent) if path.name == "best" else (path,):
+        file = folder / "settings.json"
+        if file.exists():
+            try:
+                kwargs = json.loads(file.read_text()).get("env_kwargs", {})
+            except (OSError, ValueError, AttributeError) as exc:
+                raise SystemExit(f"connrl: {file}: cannot be read as connrl train settings ({exc})") from None
+            if not isinstance(kwargs, dict):
+                raise SystemExit(f"connrl: {file}: env_kwargs must be a mapping, got {kwargs!r}")
+            return kwargs
+    return {}
+
+
 def cmd_evaluate(args) -> int:
     import numpy as np
 
-    from connrl.api import evaluate, load
+    from connrl.api import episode_cap, evaluate, load
 
     try:
         env_id = args.env or _saved_env_id(args.path)
@@ -246,13 +393,15 @@ def cmd_evaluate(args) -> int:
         raise SystemExit(f"connrl: {exc}") from None
     if not env_id:
         raise SystemExit(f"connrl: {args.path} holds an agent without an environment id; give --env ENV_ID")
-    env = _make_env(env_id)
+    env_kwargs = {**_saved_env_kwargs(Path(args.path)), **_parse_options(args.env_kwargs, "--env-kwargs")}
+    env = _make_env(env_id, env_kwargs)
     try:
-        returns = evaluate(load(args.path, env), env, args.episodes, seed=args.seed)
+        cap = episode_cap(env, args.max_episode_steps)
+        returns = evaluate(load(args.path, env), env, args.episodes, seed=args.seed, max_episode_steps=cap)
     except ValueError as exc:
         raise SystemExit(f"connrl: {exc}") from None
-    print(f"{env_id}: greedy return over {len(returns)} episodes: mean {np.mean(returns):.2f}, min "
-          f"{min(returns):.2f}, max {max(returns):.2f}")
+    print(f"{env_id}: greedy return over {len(returns)} episodes (at most {cap} steps each): mean "
+          f"{np.mean(returns):.2f}, min {min(returns):.2f}, max {max(returns):.2f}")
     return 0
 
 
@@ -268,11 +417,25 @@ def add_own_task_commands(sub) -> None:
                    help=f"one of {', '.join(kinds)} (default QCON-R, or QCON-T with --teach)")
     s.add_argument("--teach", default=None, metavar="FILE", help="a lesson file (connrl.record_lessons) that QCON-T "
                    "or AHCON-T replays after every trial")
-    s.add_argument("--steps", type=_int_at_least(1, MAX_STEPS), default=50_000,
-                   help="environment steps (default 50000)")
+    s.add_argument("--steps", type=_int_at_least(1, MAX_STEPS), default=None,
+                   help="environment steps in all (default: the settings file's n_timesteps, else 50000)")
     s.add_argument("--checkpoint-every", type=_int_at_least(0, MAX_STEPS), default=10_000, metavar="STEPS",
-                   help="save the agent every STEPS steps, so a crash loses at most that much (default 10000; 0: "
-                   "only at the end). Ctrl-C or SIGTERM saves what was trained and stops")
+                   help="save the agent, progress.csv and curve.png every STEPS steps, so a crash loses at most that "
+                   "much (default 10000; 0: only at the end). Ctrl-C or SIGTERM saves what was trained and stops")
+    s.add_argument("--resume", action="store_true", help="continue the agent saved in the --save folder (its "
+                   "latest checkpoint) up to --steps in all, with its settings")
+    s.add_argument("--eval-every", type=_int_at_least(0, MAX_STEPS), default=0, metavar="STEPS",
+                   help="greedy evaluation on a separate env every STEPS steps (at the next trial end); the best "
+                   "agent is kept in SAVE/best (default 0: none)")
+    s.add_argument("--eval-episodes", type=_positive_int, default=5, metavar="N", help="episodes per evaluation")
+    s.add_argument("--stop-at", type=_finite_float, default=None, metavar="RETURN",
+                   help="stop once an evaluation's mean return reaches RETURN (needs --eval-every)")
+    s.add_argument("--tensorboard", default=None, metavar="DIR", help="also write TensorBoard scalars to DIR "
+                   "(pip install 'connrl[tensorboard]')")
+    s.add_argument("--hyperparams", default=None, metavar="FILE", help="a settings file (RL Zoo's shape, "
+                   "connrl/settings.py); default: the shipped one for the agent, if it has ENV_ID")
+    s.add_argument("--env-kwargs", nargs="+", action="extend", default=[], metavar="KEY=VALUE",
+                   help="arguments of gymnasium.make(ENV_ID, ...), e.g. --env-kwargs is_slippery=false")
     s.add_argument("--seed", type=_seed, default=0)
     s.add_argument("--save", default=None, help="folder to save in (default runs/train/ENV-AGENT-seedS)")
     s.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
@@ -286,4 +449,9 @@ def add_own_task_commands(sub) -> None:
     s.add_argument("--episodes", type=_positive_int, default=10)
     s.add_argument("--seed", type=_seed, default=0, help="seed of the first episode (default 0)")
     s.add_argument("--env", default=None, help="environment id (default: the one it was trained on)")
+    s.add_argument("--env-kwargs", nargs="+", action="extend", default=[], metavar="KEY=VALUE",
+                   help="arguments of gymnasium.make (default: those it was trained with)")
+    s.add_argument("--max-episode-steps", type=_positive_int, default=None, metavar="N", help="cut each episode "
+                   "at N steps (default: the environment's time limit, else 1000)")
     s.set_defaults(func=cmd_evaluate)
+

@@ -12,6 +12,7 @@ import pytest
 
 import connrl
 from connrl import cli
+from connrl.callbacks import read_progress
 from connrl.core.lessons import Lesson
 from connrl.core.replay import ReplayParams, replay_q
 from connrl.nets import OAON, NetConfig
@@ -140,7 +141,8 @@ def test_train_never_saves_a_diverged_agent_and_says_so(tmp_path, capsys):
                      "--option", "lr=1e308"])
     err = capsys.readouterr().err.strip()
     assert code == 1 and err.startswith("connrl: training diverged by step ") and "it was not saved" in err
-    assert "\n" not in err and not out.exists()
+    assert "\n" not in err and not (out / "agent.json").exists()
+    assert read_progress(out / "progress.csv")[-1]["steps"] <= 2000  # the log of what diverged is kept
     agent = connrl.make_agent(gym.make("CartPole-v1"), lr=1e308, warmup_steps=100).learn(300)
     with pytest.raises(ValueError, match="the agent diverged after"):
         agent.save(tmp_path / "api")
@@ -169,4 +171,4 @@ def test_a_failed_save_says_what_was_lost_and_leaves_no_temporary_file(tmp_path,
                      "--option", "warmup_steps=100"])
     err = capsys.readouterr().err.strip()
     assert code == 1 and err.startswith("connrl: the agent trained for ") and "was NOT saved: cannot write" in err
-    assert "No space left on device" in err and not out.exists()
+    assert "No space left on device" in err and not out.exists()  # nothing could be written: not even the log

@@ -91,14 +91,15 @@ def test_cli_train_then_evaluate(tmp_path, capsys):
     from connrl import cli
     assert cli.main(["train", "CartPole-v1", "--steps", "300", "--save", str(tmp_path / "a"), "--quiet",
                      "--option", "hidden=4"]) == 0
-    assert {p.name for p in (tmp_path / "a").iterdir()} == {"agent.json", "agent.npz", "curve.png"}
+    assert {p.name for p in (tmp_path / "a").iterdir()} == {"agent.json", "agent.npz", "curve.png", "progress.csv",
+                                                              "settings.json"}
     assert cli.main(["evaluate", str(tmp_path / "a"), "--episodes", "2"]) == 0
     assert "CartPole-v1: greedy return over 2 episodes" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("args, message", [
     (["train", "Nope-v9", "--steps", "10"], "cannot make environment 'Nope-v9'"),
-    (["train", "CartPole-v1", "--steps", "10", "--option", "lr"], "--option expects key=value, got 'lr'"),
+    (["train", "CartPole-v1", "--steps", "10", "--option", "lr"], "--option expects KEY=VALUE, got 'lr'"),
     (["train", "CartPole-v1", "--steps", "10", "--option", "lr2=1"], "unknown option(s) 'lr2'"),
     (["evaluate", "nowhere"], "nowhere/agent.json: no such connrl agent file"),
 ])
@@ -221,6 +222,11 @@ def test_the_cli_offers_the_apis_kinds():
     sub = argparse.ArgumentParser().add_subparsers()
     add_own_task_commands(sub)
     assert tuple(sub.choices["train"]._option_string_actions["--agent"].choices) == KINDS
+    from connrl.api import TAUGHT_KINDS
+    from connrl.cli_tune import add_tune_command
+    add_tune_command(sub)
+    assert tuple(sub.choices["tune"]._option_string_actions["--agent"].choices) == tuple(
+        k for k in KINDS if k not in TAUGHT_KINDS)
 
 
 def test_replay_thresholds_follow_the_framework_unless_given():

@@ -1,0 +1,276 @@
+"""Watching and keeping an agent while it learns, in Stable-Baselines3's shape (``agent.learn(n, callback=...)``).
+
+    from connrl.callbacks import CheckpointCallback, EvalCallback, ProgressLog
+    eval_cb = EvalCallback(gym.make("CartPole-v1"), every=5_000, episodes=5, best_path="runs/cp/best", stop_at=475)
+    agent.learn(50_000, callback=[ProgressLog("runs/cp/progress.csv"), eval_cb, CheckpointCallback(10_000, "runs/cp")])
+
+connrl's learners change their nets at the end of a trial (replay, 3.5), so every callback runs after a trial:
+``every=N`` means at the first trial end at or past each multiple of N steps (SB3 checks after any step). A callback
+returning False from ``on_trial_end`` stops training. A plain function ``f(agent, trial_return)`` still works.
+Evaluation is greedy (T = 0) on its own environment and seeds (``eval_seed`` on), so it never moves the learner's
+random stream: a run with and without evaluation learns the same.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from connrl.storage import atomic_write_text
+
+# progress.csv's columns: one row per training trial; the eval_* cells are filled on trials that ended an evaluation
+LOG_COLUMNS = ("steps", "trial", "return", "length", "temperature", "seconds", "eval_mean", "eval_std", "eval_min")
+
+
+class Callback:
+    """Hooks of ``Agent.learn``; subclasses override what they need."""
+
+    def on_training_start(self, agent, total_steps: int) -> None:
+        """Before the first trial; ``total_steps`` is the step count training stops at."""
+
+    def on_trial_end(self, agent, stats) -> bool | None:
+        """After each training trial (``stats``: connrl.core.rollout.TrialStats); False stops training."""
+        return True
+
+    def on_training_end(self, agent) -> None:
+        """After the last trial, also when a callback stopped training."""
+
+
+class _Function(Callback):
+    def __init__(self, fn):
+        self.fn = fn
+
+    def on_trial_end(self, agent, stats):
+        return self.fn(agent, stats.total_reward)
+
+
+class CallbackList(Callback):
+    """Several callbacks in order; training stops when any returns False (the later ones still run)."""
+
+    def __init__(self, callbacks):
+        self.callbacks = [as_callback(c) for c in callbacks]
+
+    def on_training_start(self, agent, total_steps):
+        for c in self.callbacks:
+            c.on_training_start(agent, total_steps)
+
+    def on_trial_end(self, agent, stats):
+        go = [c.on_trial_end(agent, stats) is not False for c in self.callbacks]
+        return all(go)
+
+    def on_training_end(self, agent):
+        for c in self.callbacks:
+            c.on_training_end(agent)
+
+
+def as_callback(callback) -> Callback:
+    """A Callback from None, a Callback, a function ``f(agent, trial_return)`` or a list of these."""
+    if callback is None:
+        return Callback()
+    if isinstance(callback, Callback):
+        return callback
+    if isinstance(callback, (list, tuple)):
+        return CallbackList(callback)
+    if callable(callback):
+        return _Function(callback)
+    raise ValueError(f"callback must be a connrl.callbacks.Callback, a function (agent, trial_return) or a list of "
+                     f"them, got {type(callback).__name__}")
+
+
+def _check_every(name: str, every) -> int:
+    if isinstance(every, bool) or not isinstance(every, int) or every < 1:
+        raise ValueError(f"{name} must be a whole number of steps >= 1, got {every!r}")
+    return every
+
+
+class _Every:
+    """True at the first call at or past each multiple of ``every`` steps (counted from the agent's step 0, so a
+    resumed run keeps the schedule)."""
+
+    def __init__(self, every: int):
+        self.every, self.done = every, None
+
+    def due(self, steps: int) -> bool:
+        k = steps // self.every
+        if self.done is None:  # the first call of this training: due only if a multiple was crossed since start
+            self.done = k
+            return False
+        if k > self.done:
+            self.done = k
+            return True
+        return False
+
+    def start(self, steps: int) -> None:
+        self.done = steps // self.every
+
+
+class EvalCallback(Callback):
+    """Greedy evaluation every ``every`` steps on ``eval_env`` (``episodes`` episodes, seeds ``eval_seed`` on;
+    keep them apart from the seeds you report); keeps the best agent in ``best_path`` (when given) and stops
+    training once the mean return reaches ``stop_at`` (when given). ``results`` holds (steps, mean, std, min)."""
+
+    def __init__(self, eval_env, every: int = 10_000, episodes: int = 5, eval_seed: int = 1_000_000,
+                 best_path=None, stop_at: float | None = None, max_episode_steps: int | None = None,
+                 verbose: bool = False):
+        self.every = _Every(_check_every("every", every))
+        if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+            raise ValueError(f"episodes must be a whole number >= 1, got {episodes!r}")
+        if stop_at is not None and not (isinstance(stop_at, (int, float)) and math.isfinite(stop_at)):
+            raise ValueError(f"stop_at must be a finite number or None, got {stop_at!r}")
+        self.env, self.episodes, self.eval_seed = eval_env, episodes, int(eval_seed)
+        self.best_path = Path(best_path) if best_path is not None else None
+        self.stop_at, self.max_episode_steps, self.verbose = stop_at, max_episode_steps, verbose
+        self.results: list[tuple[int, float, float, float]] = []
+        self.best_mean = -math.inf
+        self.last: tuple[int, float, float, float] | None = None  # the evaluation of the latest trial, if any
+
+    def on_training_start(self, agent, total_steps):
+        agent.check_env(self.env)
+        self.every.start(agent.steps_done)
+
+    def on_trial_end(self, agent, stats):
+        self.last = None
+        if not self.every.due(agent.steps_done):
+            return True
+        return self.evaluate(agent)
+
+    def evaluate(self, agent) -> bool:
+        """Evaluate now; False when ``stop_at`` is reached."""
+        returns = np.asarray(agent.evaluate(self.env, self.episodes, seed=self.eval_seed,
+                                            max_episode_steps=self.max_episode_steps))
+        self.last = (agent.steps_done, float(returns.mean()), float(returns.std()), float(returns.min()))
+        self.results.append(self.last)
+        new_best = self.last[1] > self.best_mean
+        if new_best:
+            self.best_mean = self.last[1]
+            if self.best_path is not None and not agent.divergence():
+                agent.save(self.best_path)
+        if self.verbose:
+            print(f"\neval at step {agent.steps_done}: mean return {self.last[1]:.2f} +- {self.last[2]:.2f}"
+                  + (" (new best)" if new_best else ""), flush=True)
+        return not (self.stop_at is not None and self.last[1] >= self.stop_at)
+
+
+class CheckpointCallback(Callback):
+    """Save the agent in ``path`` every ``every`` steps (one folder, replaced atomically: the latest checkpoint
+    survives a crash in the middle of the next; ``connrl.load(path)`` resumes it). A diverged agent is not saved,
+    and stops training."""
+
+    def __init__(self, every: int, path):
+        self.every, self.path = _Every(_check_every("every", every)), Path(path)
+
+    def on_training_start(self, agent, total_steps):
+        self.every.start(agent.steps_done)
+
+    def on_trial_end(self, agent, stats):
+        if not self.every.due(agent.steps_done):
+            return True
+        if agent.divergence():
+            return False
+        agent.save(self.path)
+        return True
+
+
+class ProgressLog(Callback):
+    """progress.csv (``LOG_COLUMNS``): one row per training trial, the evaluation of ``eval_callback`` (when given)
+    on the trial that ran it. Rewritten atomically every ``flush_every`` seconds and at the end, so a crash loses at
+    most that much; a resumed run (``resume=True``) keeps the rows up to the agent's step count and appends."""
+
+    def __init__(self, path, eval_callback: EvalCallback | None = None, resume: bool = False,
+                 flush_every: float = 10.0):
+        self.path, self.eval = Path(path), eval_callback
+        self.rows: list[dict] = read_progress(self.path) if resume and self.path.exists() else []
+        self.flush_every, self._flushed, self._t0 = flush_every, 0.0, 0.0
+        self.error: OSError | None = None  # the latest failed periodic write
+
+    def on_training_start(self, agent, total_steps):
+        self.rows = [r for r in self.rows if r["steps"] <= agent.steps_done]  # rows past the checkpoint are redone
+        self._t0 = time.perf_counter() - (self.rows[-1]["seconds"] if self.rows else 0.0)
+        self._flushed = time.perf_counter()
+
+    def on_trial_end(self, agent, stats):
+        ev = self.eval.last if self.eval is not None else None
+        ev = ev if ev is not None and ev[0] == agent.steps_done else None  # an evaluation of this trial only
+        self.rows.append({"steps": agent.steps_done, "trial": agent.trials_done, "return": float(stats.total_reward),
+                          "length": stats.steps, "temperature": agent.temperature(agent.trials_done),
+                          "seconds": round(time.perf_counter() - self._t0, 3),
+                          "eval_mean": ev[1] if ev else None, "eval_std": ev[2] if ev else None,
+                          "eval_min": ev[3] if ev else None})
+        if time.perf_counter() - self._flushed >= self.flush_every:
+            self._try_flush()
+        return True
+
+    def on_training_end(self, agent):
+        self._try_flush()
+
+    def _try_flush(self) -> None:
+        try:
+            self.flush()
+        except OSError as exc:  # a full disk must not end training: the next save of the agent reports it
+            self.error = exc
+
+    def flush(self) -> None:
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(LOG_COLUMNS)
+        for r in self.rows:
+            w.writerow(["" if r[c] is None else f"{r[c]:.6g}" if isinstance(r[c], float) else r[c]
+                        for c in LOG_COLUMNS])
+        atomic_write_text(self.path, buf.getvalue())
+        self._flushed = time.perf_counter()
+
+
+class TensorBoardLog(Callback):
+    """TensorBoard scalars (the ``tensorboard`` extra: tensorboardX) in ``logdir``, SB3's names: rollout/ep_rew,
+    rollout/ep_len, train/temperature per trial and eval/mean_reward per evaluation of ``eval_callback``, against
+    environment steps. ``tensorboard --logdir DIR`` shows them."""
+
+    def __init__(self, logdir, eval_callback: EvalCallback | None = None):
+        try:
+            from tensorboardX import SummaryWriter
+        except ImportError:
+            raise ValueError("TensorBoard logs need tensorboardX: pip install 'connrl[tensorboard]'") from None
+        self.writer, self.eval = SummaryWriter(str(logdir)), eval_callback
+
+    def on_trial_end(self, agent, stats):
+        s, w = agent.steps_done, self.writer
+        w.add_scalar("rollout/ep_rew", float(stats.total_reward), s)
+        w.add_scalar("rollout/ep_len", stats.steps, s)
+        w.add_scalar("train/temperature", agent.temperature(agent.trials_done), s)
+        if self.eval is not None and self.eval.last is not None and self.eval.last[0] == s:
+            w.add_scalar("eval/mean_reward", self.eval.last[1], s)
+        return True
+
+    def on_training_end(self, agent):
+        self.writer.flush()
+        self.writer.close()
+
+
+def read_progress(path) -> list[dict]:
+    """The rows of a progress.csv (numbers; None for empty cells); ValueError in one line naming the file when it
+    is not one."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    reader = csv.reader(io.StringIO(text))
+    header = next(reader, None)
+    if header is None or tuple(header) != LOG_COLUMNS:
+        raise ValueError(f"{path}: is not a connrl progress.csv (its header must be {','.join(LOG_COLUMNS)})")
+    rows = []
+    for n, cells in enumerate(reader, start=2):
+        if len(cells) != len(LOG_COLUMNS):
+            raise ValueError(f"{path}: line {n} has {len(cells)} cells, not {len(LOG_COLUMNS)}")
+        try:
+            row = {c: (None if v == "" else int(v) if c in ("steps", "trial", "length") else float(v))
+                   for c, v in zip(LOG_COLUMNS, cells, strict=True)}
+        except ValueError:
+            raise ValueError(f"{path}: line {n} holds a cell that is not a number") from None
+        rows.append(row)
+    return rows

@@ -1,0 +1,107 @@
+"""``connrl tune ENV``: the command line of connrl.tune (a search over an agent's settings)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from connrl.cli_task import (
+    MAX_STEPS,
+    _int_at_least,
+    _make_env,
+    _parse_options,
+    _positive_int,
+    _seed,
+    _writable,
+)
+
+
+def cmd_tune(args) -> int:
+    from connrl.api import KINDS, options_from
+    from connrl.tune import DEFAULT_SPACE, check_space, parse_dimension, run_search
+
+    kind = args.agent
+    try:
+        if kind in ("QCON-T", "AHCON-T"):
+            raise ValueError(f"connrl tune trains agents without a teacher; {kind} needs lessons (tune {kind[:-2]}-R)")
+        fixed = _parse_options(args.option)
+        options_from(fixed)
+        space = [parse_dimension(t) for t in (args.space or DEFAULT_SPACE)]
+        clash = sorted({d.name for d in space} & set(fixed))
+        if clash:
+            raise ValueError(f"{', '.join(clash)} is both searched (--space) and fixed (--option)")
+        check_space(space, fixed)
+    except (ValueError, TypeError) as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+    assert kind in KINDS
+    env_kwargs = _parse_options(args.env_kwargs, "--env-kwargs")
+    _make_env(args.env_id, env_kwargs)  # an unknown id or bad kwargs: one line before any training
+    name = args.env_id.replace("/", "-").replace(":", "-")
+    out = Path(args.out or f"runs/tune/{name}-{kind}")
+    _writable(out)
+    study = {"env_id": args.env_id, "env_kwargs": env_kwargs, "agent": kind, "steps": args.steps,
+             "seeds": args.seeds, "eval_episodes": args.eval_episodes, "trials": args.trials, "fixed": fixed,
+             "space": [f"{d.name}={d.describe()}" for d in space], "sampler": args.sampler, "seed": args.study_seed}
+    try:
+        trials = run_search(lambda: _make_env(args.env_id, env_kwargs), study, space, out, args.sampler)
+    except ValueError as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+    except KeyboardInterrupt:
+        print(f"\nconnrl: interrupted; the finished trials are in {out / 'trials.csv'} and the same command resumes",
+              file=sys.stderr)
+        return 130
+    return _write_best(out, study, trials)
+
+
+def _write_best(out: Path, study: dict, trials: list[dict]) -> int:
+    from connrl.settings import settings_yaml
+    from connrl.storage import atomic_write_text
+
+    best = trials[0]
+    comment = (f"connrl tune {study['env_id']} --agent {study['agent']}: best of {len(trials)} trials, mean greedy "
+               f"return {best['mean']:.2f} over tuning seeds {study['seeds']} after {study['steps']} steps each\n"
+               "check it on other seeds before you report it")
+    atomic_write_text(out / "best.yml", settings_yaml(study["env_id"], study["steps"], study["env_kwargs"],
+                                                      {**study["fixed"], **best["params"]}, comment))
+    print(f"best: trial {best['trial']}, {best['params']}, mean greedy return {best['mean']:.2f}")
+    print(f"wrote {out / 'best.yml'}: `connrl train {study['env_id']} --agent {study['agent']} --hyperparams "
+          f"{out / 'best.yml'} --seed S` trains with it")
+    return 0
+
+
+def _seed_list(text: str) -> list[int]:
+    import argparse
+
+    try:
+        seeds = [int(x) for x in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seeds like 1000,1001, got {text!r}") from None
+    if not seeds or min(seeds) < 0 or len(set(seeds)) != len(seeds):
+        raise argparse.ArgumentTypeError(f"seeds must be distinct whole numbers >= 0, got {text!r}")
+    return seeds
+
+
+def add_tune_command(sub) -> None:
+    """tune (connrl.tune)."""
+    kinds = ("QCON", "QCON-R", "AHCON", "AHCON-R", "window-Q", "recurrent-Q")  # connrl.api.KINDS without a teacher
+    s = sub.add_parser("tune", help="search an agent's settings for a task", description="Search AgentOptions "
+                       "for ENV_ID: each trial trains one agent per tuning seed and scores its mean greedy return "
+                       "(connrl/tune.py). Writes OUT/trials.csv, OUT/study.json and OUT/best.yml (a settings file "
+                       "for `connrl train --hyperparams`); the same command resumes an interrupted search.")
+    s.add_argument("env_id")
+    s.add_argument("--agent", default="QCON-R", choices=kinds, metavar="AGENT")
+    s.add_argument("--space", action="append", default=None, metavar="NAME=SPEC", help="a searched option: "
+                   "NAME=a,b,c or NAME=low:high[:log]; repeat for several (default: lr, hidden, lam, "
+                   "lessons_per_trial)")
+    s.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", help="a fixed option")
+    s.add_argument("--trials", type=_int_at_least(1, 10_000), default=20)
+    s.add_argument("--steps", type=_int_at_least(1, MAX_STEPS), default=20_000, help="training steps per agent")
+    s.add_argument("--seeds", type=_seed_list, default=[1000, 1001], help="tuning seeds, apart from those you "
+                   "report (default 1000,1001)")
+    s.add_argument("--eval-episodes", type=_positive_int, default=5)
+    s.add_argument("--sampler", choices=("random", "tpe"), default="random", help="random (built in) or tpe "
+                   "(Optuna: pip install 'connrl[tune]')")
+    s.add_argument("--study-seed", type=_seed, default=0, help="seed of the sampler")
+    s.add_argument("--env-kwargs", nargs="+", action="extend", default=[], metavar="KEY=VALUE")
+    s.add_argument("--out", default=None, help="folder (default runs/tune/ENV-AGENT)")
+    s.set_defaults(func=cmd_tune)

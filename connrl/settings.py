@@ -1,0 +1,102 @@
+"""Per-task settings files in RL Zoo's shape: one YAML file per agent kind, one entry per environment id.
+
+    # connrl/data/hyperparams/qcon-r.yml
+    CartPole-v1:
+      n_timesteps: 50000     # connrl train's --steps
+      env_kwargs: {}         # gymnasium.make(id, **env_kwargs)
+      hidden: 16             # any connrl.api.AgentOptions field
+      lr: 0.05
+
+``connrl train ENV`` uses the shipped entry for ENV and its agent when there is one (and says so); ``--hyperparams
+FILE`` reads your own file of the same shape; ``--steps``, ``--option`` and ``--env-kwargs`` override single values.
+Files are read with ``yaml.safe_load`` (no tags, so reading never runs code) and every value is checked before
+anything is built: a wrong key is one line naming the file, the entry and what is allowed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+SETTINGS_DIR = Path(__file__).parent / "data" / "hyperparams"
+RESERVED = ("n_timesteps", "env_kwargs")
+MAX_SETTINGS_BYTES = 2**20
+
+
+def shipped_file(kind: str) -> Path:
+    """The shipped settings file of an agent kind (it may not exist)."""
+    return SETTINGS_DIR / f"{kind.lower()}.yml"
+
+
+def read_settings(path) -> dict[str, dict]:
+    """All entries of a settings file, each checked (``check_entry``); ValueError in one line otherwise."""
+    import yaml
+
+    path = Path(path)
+    try:
+        if path.stat().st_size > MAX_SETTINGS_BYTES:
+            raise ValueError(f"{path}: is larger than {MAX_SETTINGS_BYTES:,} bytes; a settings file is small")
+        data = yaml.safe_load(path.read_text())
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    except yaml.YAMLError as exc:
+        where = getattr(exc, "problem_mark", None)
+        at = f" (line {where.line + 1})" if where is not None else ""
+        raise ValueError(f"{path}: is not valid YAML{at}: {getattr(exc, 'problem', None) or exc}") from None
+    if data is None:
+        return {}
+    if not isinstance(data, dict) or not all(isinstance(k, str) for k in data):
+        raise ValueError(f"{path}: must map environment ids to settings (RL Zoo's shape: 'CartPole-v1: {{lr: "
+                         "0.05}}')")
+    return {env_id: check_entry(path, env_id, entry) for env_id, entry in data.items()}
+
+
+def check_entry(path, env_id: str, entry) -> dict:
+    """An entry with its options checked as ``AgentOptions`` fields, ``n_timesteps`` a whole number >= 1 and
+    ``env_kwargs`` a mapping with string keys."""
+    from connrl.api import options_from
+
+    where = f"{path}: entry {env_id!r}"
+    if entry is None:
+        entry = {}
+    if not isinstance(entry, dict) or not all(isinstance(k, str) for k in entry):
+        raise ValueError(f"{where} must be a mapping of settings, got {type(entry).__name__}")
+    n = entry.get("n_timesteps")
+    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
+        raise ValueError(f"{where}: n_timesteps must be a whole number >= 1, got {n!r}")
+    kwargs = entry.get("env_kwargs") or {}
+    if not isinstance(kwargs, dict) or not all(isinstance(k, str) for k in kwargs):
+        raise ValueError(f"{where}: env_kwargs must be a mapping of argument names to values, got {kwargs!r}")
+    options = {k: v for k, v in entry.items() if k not in RESERVED}
+    try:
+        options_from(options)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{where}: {exc}") from None
+    return {"n_timesteps": n, "env_kwargs": dict(kwargs), "options": options}
+
+
+def task_settings(env_id: str, kind: str, path=None) -> tuple[dict | None, str | None]:
+    """(entry, where it came from) for ``env_id``: from ``path`` when given (an id it lacks is an error), else
+    from the shipped file of ``kind`` when it has the id, else (None, None)."""
+    if path is not None:
+        entries = read_settings(path)
+        if env_id not in entries:
+            have = ", ".join(sorted(entries)) or "none"
+            raise ValueError(f"{path}: has no entry for {env_id!r} (it has: {have})")
+        return entries[env_id], f"{path} [{env_id}]"
+    file = shipped_file(kind)
+    if not file.exists():
+        return None, None
+    entries = read_settings(file)
+    if env_id not in entries:
+        return None, None
+    return entries[env_id], f"{file.relative_to(Path(__file__).parent.parent)} [{env_id}]"
+
+
+def settings_yaml(env_id: str, n_timesteps: int | None, env_kwargs: dict, options: dict, comment: str = "") -> str:
+    """One entry as the text of a settings file (``connrl tune`` writes its best settings so)."""
+    import yaml
+
+    entry = {**({"n_timesteps": n_timesteps} if n_timesteps else {}), **({"env_kwargs": env_kwargs}
+                                                                          if env_kwargs else {}), **options}
+    head = "".join(f"# {line}\n" for line in comment.splitlines())
+    return head + yaml.safe_dump({env_id: entry}, sort_keys=False)
