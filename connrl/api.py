@@ -48,6 +48,7 @@ from connrl.api_files import (
     space_json,
     write_agent,
 )
+from connrl.api_spaces import affine_scales, check_observation_space, check_single, flat_scales, flatten
 from connrl.core.divergence import network_problem
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import run_trial
@@ -125,23 +126,22 @@ def options_from(kwargs: dict) -> AgentOptions:
 
 
 def check_spaces(env) -> None:
-    """Refuse, in one line, an environment connrl's agents cannot act in."""
+    """Refuse, in one line, an environment connrl's agents cannot act in (a vector env first: its batched spaces
+    would be refused as if they were the task's)."""
+    check_single(env)
     if not isinstance(env.action_space, spaces.Discrete):
         raise ValueError(f"connrl agents need a Discrete action space, got {env.action_space}")
     if int(env.action_space.start) != 0:  # the nets number their actions 0..n-1
         raise ValueError(f"connrl agents need a Discrete action space that starts at 0, got {env.action_space}")
-    obs = env.observation_space
-    if isinstance(obs, spaces.Box) and len(obs.shape) <= 1 or isinstance(obs, spaces.Discrete):
-        return
-    raise ValueError(f"connrl agents need a flat Box or a Discrete observation space, got {obs} "
-                     "(flatten it with gymnasium.wrappers.FlattenObservation)")
+    check_observation_space(env.observation_space)
 
 
 class InputScaler:
     """Observations into the nets' input code (module docstring): ``encode(obs) -> float64 vector``."""
 
-    def __init__(self, kind: str, n: int, offset: np.ndarray | None = None, scale: np.ndarray | None = None):
-        self.kind, self.n = kind, int(n)
+    def __init__(self, kind: str, n: int, offset: np.ndarray | None = None, scale: np.ndarray | None = None,
+                 space=None):
+        self.kind, self.n, self.space = kind, int(n), space  # "flat" (composite spaces) flattens obs by the space
         self.offset = np.zeros(self.n) if offset is None else np.asarray(offset, float)
         self.scale = np.ones(self.n) if scale is None else np.asarray(scale, float)
 
@@ -149,15 +149,11 @@ class InputScaler:
     def fit(cls, space, samples: np.ndarray) -> InputScaler:
         if isinstance(space, spaces.Discrete):
             return cls("onehot", space.n, offset=np.full(space.n, float(space.start)))
-        low, high = np.asarray(space.low, float).ravel(), np.asarray(space.high, float).ravel()
-        x = np.asarray(samples, float).reshape(len(samples), -1)
-        bounded = np.isfinite(low) & np.isfinite(high) & (high - low < 1e6)
-        mean, spread = x.mean(axis=0), x.std(axis=0)
-        lo, hi = np.where(bounded, low, 0.0), np.where(bounded, high, 0.0)
-        offset = np.where(bounded, (lo + hi) / 2, mean)
-        # unbounded: 2 standard deviations of the random policy's observations reach +-1
-        scale = np.where(bounded, (hi - lo) / 2, 2 * spread)
-        return cls("affine", low.size, offset, np.where(scale > 1e-6, scale, 1.0))  # no spread seen: left as it is
+        if isinstance(space, spaces.Box):
+            offset, scale = affine_scales(space.low, space.high, samples)
+            return cls("affine", offset.size, offset, scale)
+        offset, scale = flat_scales(space, samples)  # Dict, Tuple, MultiDiscrete, MultiBinary (connrl.api_spaces)
+        return cls("flat", offset.size, offset, scale, space)
 
     @property
     def n_inputs(self) -> int:
@@ -168,14 +164,19 @@ class InputScaler:
             out = np.full(self.n, -0.5)
             out[int(obs) - int(self.offset[0])] = 0.5  # the offset holds the space's start
             return out
-        return (np.asarray(obs, float).ravel() - self.offset) / self.scale
+        x = flatten(self.space, obs) if self.kind == "flat" else np.asarray(obs, float).ravel()
+        return (x - self.offset) / self.scale
+
+    def encode_row(self, row) -> np.ndarray:
+        """A lesson file's input row (``observation_row``: a composite observation already flattened) encoded."""
+        return (np.asarray(row, float) - self.offset) / self.scale if self.kind == "flat" else self.encode(row)
 
     def to_json(self) -> dict:
         return {"kind": self.kind, "n": self.n, "offset": self.offset.tolist(), "scale": self.scale.tolist()}
 
     @classmethod
-    def from_json(cls, d: dict) -> InputScaler:
-        return cls(d["kind"], d["n"], d["offset"], d["scale"])
+    def from_json(cls, d: dict, space=None) -> InputScaler:
+        return cls(d["kind"], d["n"], d["offset"], d["scale"], space)
 
 
 class _Scaled(gym.ObservationWrapper):
@@ -194,7 +195,7 @@ class _Scaled(gym.ObservationWrapper):
         return obs, r, terminated, truncated, info
 
 
-def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, float, list]:
+def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[list, float, list]:
     """Observations, the largest |reward| and the episodes (observations, actions, rewards, terminated) of ``steps``
     random-policy steps (at least one observation)."""
     obs, _ = env.reset(seed=int(rng.integers(2**31)))
@@ -212,7 +213,7 @@ def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, floa
             obs, _ = env.reset(seed=int(rng.integers(2**31)))
             seen.append(obs)
             ep = ([obs], [], [])
-    return np.asarray(seen, dtype=float), r_max, episodes
+    return seen, r_max, episodes  # raw: a Dict observation is no array
 
 
 class Agent:
@@ -276,6 +277,7 @@ class Agent:
 
     def check_env(self, env) -> None:
         """Refuse, in one line, an environment whose spaces are not the ones this agent was made for."""
+        check_single(env)
         for name in ("observation_space", "action_space"):
             mine, theirs = space_json(getattr(self, name)), space_json(getattr(env, name))
             if mine != theirs:
@@ -378,7 +380,7 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options
     raw_taught = read_taught(lessons, env) if lessons is not None else []  # a file for another task: refused first
     seen, r_max, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
     scaler = InputScaler.fit(env.observation_space, seen)
-    taught = [Lesson(np.array([scaler.encode(x) for x in lesson.inputs]), lesson.actions, lesson.rewards,
+    taught = [Lesson(np.array([scaler.encode_row(x) for x in lesson.inputs]), lesson.actions, lesson.rewards,
                      terminated=lesson.terminated, truncated=lesson.truncated, taught=True) for lesson in raw_taught]
     r_max = max([r_max] + [float(np.abs(x.rewards).max()) for x in taught if x.rewards.size])
     value_range = o.value_range or max(r_max, 1e-3) / max(1.0 - o.gamma, 1e-3)
@@ -399,6 +401,8 @@ def load(path, env=None) -> Agent:
     """An agent written by ``Agent.save`` (weights, replay memory, taught lessons, random state: learning goes on as it
     would have); with ``env``, its spaces must be the saved ones. Every field and array is checked before anything
     is built from it (connrl.api_files); a damaged or foreign file is a ValueError in one line naming it."""
+    if env is not None:
+        check_single(env)
     path = Path(path)
     m, arrays = read_agent(path, KINDS)
     meta = path / "agent.json"
@@ -406,8 +410,9 @@ def load(path, env=None) -> Agent:
         options = options_from(m["options"])
     except (ValueError, TypeError) as exc:
         raise FileError(meta, str(exc), "options") from None
-    agent = Agent(m["agent"], options, space_from(m["observation_space"]), space_from(m["action_space"]),
-                  InputScaler.from_json(m["scaler"]), m["value_range"], m["seed"], m.get("env_id"))
+    obs_space = space_from(m["observation_space"])
+    agent = Agent(m["agent"], options, obs_space, space_from(m["action_space"]),
+                  InputScaler.from_json(m["scaler"], obs_space), m["value_range"], m["seed"], m.get("env_id"))
     state, memory, taught = check_arrays(path, arrays, agent.nets.state_dict(), m, _input_width(agent),
                                          int(agent.action_space.n))
     agent.nets.load_state_dict(state)
