@@ -6,12 +6,15 @@
     agent.save("cartpole-agent"); agent = connrl.load("cartpole-agent", env)
     print(connrl.evaluate(agent, env, episodes=10))
 
-Any Gymnasium environment with a ``Discrete`` action space and a flat ``Box`` or ``Discrete`` observation works without
-hand-tuning the scales the thesis's tasks set by hand:
+Any single (not vectorised) Gymnasium environment with a ``Discrete`` action space and a ``Box`` (any shape),
+``Discrete``, ``MultiDiscrete`` or ``MultiBinary`` observation, or a ``Dict`` / ``Tuple`` of them, works without
+hand-tuning the scales the thesis's tasks set by hand (``Graph``, ``Text`` and ``Sequence`` observations are refused):
 
 - **Inputs** (``InputScaler``): a bounded ``Box`` dimension is mapped affinely onto [-1, 1]; an unbounded one by the
   mean and spread of the observations a random policy sees in the first ``warmup_steps`` steps (frozen then, so learning
-  sees one fixed input code); a ``Discrete`` observation is one-hot (+-0.5, the thesis's binary code, 5.3.2).
+  sees one fixed input code); a ``Discrete`` observation is one-hot (+-0.5, the thesis's binary code, 5.3.2), a
+  ``MultiDiscrete`` one its one-hots side by side, a ``MultiBinary`` bit +-0.5; a ``Dict`` / ``Tuple`` is its parts'
+  codes in ``gymnasium.spaces.flatten`` order (connrl.api_spaces).
 - **Values**: the nets' outputs span +-``value_range``, which defaults to the largest |reward| of the warm-up divided by
   (1 - gamma), the largest discounted return those rewards allow; the temperature acts on Q / value_range, so changing
   the scale does not change exploration.
