@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
-from connrl.api_spaces import COMPOSITE, binary_units, check_space, flatten
+from connrl.api_spaces import COMPOSITE, binary_units, check_single, check_space, flatten
 from connrl.api_spaces import space_from as space_from  # re-exported: connrl.api imports both from here
 from connrl.api_spaces import space_json as space_json
 from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
@@ -196,6 +196,7 @@ def record_lessons(env, teacher, episodes: int, path, seed: int = 0) -> list[Les
 
     ``make_agent(env, "QCON-T", lessons=path)`` replays them after every trial beside its own (3.7), scaled by the
     agent's own input code, so one file serves any agent on that task."""
+    check_single(env)
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a whole number >= 1, got {episodes!r}")
     lessons = []

@@ -64,7 +64,8 @@ def trained(tmp_path_factory):
 def test_a_vector_env_is_refused_first_everywhere(trained, vec):
     agent, path = trained
     for call in (lambda: connrl.make_agent(vec()), lambda: connrl.load(path, vec()),
-                 lambda: agent.learn(10, env=vec()), lambda: connrl.evaluate(agent, vec())):
+                 lambda: agent.learn(10, env=vec()), lambda: connrl.evaluate(agent, vec()),
+                 lambda: connrl.record_lessons(vec(), lambda obs: 0, 1, "never-written.json")):
         _one_line(call, VECTOR, "2 copies", "gym.make(id) instead of gym.make_vec(id, n)")
 
 
