@@ -6,12 +6,15 @@
     agent.save("cartpole-agent"); agent = connrl.load("cartpole-agent", env)
     print(connrl.evaluate(agent, env, episodes=10))
 
-Any Gymnasium environment with a ``Discrete`` action space and a flat ``Box`` or ``Discrete`` observation works without
-hand-tuning the scales the thesis's tasks set by hand:
+Any single (not vectorised) Gymnasium environment with a ``Discrete`` action space and a ``Box`` (any shape),
+``Discrete``, ``MultiDiscrete`` or ``MultiBinary`` observation, or a ``Dict`` / ``Tuple`` of them, works without
+hand-tuning the scales the thesis's tasks set by hand (``Graph``, ``Text`` and ``Sequence`` observations are refused):
 
 - **Inputs** (``InputScaler``): a bounded ``Box`` dimension is mapped affinely onto [-1, 1]; an unbounded one by the
   mean and spread of the observations a random policy sees in the first ``warmup_steps`` steps (frozen then, so learning
-  sees one fixed input code); a ``Discrete`` observation is one-hot (+-0.5, the thesis's binary code, 5.3.2).
+  sees one fixed input code); a ``Discrete`` observation is one-hot (+-0.5, the thesis's binary code, 5.3.2), a
+  ``MultiDiscrete`` one its one-hots side by side, a ``MultiBinary`` bit +-0.5; a ``Dict`` / ``Tuple`` is its parts'
+  codes in ``gymnasium.spaces.flatten`` order (connrl.api_spaces).
 - **Values**: the nets' outputs span +-``value_range``, which defaults to the largest |reward| of the warm-up divided by
   (1 - gamma), the largest discounted return those rewards allow; the temperature acts on Q / value_range, so changing
   the scale does not change exploration.
@@ -48,9 +51,10 @@ from connrl.api_files import (
     space_json,
     write_agent,
 )
+from connrl.api_spaces import affine_scales, check_observation_space, check_single, flat_scales, flatten
 from connrl.core.divergence import network_problem
 from connrl.core.lessons import Lesson
-from connrl.core.rollout import run_trial
+from connrl.core.rollout import MAX_EPISODE_STEPS, episode_cap, run_trial  # noqa: F401  (MAX_EPISODE_STEPS: API)
 from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
 from connrl.storage import FileError
@@ -125,23 +129,22 @@ def options_from(kwargs: dict) -> AgentOptions:
 
 
 def check_spaces(env) -> None:
-    """Refuse, in one line, an environment connrl's agents cannot act in."""
+    """Refuse, in one line, an environment connrl's agents cannot act in (a vector env first: its batched spaces
+    would be refused as if they were the task's)."""
+    check_single(env)
     if not isinstance(env.action_space, spaces.Discrete):
         raise ValueError(f"connrl agents need a Discrete action space, got {env.action_space}")
     if int(env.action_space.start) != 0:  # the nets number their actions 0..n-1
         raise ValueError(f"connrl agents need a Discrete action space that starts at 0, got {env.action_space}")
-    obs = env.observation_space
-    if isinstance(obs, spaces.Box) and len(obs.shape) <= 1 or isinstance(obs, spaces.Discrete):
-        return
-    raise ValueError(f"connrl agents need a flat Box or a Discrete observation space, got {obs} "
-                     "(flatten it with gymnasium.wrappers.FlattenObservation)")
+    check_observation_space(env.observation_space)
 
 
 class InputScaler:
     """Observations into the nets' input code (module docstring): ``encode(obs) -> float64 vector``."""
 
-    def __init__(self, kind: str, n: int, offset: np.ndarray | None = None, scale: np.ndarray | None = None):
-        self.kind, self.n = kind, int(n)
+    def __init__(self, kind: str, n: int, offset: np.ndarray | None = None, scale: np.ndarray | None = None,
+                 space=None):
+        self.kind, self.n, self.space = kind, int(n), space  # "flat" (composite spaces) flattens obs by the space
         self.offset = np.zeros(self.n) if offset is None else np.asarray(offset, float)
         self.scale = np.ones(self.n) if scale is None else np.asarray(scale, float)
 
@@ -149,15 +152,11 @@ class InputScaler:
     def fit(cls, space, samples: np.ndarray) -> InputScaler:
         if isinstance(space, spaces.Discrete):
             return cls("onehot", space.n, offset=np.full(space.n, float(space.start)))
-        low, high = np.asarray(space.low, float).ravel(), np.asarray(space.high, float).ravel()
-        x = np.asarray(samples, float).reshape(len(samples), -1)
-        bounded = np.isfinite(low) & np.isfinite(high) & (high - low < 1e6)
-        mean, spread = x.mean(axis=0), x.std(axis=0)
-        lo, hi = np.where(bounded, low, 0.0), np.where(bounded, high, 0.0)
-        offset = np.where(bounded, (lo + hi) / 2, mean)
-        # unbounded: 2 standard deviations of the random policy's observations reach +-1
-        scale = np.where(bounded, (hi - lo) / 2, 2 * spread)
-        return cls("affine", low.size, offset, np.where(scale > 1e-6, scale, 1.0))  # no spread seen: left as it is
+        if isinstance(space, spaces.Box):
+            offset, scale = affine_scales(space.low, space.high, samples)
+            return cls("affine", offset.size, offset, scale)
+        offset, scale = flat_scales(space, samples)  # Dict, Tuple, MultiDiscrete, MultiBinary (connrl.api_spaces)
+        return cls("flat", offset.size, offset, scale, space)
 
     @property
     def n_inputs(self) -> int:
@@ -168,14 +167,19 @@ class InputScaler:
             out = np.full(self.n, -0.5)
             out[int(obs) - int(self.offset[0])] = 0.5  # the offset holds the space's start
             return out
-        return (np.asarray(obs, float).ravel() - self.offset) / self.scale
+        x = flatten(self.space, obs) if self.kind == "flat" else np.asarray(obs, float).ravel()
+        return (x - self.offset) / self.scale
+
+    def encode_row(self, row) -> np.ndarray:
+        """A lesson file's input row (``observation_row``: a composite observation already flattened) encoded."""
+        return (np.asarray(row, float) - self.offset) / self.scale if self.kind == "flat" else self.encode(row)
 
     def to_json(self) -> dict:
         return {"kind": self.kind, "n": self.n, "offset": self.offset.tolist(), "scale": self.scale.tolist()}
 
     @classmethod
-    def from_json(cls, d: dict) -> InputScaler:
-        return cls(d["kind"], d["n"], d["offset"], d["scale"])
+    def from_json(cls, d: dict, space=None) -> InputScaler:
+        return cls(d["kind"], d["n"], d["offset"], d["scale"], space)
 
 
 class _Scaled(gym.ObservationWrapper):
@@ -202,28 +206,7 @@ class _Scaled(gym.ObservationWrapper):
         return obs, r, terminated, truncated, info
 
 
-MAX_EPISODE_STEPS = 1_000  # a trial's (and an evaluation episode's) steps when the env sets no time limit
-
-
-def episode_cap(env, max_steps: int | None = None) -> int:
-    """``max_steps`` if given, else the env's own time limit (its spec or a TimeLimit wrapper), else
-    ``MAX_EPISODE_STEPS``."""
-    if max_steps is not None:
-        if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
-            raise ValueError(f"max_episode_steps must be a whole number >= 1 or None, got {max_steps!r}")
-        return max_steps
-    spec = getattr(env, "spec", None)
-    if getattr(spec, "max_episode_steps", None):
-        return int(spec.max_episode_steps)
-    e = env
-    while e is not None:
-        if isinstance(e, gym.wrappers.TimeLimit):
-            return int(e._max_episode_steps)
-        e = getattr(e, "env", None)
-    return MAX_EPISODE_STEPS
-
-
-def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, float, list]:
+def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[list, float, list]:
     """Observations, the largest |reward| and the episodes (observations, actions, rewards, terminated) of ``steps``
     random-policy steps (at least one observation)."""
     obs, _ = env.reset(seed=int(rng.integers(2**31)))
@@ -241,7 +224,7 @@ def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, floa
             obs, _ = env.reset(seed=int(rng.integers(2**31)))
             seen.append(obs)
             ep = ([obs], [], [])
-    return np.asarray(seen, dtype=float), r_max, episodes
+    return seen, r_max, episodes  # raw: a Dict observation is no array
 
 
 class Agent:
@@ -327,6 +310,7 @@ class Agent:
 
     def check_env(self, env) -> None:
         """Refuse, in one line, an environment whose spaces are not the ones this agent was made for."""
+        check_single(env)
         for name in ("observation_space", "action_space"):
             mine, theirs = space_json(getattr(self, name)), space_json(getattr(env, name))
             if mine != theirs:
@@ -429,7 +413,7 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options
     raw_taught = read_taught(lessons, env) if lessons is not None else []  # a file for another task: refused first
     seen, r_max, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
     scaler = InputScaler.fit(env.observation_space, seen)
-    taught = [Lesson(np.array([scaler.encode(x) for x in lesson.inputs]), lesson.actions, lesson.rewards,
+    taught = [Lesson(np.array([scaler.encode_row(x) for x in lesson.inputs]), lesson.actions, lesson.rewards,
                      terminated=lesson.terminated, truncated=lesson.truncated, taught=True) for lesson in raw_taught]
     r_max = max([r_max] + [float(np.abs(x.rewards).max()) for x in taught if x.rewards.size])
     value_range = o.value_range or max(r_max, 1e-3) / max(1.0 - o.gamma, 1e-3)
@@ -450,6 +434,8 @@ def load(path, env=None) -> Agent:
     """An agent written by ``Agent.save`` (weights, replay memory, taught lessons, random state: learning goes on as it
     would have); with ``env``, its spaces must be the saved ones. Every field and array is checked before anything
     is built from it (connrl.api_files); a damaged or foreign file is a ValueError in one line naming it."""
+    if env is not None:
+        check_single(env)
     path = Path(path)
     m, arrays = read_agent(path, KINDS)
     meta = path / "agent.json"
@@ -457,8 +443,9 @@ def load(path, env=None) -> Agent:
         options = options_from(m["options"])
     except (ValueError, TypeError) as exc:
         raise FileError(meta, str(exc), "options") from None
-    agent = Agent(m["agent"], options, space_from(m["observation_space"]), space_from(m["action_space"]),
-                  InputScaler.from_json(m["scaler"]), m["value_range"], m["seed"], m.get("env_id"))
+    obs_space = space_from(m["observation_space"])
+    agent = Agent(m["agent"], options, obs_space, space_from(m["action_space"]),
+                  InputScaler.from_json(m["scaler"], obs_space), m["value_range"], m["seed"], m.get("env_id"))
     state, memory, taught = check_arrays(path, arrays, agent.nets.state_dict(), m, _input_width(agent),
                                          int(agent.action_space.n))
     agent.nets.load_state_dict(state)

@@ -17,6 +17,9 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
+from connrl.api_spaces import COMPOSITE, binary_units, check_single, check_space, flatten
+from connrl.api_spaces import space_from as space_from  # re-exported: connrl.api imports both from here
+from connrl.api_spaces import space_json as space_json
 from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
 from connrl.core.lessons import Lesson
 from connrl.storage import (
@@ -31,27 +34,6 @@ from connrl.storage import (
 
 FORMAT = 1
 _FIELDS = ("inputs", "actions", "rewards")
-
-
-def space_json(space) -> dict:
-    if isinstance(space, spaces.Discrete):
-        return {"type": "Discrete", "n": int(space.n), "start": int(space.start)}
-    if isinstance(space, spaces.Box):
-        return {"type": "Box", "shape": list(space.shape), "low": _bounds(space.low), "high": _bounds(space.high)}
-    return {"type": type(space).__name__}
-
-
-def _bounds(values) -> list:
-    """A Box bound as strict JSON: an infinite bound as the string "inf" / "-inf" (JSON has no Infinity)."""
-    return [v if np.isfinite(v) else ("inf" if v > 0 else "-inf") for v in np.asarray(values, float).ravel().tolist()]
-
-
-def space_from(d: dict):
-    if d["type"] == "Discrete":
-        return spaces.Discrete(d["n"], start=d.get("start", 0))
-    shape = tuple(d["shape"])
-    return spaces.Box(np.asarray(d["low"], float).reshape(shape), np.asarray(d["high"], float).reshape(shape),
-                      dtype=np.float64)
 
 
 def version() -> str:
@@ -106,7 +88,7 @@ def read_agent(path: Path, kinds: tuple[str, ...]) -> tuple[dict, dict[str, np.n
 MAX_RECORD_BYTES = 16 * 2**20
 MAX_LESSONS = 100_000
 MAX_INPUTS, MAX_ACTIONS = 100_000, 10_000  # observation width and actions an agent file may declare
-KINDS_OF_SCALER = ("onehot", "affine")
+KINDS_OF_SCALER = {"Discrete": "onehot", "Box": "affine"}  # the scaler kind of each space type; others: "flat"
 
 
 def _field(meta: Path, m: dict, key: str, types: tuple, allowed: str):
@@ -118,43 +100,23 @@ def _field(meta: Path, m: dict, key: str, types: tuple, allowed: str):
     return v
 
 
-def _check_space(meta: Path, d, key: str) -> int:
-    """A space as ``space_json`` writes it; returns its width as the nets see it (Discrete: n, Box: size)."""
-    if not isinstance(d, dict) or d.get("type") not in ("Discrete", "Box"):
-        raise FileError(meta, "must be an object with 'type' \"Discrete\" or \"Box\"", key)
-    if d["type"] == "Discrete":
-        n = check_number(meta, f"{key}.n", d.get("n"), 1, MAX_INPUTS, integer=True)
-        check_number(meta, f"{key}.start", d.get("start", 0), -2**62, 2**62, integer=True)
-        return n
-    shape = d.get("shape")
-    if not isinstance(shape, list) or len(shape) > 1:
-        raise FileError(meta, f"is {shape!r}; a flat Box's shape is [] or [n]", f"{key}.shape")
-    size = check_number(meta, f"{key}.shape", shape[0], 1, MAX_INPUTS, integer=True) if shape else 1
-    for bound in ("low", "high"):
-        values = d.get(bound)
-        if not isinstance(values, list) or len(values) != size or not all(
-                v in ("inf", "-inf") or isinstance(v, int | float) and not isinstance(v, bool) and not v != v
-                for v in values):
-            raise FileError(meta, f"must be a list of {size} numbers (\"inf\" / \"-inf\" for no bound)",
-                            f"{key}.{bound}")
-    return size
-
-
 def check_record(meta: Path, m: dict, kinds: tuple[str, ...]) -> None:
     """Every field of an agent.json that loading reads: types, finite numbers, sizes inside their bounds, the scaler
     matching the observation space; ``kinds`` are the agents allowed. FileError naming the field otherwise."""
     kind = _field(meta, m, "agent", (str,), f"one of {', '.join(kinds)}")
     if kind not in kinds:
         raise FileError(meta, f"is {kind!r}; it must be one of {', '.join(kinds)}", "agent")
-    width = _check_space(meta, m.get("observation_space"), "observation_space")
+    width = check_space(meta, m.get("observation_space"), "observation_space", MAX_INPUTS)
     a = m.get("action_space")
     if not isinstance(a, dict) or a.get("type") != "Discrete" or a.get("start", 0) != 0:
         raise FileError(meta, "must be a Discrete space that starts at 0", "action_space")
     check_number(meta, "action_space.n", a.get("n"), 1, MAX_ACTIONS, integer=True)
     _field(meta, m, "options", (dict,), "an object of AgentOptions fields")
     sc = _field(meta, m, "scaler", (dict,), "an object with kind, n, offset and scale")
-    if sc.get("kind") not in KINDS_OF_SCALER:
-        raise FileError(meta, f"is {sc.get('kind')!r}; it must be one of {KINDS_OF_SCALER}", "scaler.kind")
+    kind_needed = KINDS_OF_SCALER.get(m["observation_space"]["type"], "flat")
+    if sc.get("kind") != kind_needed:
+        raise FileError(meta, f"is {sc.get('kind')!r}; it must be {kind_needed!r} for a "
+                        f"{m['observation_space']['type']} observation space", "scaler.kind")
     if sc.get("n") != width or isinstance(sc.get("n"), bool):
         raise FileError(meta, f"is {sc.get('n')!r}; it must be {width}, the observation space's width", "scaler.n")
     for key in ("offset", "scale"):
@@ -221,10 +183,11 @@ def _lessons(npz: Path, prefix: str, arrays: dict, ends: list, taught: bool, n_i
 
 
 def observation_row(space, obs) -> list[float]:
-    """An observation as a lesson file's input row: a Box flattened, a Discrete as its one integer."""
+    """An observation as a lesson file's input row: a Box flattened, a Discrete as its one integer, a composite space
+    as ``gymnasium.spaces.flatten`` gives it (one-hots and bits as 0 / 1)."""
     if isinstance(space, spaces.Discrete):
         return [float(int(obs))]
-    return np.asarray(obs, float).ravel().tolist()
+    return (flatten(space, obs) if isinstance(space, COMPOSITE) else np.asarray(obs, float).ravel()).tolist()
 
 
 def record_lessons(env, teacher, episodes: int, path, seed: int = 0) -> list[Lesson]:
@@ -233,6 +196,7 @@ def record_lessons(env, teacher, episodes: int, path, seed: int = 0) -> list[Les
 
     ``make_agent(env, "QCON-T", lessons=path)`` replays them after every trial beside its own (3.7), scaled by the
     agent's own input code, so one file serves any agent on that task."""
+    check_single(env)
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be a whole number >= 1, got {episodes!r}")
     lessons = []
@@ -266,7 +230,7 @@ def read_taught(path, env) -> list[Lesson]:
     spec = getattr(env, "spec", None)
     space = env.observation_space
     discrete = isinstance(space, spaces.Discrete)
-    width = 1 if discrete else int(np.prod(space.shape))
+    width = 1 if discrete else spaces.flatdim(space)
     lessons = load_lessons(path, input_dim=width, n_actions=int(env.action_space.n),
                            **({"env_id": spec.id, "env_kwargs": _plain(spec.kwargs)} if spec is not None else {}))
     for k, lesson in enumerate(lessons):
@@ -274,8 +238,22 @@ def read_taught(path, env) -> list[Lesson]:
         if discrete and not np.all((rows == np.round(rows)) & (rows >= space.start) & (rows < space.start + space.n)):
             raise LessonFileError(f"{path}: lesson {k} holds observations outside {space} (whole numbers "
                                   f"{space.start}..{space.start + space.n - 1} are allowed)")
+        if isinstance(space, COMPOSITE) and not all(_is_flat_observation(space, row) for row in lesson.inputs):
+            raise LessonFileError(f"{path}: lesson {k} holds rows that are not observations of {space} as "
+                                  "gymnasium.spaces.flatten writes them (one-hots and bits as 0 / 1)")
     return [Lesson(x.inputs[:, 0] if discrete else x.inputs, x.actions, x.rewards, terminated=x.terminated,
                    truncated=x.truncated, taught=True) for x in lessons]
+
+
+def _is_flat_observation(space, row: np.ndarray) -> bool:
+    """Whether ``row`` is a flattened observation: each one-hot has one 1, each bit is 0 or 1 (a Box entry is any
+    finite number, as for a plain Box)."""
+    bits = binary_units(space)
+    try:
+        again = flatten(space, spaces.unflatten(space, row))
+    except (ValueError, TypeError, IndexError):
+        return False
+    return bool(np.isin(row[bits], (0.0, 1.0)).all() and np.array_equal(again[bits], row[bits]))
 
 
 def _plain(kwargs: dict) -> dict:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import gymnasium as gym
+
 
 @dataclass
 class TrialStats:
@@ -47,3 +49,24 @@ def run_trial(env, agent, *, trial: int, learning: bool, seed: int | None = None
     if learning:
         agent.learn()
     return TrialStats(steps, total, bool(terminated), bool(truncated), info)
+
+
+MAX_EPISODE_STEPS = 1_000  # a trial's (and an evaluation episode's) steps when the env sets no time limit
+
+
+def episode_cap(env, max_steps: int | None = None) -> int:
+    """``max_steps`` if given, else the env's own time limit (its spec or a TimeLimit wrapper), else
+    ``MAX_EPISODE_STEPS``."""
+    if max_steps is not None:
+        if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
+            raise ValueError(f"max_episode_steps must be a whole number >= 1 or None, got {max_steps!r}")
+        return max_steps
+    spec = getattr(env, "spec", None)
+    if getattr(spec, "max_episode_steps", None):
+        return int(spec.max_episode_steps)
+    e = env
+    while e is not None:
+        if isinstance(e, gym.wrappers.TimeLimit):
+            return int(e._max_episode_steps)
+        e = getattr(e, "env", None)
+    return MAX_EPISODE_STEPS
