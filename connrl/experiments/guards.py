@@ -34,6 +34,7 @@ def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
                             f"({exc.strerror or type(exc).__name__}); start one with `ray start --head` there, "
                             "or leave out --address to run on a local instance") from None
 
+
 _JOINED: set[str] = set()  # addresses whose cluster accepted this driver
 
 
@@ -50,16 +51,20 @@ def check_ray_cluster(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
     check_reachable(address)
     if address == "auto" or address.startswith("ray://"):
         return  # Ray finds the local cluster, and its auth, itself; Ray Client is not the GCS this probes
-    try:  # in a child: it can be killed at the timeout, Ray's own logs stay there, and this process need not load Ray
-        said = subprocess.run([sys.executable, "-c", _PROBE, address], capture_output=True, text=True,
-                              timeout=timeout).stdout.split("\n", 1)
-    except subprocess.TimeoutExpired:
-        raise ExecutorError(f"{address} accepts connections but does not answer as a Ray cluster's head within "
-                            f"{timeout:g} s; give the address `ray start --head` printed (HOST:6379 by default)"
-                            ) from None
-    if len(said) < 2:  # the probe could not even load Ray: ray.init's own errors are all there is
+    # in a child: it can be killed at the timeout, Ray's own logs stay there, and this process need not load Ray
+    with subprocess.Popen([sys.executable, "-c", _PROBE, address], stdout=subprocess.PIPE,
+                          stderr=subprocess.DEVNULL, text=True) as probe:
+        first = probe.stdout.readline().strip()  # once Ray is loaded: the timeout is the head's, not the import's
+        try:
+            said = probe.communicate(timeout=timeout)[0].strip()
+        except subprocess.TimeoutExpired:
+            probe.kill()
+            raise ExecutorError(f"{address} accepts connections but does not answer as a Ray cluster's head within "
+                                f"{timeout:g} s; give the address `ray start --head` printed (HOST:6379 by default)"
+                                ) from None
+    if not first:  # the probe could not even load Ray: ray.init's own errors are all there is
         return
-    has_token, said = said[0] == "token", said[1].strip()
+    has_token = first == "token"
     if "RAY_AUTH_MODE" not in os.environ and has_token:
         os.environ["RAY_AUTH_MODE"] = "token"  # for ray.init here and the processes it starts, as in the probe
         if "ray._raylet" in sys.modules:  # Ray caches its settings: reread them, as Ray does when it turns tokens on
