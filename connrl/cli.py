@@ -281,11 +281,12 @@ def build_parser() -> argparse.ArgumentParser:
 def _executor_options(s) -> None:
     s.add_argument("--executor", default="process", help="process: worker processes here (default); ray: Ray "
                    "tasks, on a local instance or the cluster at --address (pip install -e \".[ray]\")")
-    s.add_argument("--address", default=None, help="a Ray cluster's head, HOST:PORT (with --executor ray)")
+    s.add_argument("--address", default=None, help="a Ray cluster's head, HOST:PORT (with --executor ray); "
+                   "its token, if it wants one, is taken from ~/.ray/auth_token or RAY_AUTH_TOKEN")
 
 
 def _check_executor(args) -> None:
-    from connrl.experiments.runner import ExecutorError, check_executor, check_reachable
+    from connrl.experiments.runner import ExecutorError, check_executor, check_ray_cluster
 
     try:
         check_executor(args.executor)
@@ -294,8 +295,8 @@ def _check_executor(args) -> None:
     if args.address and args.executor != "ray":
         raise SystemExit("connrl: --address is for --executor ray")
     if args.address:
-        try:  # before any run: Ray itself would retry a dead address for minutes without a word
-            check_reachable(args.address)
+        try:  # before any run: Ray itself would retry a dead address for minutes, a refused token for 20 s
+            check_ray_cluster(args.address)
         except ExecutorError as exc:
             raise SystemExit(f"connrl: {exc}") from None
 

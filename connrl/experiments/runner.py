@@ -32,7 +32,7 @@ import numpy as np
 from numba.core import event as numba_event
 
 from connrl.core.divergence import Diverged
-from connrl.experiments.guards import ExecutorError, check_reachable, run_lock  # noqa: F401
+from connrl.experiments.guards import ExecutorError, check_ray_cluster, check_reachable, run_lock  # noqa: F401
 from connrl.experiments.spec import ExperimentSpec, RunResult, as_dict, load_callable, qualified_name
 from connrl.experiments.store import (
     DamagedFile,
@@ -245,7 +245,7 @@ class RayExecutor:
 
         started = not ray.is_initialized()
         if started and self.address:
-            check_reachable(self.address)
+            check_ray_cluster(self.address)  # answers, and takes this driver's token if it wants one
         if started:  # "local": a fresh instance here, whatever RAY_ADDRESS says; else the cluster at address
             try:
                 ray.init(address=self.address or "local", num_cpus=None if self.address else self.workers,
