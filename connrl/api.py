@@ -283,8 +283,13 @@ class Agent:
         callbacks.on_training_start(self, end)
         while self.steps_done < end:
             scaled.limit = min(cap, end - self.steps_done)
-            stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
-                              seed=int(self.rng.integers(2**31)))
+            try:
+                stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
+                                  seed=int(self.rng.integers(2**31)))
+            except BaseException:  # Ctrl-C inside a trial: its steps were taken; its lesson is dropped unreplayed,
+                self.steps_done += scaled.steps  # so the next learn() starts a trial of its own
+                self.learner.book.recorder.finish(False, False)
+                raise
             self.steps_done += stats.steps
             self.trials_done += 1
             self._check_range(scaled.max_abs_reward)

@@ -235,7 +235,11 @@ class TensorBoardLog(Callback):
             from tensorboardX import SummaryWriter
         except ImportError:
             raise ValueError("TensorBoard logs need tensorboardX: pip install 'connrl[tensorboard]'") from None
-        self.writer, self.eval = SummaryWriter(str(logdir)), eval_callback
+        try:
+            self.writer = SummaryWriter(str(logdir))
+        except OSError as exc:
+            raise ValueError(f"cannot write TensorBoard logs in {logdir}: {exc.strerror or exc}") from None
+        self.eval = eval_callback
 
     def on_trial_end(self, agent, stats):
         s, w = agent.steps_done, self.writer
@@ -256,15 +260,15 @@ def read_progress(path) -> list[dict]:
     is not one."""
     path = Path(path)
     try:
-        text = path.read_text()
+        lines = list(csv.reader(io.StringIO(path.read_text())))
     except OSError as exc:
         raise ValueError(f"{path}: cannot be read ({exc.strerror or exc})") from None
-    reader = csv.reader(io.StringIO(text))
-    header = next(reader, None)
-    if header is None or tuple(header) != LOG_COLUMNS:
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise ValueError(f"{path}: is not a connrl progress.csv ({exc})") from None
+    if not lines or tuple(lines[0]) != LOG_COLUMNS:
         raise ValueError(f"{path}: is not a connrl progress.csv (its header must be {','.join(LOG_COLUMNS)})")
     rows = []
-    for n, cells in enumerate(reader, start=2):
+    for n, cells in enumerate(lines[1:], start=2):
         if len(cells) != len(LOG_COLUMNS):
             raise ValueError(f"{path}: line {n} has {len(cells)} cells, not {len(LOG_COLUMNS)}")
         try:

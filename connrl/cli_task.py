@@ -34,7 +34,6 @@ _positive_int, _seed = _int_at_least(1), _int_at_least(0)
 
 
 def _finite_float(text: str) -> float:
-    import argparse
     import math
 
     try:
@@ -169,7 +168,7 @@ def _resumed_settings(out: Path, settings: dict, args) -> dict:
         if old.get(key) != settings[key]:
             raise SystemExit(f"connrl: --resume: {key} is {settings[key]!r} here but {old.get(key)!r} in {file}; a "
                              "resumed run keeps its settings (only --steps may change)")
-    return {**old, "steps": settings["steps"]}
+    return {**old, "steps": args.steps or old.get("steps") or settings["steps"]}  # no --steps: the run's own
 
 
 def cmd_train(args) -> int:
@@ -188,7 +187,10 @@ def cmd_train(args) -> int:
     evaluation = None if eval_env is None else EvalCallback(
         eval_env, args.eval_every, args.eval_episodes, best_path=out / "best", stop_at=args.stop_at,
         verbose=not args.quiet)
-    log = ProgressLog(out / "progress.csv", evaluation, resume=args.resume)
+    try:
+        log = ProgressLog(out / "progress.csv", evaluation, resume=args.resume)
+    except ValueError as exc:
+        raise SystemExit(f"connrl: --resume: {exc}") from None
     if evaluation is not None:  # a resumed run's best/ stays until an evaluation beats it
         evaluation.best_mean = max((r["eval_mean"] for r in log.rows if r["eval_mean"] is not None),
                                    default=evaluation.best_mean)
@@ -225,11 +227,13 @@ def cmd_train(args) -> int:
             if not args.quiet and agent is not None:
                 print(flush=True)  # end the progress line
     code = _finish(agent, out, fresh, stopped, saved, save)
-    if evaluation is not None and evaluation.results and code == 0:
-        steps, mean = max(evaluation.results, key=lambda e: e[1])[:2]
+    evals = [r for r in log.rows if r["eval_mean"] is not None]  # a resumed run's earlier ones too: best/ may be
+    if evaluation is not None and evaluation.results and code == 0:  # from before the resume
+        best = max(evals, key=lambda r: r["eval_mean"])  # the first of equals: best/ is replaced only by a better
         reached = " (--stop-at reached)" if args.stop_at is not None and evaluation.results[-1][1] >= args.stop_at \
             else ""
-        print(f"best evaluation: mean return {mean:.2f} at step {steps}, kept in {out / 'best'}{reached}")
+        print(f"best evaluation: mean return {best['eval_mean']:.2f} at step {best['steps']}, kept in "
+              f"{out / 'best'}{reached}")
     return code
 
 
@@ -378,6 +382,10 @@ def _saved_env_kwargs(path: Path) -> dict:
                 raise SystemExit(f"connrl: {file}: cannot be read as connrl train settings ({exc})") from None
             if not isinstance(kwargs, dict):
                 raise SystemExit(f"connrl: {file}: env_kwargs must be a mapping, got {kwargs!r}")
+            named = [k for k, v in kwargs.items() if isinstance(v, str) and ":" in v]
+            if named:  # some wrappers import a 'module:Class' they are given: a file never chooses code to run
+                raise SystemExit(f"connrl: {file}: env_kwargs {', '.join(named)} look like 'module:name' imports; a "
+                                 "file never chooses code to import: give them yourself with --env-kwargs")
             return kwargs
     return {}
 

@@ -17,13 +17,11 @@ from connrl.cli_task import (
 
 
 def cmd_tune(args) -> int:
-    from connrl.api import KINDS, options_from
+    from connrl.api import options_from
     from connrl.tune import DEFAULT_SPACE, check_space, parse_dimension, run_search
 
     kind = args.agent
     try:
-        if kind in ("QCON-T", "AHCON-T"):
-            raise ValueError(f"connrl tune trains agents without a teacher; {kind} needs lessons (tune {kind[:-2]}-R)")
         fixed = _parse_options(args.option)
         options_from(fixed)
         space = [parse_dimension(t) for t in (args.space or DEFAULT_SPACE)]
@@ -33,7 +31,6 @@ def cmd_tune(args) -> int:
         check_space(space, fixed)
     except (ValueError, TypeError) as exc:
         raise SystemExit(f"connrl: {exc}") from None
-    assert kind in KINDS
     env_kwargs = _parse_options(args.env_kwargs, "--env-kwargs")
     _make_env(args.env_id, env_kwargs)  # an unknown id or bad kwargs: one line before any training
     name = args.env_id.replace("/", "-").replace(":", "-")
@@ -63,7 +60,7 @@ def _write_best(out: Path, study: dict, trials: list[dict]) -> int:
                "check it on other seeds before you report it")
     atomic_write_text(out / "best.yml", settings_yaml(study["env_id"], study["steps"], study["env_kwargs"],
                                                       {**study["fixed"], **best["params"]}, comment))
-    print(f"best: trial {best['trial']}, {best['params']}, mean greedy return {best['mean']:.2f}")
+    print(f"best: trial {best['trial'] + 1}, {best['params']}, mean greedy return {best['mean']:.2f}")
     print(f"wrote {out / 'best.yml'}: `connrl train {study['env_id']} --agent {study['agent']} --hyperparams "
           f"{out / 'best.yml'} --seed S` trains with it")
     return 0

@@ -15,6 +15,7 @@ anything is built: a wrong key is one line naming the file, the entry and what i
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 SETTINGS_DIR = Path(__file__).parent / "data" / "hyperparams"
@@ -66,6 +67,9 @@ def check_entry(path, env_id: str, entry) -> dict:
     kwargs = entry.get("env_kwargs") or {}
     if not isinstance(kwargs, dict) or not all(isinstance(k, str) for k in kwargs):
         raise ValueError(f"{where}: env_kwargs must be a mapping of argument names to values, got {kwargs!r}")
+    if json.loads(json.dumps(kwargs, default=str)) != kwargs:  # a YAML date, set or bytes: not kept in settings.json
+        raise ValueError(f"{where}: env_kwargs must be plain values (numbers, strings, true/false, null, lists, "
+                         f"mappings), got {kwargs!r}")
     options = {k: v for k, v in entry.items() if k not in RESERVED}
     try:
         options_from(options)

@@ -71,13 +71,37 @@ def atomic_write_files(files: dict) -> None:
                 f.write(data)
                 f.flush()
                 os.fsync(f.fileno())
-        for tmp, path in temps:
-            os.replace(tmp, path)
+        with _signals_held(len(temps) > 1):  # a signal between two moves would pair files of two saves
+            for tmp, path in temps:
+                os.replace(tmp, path)
     except BaseException:
         for tmp, _ in temps:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
         raise
+
+
+@contextlib.contextmanager
+def _signals_held(hold: bool):
+    """SIGINT and SIGTERM held back until the block ends, then delivered to the handlers they were meant for (main
+    thread only: Python runs signal handlers there, whichever thread the OS gave the signal to)."""
+    import signal
+    import threading
+
+    sigs = (signal.SIGINT, signal.SIGTERM)
+    if not hold or threading.current_thread() is not threading.main_thread() or any(
+            signal.getsignal(x) is None for x in sigs):  # a handler set outside Python cannot be put back
+        yield
+        return
+    pending: list[int] = []
+    old = {x: signal.signal(x, lambda signum, frame: pending.append(signum)) for x in sigs}
+    try:
+        yield
+    finally:
+        for x, handler in old.items():
+            signal.signal(x, handler)
+        if pending:
+            signal.raise_signal(pending[0])
 
 
 def npz_bytes(**arrays: np.ndarray) -> bytes:

@@ -51,7 +51,8 @@ class Dimension:
             v = math.exp(math.log(self.low) + u * (math.log(self.high) - math.log(self.low)))
         else:
             v = self.low + u * (self.high - self.low)
-        return int(round(v)) if self.integer else float(f"{v:.4g}")
+        v = int(round(v)) if self.integer else float(f"{v:.4g}")
+        return min(max(v, self.low), self.high)  # rounding must not leave the range asked for
 
     def describe(self) -> str:
         if self.choices is not None:
@@ -86,6 +87,8 @@ def parse_dimension(text: str) -> Dimension:
             raise ValueError(f"--space {name}: a range needs two numbers low < high, got {spec!r}")
         if log and low <= 0:
             raise ValueError(f"--space {name}: a log range needs low > 0, got {spec!r}")
+        if not isinstance(getattr(AgentOptions(), name), int):  # lam=0:1 is a range of numbers, not of 0 and 1
+            low, high = float(low), float(high)
         return Dimension(name, low=low, high=high, log=log)
     return Dimension(name, choices=tuple(value(s) for s in spec.split(",")))
 
@@ -122,18 +125,22 @@ def run_search(env_fn, study: dict, space: list[Dimension], out: Path, sampler: 
                progress=print) -> list[dict]:
     """Run (or resume) the search ``study`` describes; returns the finished trials, best first."""
     out.mkdir(parents=True, exist_ok=True)
-    meta = out / "study.json"
+    meta, trials_file = out / "study.json", out / "trials.csv"
     if meta.exists():
         try:
             old = json.loads(meta.read_text())
-        except (OSError, json.JSONDecodeError) as exc:
-            raise ValueError(f"{meta}: cannot be read as a study ({exc}); remove it to start over") from None
-        if {**old, "trials": None} != {**study, "trials": None}:  # more trials may be asked of a search
-            raise ValueError(f"{out} holds another search ({meta} differs: env, agent, steps, seeds, space or "
-                             "sampler); choose another --out or remove it")
-    atomic_write_text(meta, json.dumps(study, indent=1) + "\n")
-    done = read_trials(out / "trials.csv") if (out / "trials.csv").exists() else []
-    optuna_study = _optuna_study(space, done, study["seed"]) if sampler == "tpe" else None
+        except (OSError, ValueError) as exc:
+            raise ValueError(f"{meta}: cannot be read as a study ({exc}); remove the folder {out} to start over") \
+                from None
+        if not isinstance(old, dict) or {**old, "trials": None} != {**study, "trials": None}:  # more trials may
+            raise ValueError(f"{out} holds another search ({meta} differs: env, agent, steps, seeds, space or "  # be
+                             "sampler); choose another --out or remove that folder")  # asked of a search
+    elif trials_file.exists():
+        raise ValueError(f"{trials_file} has no study.json beside it, so what it searched is unknown; remove the "
+                         f"folder {out} to start over")
+    done = read_trials(trials_file) if trials_file.exists() else []
+    optuna_study = _optuna_study(space, done, study["seed"]) if sampler == "tpe" else None  # Optuna missing:
+    atomic_write_text(meta, json.dumps(study, indent=1) + "\n")  # refused before the study is written
     rng = np.random.default_rng(study["seed"])
     for k in range(study["trials"]):
         if optuna_study is None:
@@ -163,7 +170,8 @@ def _optuna_study(space: list[Dimension], done: list[dict], seed: int):
     except ImportError:
         raise ValueError("--sampler tpe needs Optuna: pip install 'connrl[tune]' (or --sampler random)") from None
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed))
+    # seeded past the trials done: a resumed search would otherwise draw its first settings again
+    study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed + len(done)))
     dists = {d.name: _distribution(optuna, d) for d in space}
     for t in done:  # a resumed search tells the sampler what it already knows
         value = t["mean"] if math.isfinite(t["mean"]) else -1e300
@@ -214,6 +222,8 @@ def read_trials(path: Path) -> list[dict]:
                            "seconds": float(r[4])})
             if trials[-1]["trial"] != k or not isinstance(trials[-1]["params"], dict):
                 raise ValueError(f"row {k + 2} is not trial {k}")
+            if math.isnan(trials[-1]["mean"]):
+                raise ValueError(f"row {k + 2} has no mean score")
         return trials
-    except (OSError, ValueError, IndexError, TypeError, json.JSONDecodeError) as exc:
+    except (OSError, ValueError, IndexError, TypeError, csv.Error) as exc:  # UnicodeDecodeError is a ValueError
         raise ValueError(f"{path}: is not a connrl trials file ({exc}); remove it to start the search over") from None

@@ -167,3 +167,54 @@ def test_tensorboard_logs_the_trials_and_evaluations_of_progress_csv(tmp_path):
     assert tb["rollout/ep_rew"] == [(r["steps"], pytest.approx(r["return"])) for r in rows]
     assert tb["eval/mean_reward"] == [(r["steps"], pytest.approx(r["eval_mean"], rel=1e-5)) for r in rows
                                       if r["eval_mean"] is not None]
+
+
+class _InterruptAt(gym.Wrapper):
+    """Ctrl-C at the ``at``-th step of the wrapped env."""
+
+    def __init__(self, env, at: int):
+        super().__init__(env)
+        self.at, self.n = at, 0
+
+    def step(self, action):
+        self.n += 1
+        if self.n == self.at:
+            raise KeyboardInterrupt
+        return self.env.step(action)
+
+
+def test_ctrl_c_inside_a_trial_counts_its_steps_and_the_next_learn_starts_a_trial_of_its_own():
+    env = _InterruptAt(gym.make("CartPole-v1"), at=300)
+    agent = connrl.make_agent(env, "QCON-R", seed=0, hidden=4, warmup_steps=20)
+    env.n = 0  # the warm-up's steps do not count
+    ends = []
+    with pytest.raises(KeyboardInterrupt):
+        agent.learn(5000, callback=lambda a, r: ends.append(a.steps_done))
+    assert agent.steps_done == 299  # the 300th step never happened
+    n_lessons = len(agent.learner.book.memory)
+    agent.learn(100)
+    new = agent.learner.book.memory.lessons[n_lessons]
+    assert len(new.actions) == agent.steps_done - 299 or len(new.actions) <= 100  # none of the cut trial's steps
+    assert agent.learner.book.memory.lessons[n_lessons - 1].actions.size == ends[-1] - (ends[-2] if len(ends) > 1
+                                                                                          else 0)
+
+
+def test_a_multi_file_write_holds_ctrl_c_until_both_files_are_in_place(tmp_path, monkeypatch):
+    import os
+    import signal
+
+    from connrl import storage
+
+    storage.atomic_write_files({tmp_path / "a": b"old", tmp_path / "b": b"old"})
+    real, moves = os.replace, []
+
+    def replace_and_signal(src, dst):
+        if not moves:
+            os.kill(os.getpid(), signal.SIGINT)  # arrives between the two moves
+        moves.append(dst)
+        real(src, dst)
+
+    monkeypatch.setattr(storage.os, "replace", replace_and_signal)
+    with pytest.raises(KeyboardInterrupt):
+        storage.atomic_write_files({tmp_path / "a": b"new", tmp_path / "b": b"new"})
+    assert len(moves) == 2 and (tmp_path / "a").read_bytes() == (tmp_path / "b").read_bytes() == b"new"

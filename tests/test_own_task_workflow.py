@@ -69,3 +69,22 @@ def test_train_interrupt_resume_plot_tune_and_load_the_best(tmp_path, monkeypatc
     settings = json.loads((tmp_path / "tuned" / "settings.json").read_text())
     assert settings["steps"] == 300 and set(settings["options"]) == {"lr", "hidden"}
     assert connrl.load(tmp_path / "tuned").steps_done == 300
+
+
+def test_resume_keeps_the_runs_own_steps_and_damaged_files_are_one_line(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert cli.main(["train", "CartPole-v1", "--steps", "300", "--quiet", "--save", str(out)]) == 0
+    assert cli.main(["train", "CartPole-v1", "--quiet", "--save", str(out), "--resume"]) == 0
+    assert "trained for 300 steps already" in capsys.readouterr().out  # not the default 50,000
+    (out / "progress.csv").write_bytes(b"\xff\xfe broken")
+    with pytest.raises(SystemExit, match="progress.csv: is not a connrl progress.csv"):
+        cli.main(["train", "CartPole-v1", "--steps", "600", "--quiet", "--save", str(out), "--resume"])
+    (tmp_path / "file").write_text("")
+    with pytest.raises(SystemExit, match="cannot write TensorBoard logs in"):
+        cli.main(["train", "CartPole-v1", "--steps", "300", "--quiet", "--save", str(tmp_path / "t"),
+                  "--tensorboard", str(tmp_path / "file" / "x")])
+    settings = json.loads((out / "settings.json").read_text())
+    settings["env_kwargs"] = {"env_id": "evilmod:Evil"}
+    (out / "settings.json").write_text(json.dumps(settings))
+    with pytest.raises(SystemExit, match="look like 'module:name' imports"):
+        cli.main(["evaluate", str(out)])

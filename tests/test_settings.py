@@ -30,6 +30,7 @@ def test_a_settings_entry_is_read_and_the_command_line_overrides_it(tmp_path, ca
     ("- CartPole-v1\n", "must map environment ids to settings"),
     ("CartPole-v1:\n  lr: [\n", "is not valid YAML"),
     ("CartPole-v1: !!python/object/apply:os.system ['echo pwned']\n", "is not valid YAML"),  # never run code
+    ("CartPole-v1:\n  env_kwargs: {day: 2020-01-01}\n", "env_kwargs must be plain values"),  # a YAML date
 ])
 def test_a_bad_settings_file_is_one_line(text, message, tmp_path):
     f = tmp_path / "bad.yml"
@@ -94,11 +95,37 @@ def test_tune_refuses_bad_input_in_one_line_before_training(args, message, tmp_p
     assert not (tmp_path / "t" / "trials.csv").exists()
 
 
-def test_tune_with_optuna_tpe_runs_and_resumes(tmp_path, capsys):
+def test_tune_with_optuna_tpe_runs_and_resumes_without_drawing_the_same_settings_again(tmp_path, capsys):
     pytest.importorskip("optuna")
     args = ["tune", "CartPole-v1", "--space", "lr=0.02:0.1:log", "--steps", "200", "--seeds", "1000",
             "--eval-episodes", "1", "--sampler", "tpe", "--out", str(tmp_path / "t"), "--trials"]
     assert cli.main([*args, "2"]) == 0
     first = (tmp_path / "t" / "trials.csv").read_text().splitlines()
     assert cli.main([*args, "3"]) == 0
-    assert (tmp_path / "t" / "trials.csv").read_text().splitlines()[:3] == first
+    rows = (tmp_path / "t" / "trials.csv").read_text().splitlines()
+    assert rows[:3] == first
+    assert rows[3].split(",")[1] not in {r.split(",")[1] for r in rows[1:3]}  # a new setting, not trial 1's again
+
+
+def test_a_search_folder_that_is_not_this_search_is_refused_in_one_line(tmp_path):
+    args = ["tune", "CartPole-v1", "--space", "lr=0.02,0.1", "--steps", "100", "--seeds", "1000", "--eval-episodes",
+            "1", "--trials", "1", "--out", str(tmp_path / "t")]
+    (tmp_path / "t").mkdir()
+    (tmp_path / "t" / "study.json").write_text("[]")
+    with pytest.raises(SystemExit, match="holds another search"):
+        cli.main(args)
+    (tmp_path / "t" / "study.json").unlink()
+    (tmp_path / "t" / "trials.csv").write_text("trial,params,scores,mean,seconds\n")
+    with pytest.raises(SystemExit, match="has no study.json beside it"):
+        cli.main(args)
+
+
+def test_drawn_settings_stay_in_their_range_and_float_options_draw_floats():
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    gamma = parse_dimension("gamma=0.999:0.99999")
+    assert all(0.999 <= gamma.sample(rng) <= 0.99999 for _ in range(2000))
+    lam = parse_dimension("lam=0:1")
+    assert len({lam.sample(rng) for _ in range(50)}) > 2  # not only 0 and 1
+    assert isinstance(parse_dimension("hidden=4:8").sample(rng), int)
