@@ -12,9 +12,10 @@ hand-tuning the scales the thesis's tasks set by hand:
 - **Inputs** (``InputScaler``): a bounded ``Box`` dimension is mapped affinely onto [-1, 1]; an unbounded one by the
   mean and spread of the observations a random policy sees in the first ``warmup_steps`` steps (frozen then, so learning
   sees one fixed input code); a ``Discrete`` observation is one-hot (+-0.5, the thesis's binary code, 5.3.2).
-- **Values**: the nets' outputs span +-``value_range``, which defaults to the largest |reward| of the warm-up divided by
-  (1 - gamma), the largest discounted return those rewards allow; the temperature acts on Q / value_range, so changing
-  the scale does not change exploration.
+- **Values**: the nets' outputs span +-``value_range``, by default the largest |discounted return| the warm-up's rewards
+  allow: max |reward| / (1 - gamma) for rewards that can recur every step, but only |reward| for one that ends the
+  episode (a goal's +1 gives 1, not 100); until a non-zero reward is seen the range is provisional and the first ones
+  set it (connrl.value_scale). The temperature acts on Q / value_range, so the scale does not change exploration.
 - **Schedules** run over environment steps (``anneal_steps``), not trials: a user states a budget in steps.
 
 Frameworks by the thesis's names: ``"QCON"`` (on-line Q-learning, Fig. 3.4), ``"QCON-R"`` (with backward TD(lambda)
@@ -54,6 +55,7 @@ from connrl.core.rollout import run_trial
 from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
 from connrl.storage import FileError
+from connrl.value_scale import PROVISIONAL, range_for, rescale, reward_sizes
 
 KINDS = ("QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q", "recurrent-Q")
 MEMORY_KINDS = ("window-Q", "recurrent-Q")  # act on a history: predict() needs one, evaluate() keeps it
@@ -85,7 +87,8 @@ class AgentOptions:
     capacity: int = 100  # latest lessons kept for replay
     p_threshold: float | None = None  # actions less likely than this are not replayed (3.5.1); None: the thesis's
     # value for the framework (4.2.7): 0.01 for Q-learning, 0.2 for AHC
-    value_range: float | None = None  # Q spans +-value_range; None: max |warm-up reward| / (1 - gamma)
+    value_range: float | None = None  # Q spans +-value_range; None: the largest return the rewards seen allow
+    # (max |r| / (1 - gamma), but |r| for a reward that ends the episode; set by the first non-zero reward)
     warmup_steps: int = 1000  # random-policy steps that set the input and value scales
     window: int = 2  # window-Q: the N latest observations and actions beside the current one (7.3)
     context: int = 8  # recurrent-Q: context units, at most hidden (7.3-7.4)
@@ -184,6 +187,8 @@ class _Scaled(gym.ObservationWrapper):
         self.scaler = scaler
         self.observation_space = spaces.Box(-np.inf, np.inf, (scaler.n_inputs,), np.float64)
         self.max_abs_reward = 0.0  # the largest |reward| it has passed on
+        self.sizes = (0.0, 0.0)  # connrl.value_scale.reward_sizes of the rewards it has passed on
+        self.on_sizes = None  # called with the new sizes when they grow
 
     def observation(self, observation):
         return self.scaler.encode(observation)
@@ -191,14 +196,19 @@ class _Scaled(gym.ObservationWrapper):
     def step(self, action):
         obs, r, terminated, truncated, info = super().step(action)
         self.max_abs_reward = max(self.max_abs_reward, abs(float(r)))
+        i = int(bool(terminated))
+        if abs(float(r)) > self.sizes[i]:
+            self.sizes = (abs(float(r)), self.sizes[1]) if i == 0 else (self.sizes[0], abs(float(r)))
+            if self.on_sizes is not None:
+                self.on_sizes(self.sizes)
         return obs, r, terminated, truncated, info
 
 
-def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, float, list]:
-    """Observations, the largest |reward| and the episodes (observations, actions, rewards, terminated) of ``steps``
-    random-policy steps (at least one observation)."""
+def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, list, list]:
+    """Observations, every step's (reward, terminated) and the episodes (observations, actions, rewards, terminated)
+    of ``steps`` random-policy steps (at least one observation)."""
     obs, _ = env.reset(seed=int(rng.integers(2**31)))
-    seen, r_max, episodes, ep = [obs], 0.0, [], ([obs], [], [])
+    seen, rewards, episodes, ep = [obs], [], [], ([obs], [], [])
     for _ in range(steps):
         a = int(rng.integers(env.action_space.n))
         obs, r, terminated, truncated, _ = env.step(a)
@@ -206,23 +216,26 @@ def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[np.ndarray, floa
         ep[0].append(obs)
         ep[1].append(a)
         ep[2].append(float(r))
-        r_max = max(r_max, abs(float(r)))
+        rewards.append((float(r), bool(terminated)))
         if terminated or truncated:
             episodes.append((*ep, bool(terminated)))
             obs, _ = env.reset(seed=int(rng.integers(2**31)))
             seen.append(obs)
             ep = ([obs], [], [])
-    return np.asarray(seen, dtype=float), r_max, episodes
+    return np.asarray(seen, dtype=float), rewards, episodes
 
 
 class Agent:
     """A thesis learner bound to one environment's spaces, with its scales (``make_agent`` builds it)."""
 
     def __init__(self, kind: str, options: AgentOptions, observation_space, action_space, scaler: InputScaler,
-                 value_range: float, seed: int, env_id: str | None):
+                 value_range: float | None, seed: int, env_id: str | None):
         if kind not in KINDS:
             raise ValueError(f"unknown agent {kind!r}; available: {', '.join(KINDS)}")
-        self.kind, self.options, self.scaler, self.value_range = kind, options, scaler, float(value_range)
+        # value_range None: provisional until the first non-zero reward sets it (connrl.value_scale)
+        self.range_set = value_range is not None
+        self.kind, self.options, self.scaler = kind, options, scaler
+        self.value_range = float(value_range) if self.range_set else PROVISIONAL
         self.observation_space, self.action_space = observation_space, action_space
         self.env_id, self.seed = env_id, seed
         self.rng = np.random.default_rng(seed)
@@ -259,12 +272,12 @@ class Agent:
             raise ValueError(f"total_steps must be a whole number >= 1, got {total_steps!r}")
         self.check_env(env)
         scaled, end = _Scaled(env, self.scaler), self.steps_done + total_steps
+        scaled.on_sizes = self._check_range
         while self.steps_done < end:
             stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
                               seed=int(self.rng.integers(2**31)))
             self.steps_done += stats.steps
             self.trials_done += 1
-            self._check_range(scaled.max_abs_reward)
             if progress:
                 print(f"\rsteps {self.steps_done}/{end}  trial {self.trials_done}  return {stats.total_reward:.1f}",
                       end="", flush=True)
@@ -282,12 +295,21 @@ class Agent:
                 raise ValueError(f"this agent was made for {self.env_id or 'another environment'} with {name} "
                                  f"{mine}; the given environment has {theirs}")
 
-    def _check_range(self, r_max: float) -> None:
-        """Warn once when a reward seen while learning allows returns beyond +-value_range (|r| / (1 - gamma) above
-        it): such targets are cut off by the nets' output range and the Q-values stop telling actions apart."""
-        bound = r_max / max(1.0 - self.options.gamma, 1e-3)
+    def _check_range(self, sizes: tuple[float, float]) -> None:
+        """Called when the rewards seen while learning grow (``sizes``: connrl.value_scale.reward_sizes). The first
+        non-zero ones set a provisional range (the nets rescaled: every target so far was 0). Later, warn once when
+        they allow returns beyond +-value_range: such targets are cut off by the nets' output range and the Q-values
+        stop telling actions apart."""
+        bound = range_for(*sizes, self.options.gamma)
+        if bound is None:
+            return
+        if not self.range_set:
+            self.range_set, self.value_range = True, bound
+            rescale(_all_nets(self), bound)
+            return
         if not self._range_warned and bound > self.value_range * (1 + 1e-9):
             self._range_warned = True
+            r_max = sizes[0] if bound > sizes[1] else sizes[1]
             warnings.warn(f"a reward of {r_max:.3g} allows returns up to {bound:.3g}, beyond value_range "
                           f"+-{self.value_range:.3g}: such targets are cut off; give a larger value_range "
                           "(make_agent(..., value_range=...) or connrl train --option value_range=...)", RuntimeWarning,
@@ -320,10 +342,16 @@ class Agent:
         write_agent(path, {
             "agent": self.kind, "env_id": self.env_id, "observation_space": space_json(self.observation_space),
             "action_space": space_json(self.action_space), "options": asdict(self.options),
-            "scaler": self.scaler.to_json(), "value_range": self.value_range, "seed": self.seed,
+            "scaler": self.scaler.to_json(), "value_range": self.value_range, "range_set": self.range_set,
+            "seed": self.seed,
             "steps_done": self.steps_done, "trials_done": self.trials_done, "rng": self.rng.bit_generator.state},
             self.nets.state_dict(), memory.lessons if memory is not None else [], self.learner.book.taught)
         return path
+
+
+def _all_nets(agent: Agent) -> list:
+    nets = agent.nets
+    return list(nets.parts.values()) if isinstance(nets, _NetPair) else [nets]
 
 
 class _NetPair:
@@ -376,12 +404,12 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options
     o = options_from(options)
     rng = np.random.default_rng(seed)
     raw_taught = read_taught(lessons, env) if lessons is not None else []  # a file for another task: refused first
-    seen, r_max, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
+    seen, rewards, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
     scaler = InputScaler.fit(env.observation_space, seen)
     taught = [Lesson(np.array([scaler.encode(x) for x in lesson.inputs]), lesson.actions, lesson.rewards,
                      terminated=lesson.terminated, truncated=lesson.truncated, taught=True) for lesson in raw_taught]
-    r_max = max([r_max] + [float(np.abs(x.rewards).max()) for x in taught if x.rewards.size])
-    value_range = o.value_range or max(r_max, 1e-3) / max(1.0 - o.gamma, 1e-3)
+    rewards += [(r, x.terminated and k == x.rewards.size - 1) for x in taught for k, r in enumerate(x.rewards)]
+    value_range = o.value_range or range_for(*reward_sizes(rewards), o.gamma)  # None: set by the first reward
     spec = getattr(env, "spec", None)
     agent = Agent(kind, o, env.observation_space, env.action_space, scaler, value_range,
                   int(rng.integers(2**31)), spec.id if spec is not None else None)
@@ -408,6 +436,8 @@ def load(path, env=None) -> Agent:
         raise FileError(meta, str(exc), "options") from None
     agent = Agent(m["agent"], options, space_from(m["observation_space"]), space_from(m["action_space"]),
                   InputScaler.from_json(m["scaler"]), m["value_range"], m["seed"], m.get("env_id"))
+    if m.get("range_set") is False:  # still provisional (files before it was saved: set)
+        agent.range_set = False
     state, memory, taught = check_arrays(path, arrays, agent.nets.state_dict(), m, _input_width(agent),
                                          int(agent.action_space.n))
     agent.nets.load_state_dict(state)
