@@ -4,7 +4,7 @@ one that ends the episode, set by the first non-zero reward when the warm-up saw
 (the rule was chosen on these, seeds 100-102) and on held-out tasks and seeds (never used to choose: seeds 200-202).
 A run succeeds when its greedy evaluation return (mean over the task's evaluation episodes, seeds 500...) reaches
 the task's threshold; the table gives per-seed returns and the successes, and the first seed's value_range after the
-warm-up (nan: provisional, no reward seen) and at the end.
+warm-up and at the end (nan: provisional, no non-zero reward seen yet).
 
     python scripts/own_task/value_scale.py [--quick] [--set dev|held-out|all] [--rules old new] [--workers 2]
         [--seeds ...] [--tasks ...] [--out FILE.json]
@@ -117,7 +117,8 @@ def one(job):
         first = agent.value_range if agent.range_set else float("nan")  # nan: provisional (no reward seen yet)
         agent.learn(steps)
     ret = float(np.mean(connrl.evaluate(agent, env, episodes, seed=500)))
-    return task, rule, seed, ret, ret >= threshold, first, agent.value_range, time.process_time() - t0
+    last = agent.value_range if agent.range_set else float("nan")
+    return task, rule, seed, ret, ret >= threshold, first, last, time.process_time() - t0
 
 
 def main() -> None:
