@@ -15,7 +15,8 @@ hand-tuning the scales the thesis's tasks set by hand:
 - **Values**: the nets' outputs span +-``value_range``, by default the largest |discounted return| the warm-up's rewards
   allow: max |reward| / (1 - gamma) for rewards that can recur every step, but only |reward| for one that ends the
   episode (a goal's +1 gives 1, not 100); until a non-zero reward is seen the range is provisional and the first ones
-  set it (connrl.value_scale). The temperature acts on Q / value_range, so the scale does not change exploration.
+  set it, and larger rewards seen later grow it, the Q-values kept (connrl.value_scale). The temperature acts on
+  Q / value_range, so the scale does not change exploration.
 - **Schedules** run over environment steps (``anneal_steps``), not trials: a user states a budget in steps.
 
 Frameworks by the thesis's names: ``"QCON"`` (on-line Q-learning, Fig. 3.4), ``"QCON-R"`` (with backward TD(lambda)
@@ -88,7 +89,8 @@ class AgentOptions:
     p_threshold: float | None = None  # actions less likely than this are not replayed (3.5.1); None: the thesis's
     # value for the framework (4.2.7): 0.01 for Q-learning, 0.2 for AHC
     value_range: float | None = None  # Q spans +-value_range; None: the largest return the rewards seen allow
-    # (max |r| / (1 - gamma), but |r| for a reward that ends the episode; set by the first non-zero reward)
+    # (max |r| / (1 - gamma), but |r| for a reward that ends the episode; set by the first non-zero reward, grown by
+    # larger ones)
     warmup_steps: int = 1000  # random-policy steps that set the input and value scales
     window: int = 2  # window-Q: the N latest observations and actions beside the current one (7.3)
     context: int = 8  # recurrent-Q: context units, at most hidden (7.3-7.4)
@@ -297,17 +299,17 @@ class Agent:
 
     def _check_range(self, sizes: tuple[float, float]) -> None:
         """Called when the rewards seen while learning grow (``sizes``: connrl.value_scale.reward_sizes). The first
-        non-zero ones set a provisional range (the nets rescaled: every target so far was 0). Later, warn once when
-        they allow returns beyond +-value_range: such targets are cut off by the nets' output range and the Q-values
-        stop telling actions apart."""
+        non-zero ones set a provisional range (the nets rescaled: every target so far was 0); later ones that allow
+        returns beyond +-value_range grow it, keeping the Q-values (connrl.value_scale.rescale). A range the user
+        set is kept, with a warning, once: such targets are cut off and the Q-values stop telling actions apart."""
         bound = range_for(*sizes, self.options.gamma)
-        if bound is None:
+        if bound is None or self.range_set and bound <= self.value_range * (1 + 1e-9):
             return
-        if not self.range_set:
+        if self.options.value_range is None:
+            rescale(_all_nets(self), bound, keep_q=self.range_set)
             self.range_set, self.value_range = True, bound
-            rescale(_all_nets(self), bound)
             return
-        if not self._range_warned and bound > self.value_range * (1 + 1e-9):
+        if not self._range_warned:
             self._range_warned = True
             r_max = sizes[0] if bound > sizes[1] else sizes[1]
             warnings.warn(f"a reward of {r_max:.3g} allows returns up to {bound:.3g}, beyond value_range "

@@ -12,10 +12,14 @@ is the old rule ``max |r| / (1 - g)``; where the only reward ends the episode (a
 
 Until a non-zero reward is seen the range is provisional (``PROVISIONAL``): with every reward zero, every target is
 zero and any scale describes the task equally well, so the first non-zero rewards set the range and the nets'
-output scale is changed to it (``rescale``), which scales every Q-value by the same factor.
+output scale is changed to it (``rescale``), which scales every Q-value by the same factor. Rewards seen later that
+allow larger returns grow the range, keeping the Q-values learnt (``rescale(..., keep_q=True)``), unless the user
+set the range.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 
@@ -41,11 +45,16 @@ def range_for(step_max: float, end_max: float, gamma: float) -> float | None:
     return float(bound) if bound > 0 and np.isfinite(bound) else None
 
 
-def rescale(nets, value_range: float) -> None:
+def rescale(nets, value_range: float, keep_q: bool = False) -> None:
     """Set the output scale of ``nets`` (OAON or recurrent nets, one or several) to +-``value_range``: every output
-    is multiplied by ``value_range / old range``."""
-    import dataclasses
-
+    is multiplied by ``value_range / old range``. With ``keep_q`` the output layer's weights (and their momentum) are
+    multiplied by ``old range / value_range`` instead, which keeps every Q-value to first order in the output unit's
+    net input (exactly at 0, closely in the sigmoid's linear part); outputs near the old range's edge, where targets
+    beyond it were cut off, come out larger, towards those targets."""
     for net in nets:
+        ratio = net.scale / (2.0 * float(value_range))
         net.scale = 2.0 * float(value_range)
         net.config = dataclasses.replace(net.config, value_range=float(value_range))
+        if keep_q:
+            net.w2 *= ratio
+            net.d2 *= ratio

@@ -1,6 +1,6 @@
 """The value scale of connrl.api (connrl.value_scale, issue 29): the rule on hand-made rewards, the provisional range
-set by the first reward, save / load of both, and a small sparse-reward grid the defaults solve where the old rule
-(max |reward| / (1 - gamma)) did not."""
+set by the first reward, growth by larger ones, save / load, and a small sparse-reward grid the defaults solve where
+the old rule (max |reward| / (1 - gamma)) did not."""
 
 import json
 import warnings
@@ -71,8 +71,23 @@ def test_the_first_reward_sets_a_provisional_range_and_rescales_every_q_value():
     assert agent.range_set and agent.value_range == pytest.approx(10.0)
     np.testing.assert_allclose(agent.learner.q.values(x), 10.0 * before)
     assert agent.temperature(0) == pytest.approx(0.05 * 10.0)
-    with pytest.warns(RuntimeWarning, match="beyond value_range"):  # set: larger rewards are warned of, once
-        agent._check_range((0.5, 10.0))
+
+
+def test_larger_rewards_grow_the_range_keeping_q_and_a_range_the_user_set_is_kept_with_a_warning():
+    agent = make_agent(grid(8, goal=10.0, limit=20), "QCON-R", seed=0, warmup_steps=20)
+    agent._check_range((0.0, 10.0))
+    x = agent.scaler.encode(5)
+    before = agent.learner.q.values(x)
+    agent._check_range((0.0, 5.0))  # no larger return: nothing changes
+    np.testing.assert_array_equal(agent.learner.q.values(x), before)
+    agent._check_range((0.5, 10.0))  # a step reward of 0.5 allows 0.5 / (1 - 0.99) = 50
+    assert agent.value_range == pytest.approx(50.0)
+    np.testing.assert_allclose(agent.learner.q.values(x), before, rtol=0.05)  # kept (to first order)
+    assert not np.allclose(agent.learner.q.values(x), 5 * before, rtol=0.5)  # not scaled with the range
+    fixed = make_agent(grid(8, limit=20), "QCON-R", seed=0, warmup_steps=20, value_range=1.0)
+    with pytest.warns(RuntimeWarning, match="a reward of 0.5 allows returns up to 50, beyond value_range"):
+        fixed._check_range((0.5, 0.0))
+    assert fixed.value_range == 1.0
 
 
 def test_rescale_changes_every_net_of_every_kind():

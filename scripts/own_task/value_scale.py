@@ -1,6 +1,7 @@
 """How connrl.api's value scale was chosen (issue 29): QCON-R with the old rule (value_range = max |warm-up reward| /
-(1 - gamma), at least 0.1) against the new one (connrl.value_scale: |r| / (1 - gamma) for rewards that recur, |r| for
-one that ends the episode, set by the first non-zero reward when the warm-up saw none), on development tasks
+(1 - gamma), at least 0.1, never changed) against the new one (connrl.value_scale: |r| / (1 - gamma) for rewards that
+recur, |r| for one that ends the episode, set by the first non-zero reward when the warm-up saw none, grown by larger
+rewards; "new-nogrow" without the growth, "new-h2" / "new-h2-T" with nets spanning twice that), on development tasks
 (the rule was chosen on these, seeds 100-102) and on held-out tasks and seeds (never used to choose: seeds 200-202).
 A run succeeds when its greedy evaluation return (mean over the task's evaluation episodes, seeds 500...) reaches
 the task's threshold; the table gives per-seed returns and the successes, and the first seed's value_range after the
@@ -66,6 +67,7 @@ DEV = {
     "grid5 (+1 goal)": (lambda: grid(50, n=5), 20_000, 0.99, 1, True),
     "FrozenLake4x4": (lambda: gym.make("FrozenLake-v1", is_slippery=False), 20_000, 0.99, 1, True),
     "CliffWalking": (lambda: TimeLimit(gym.make("CliffWalking-v1"), 200), 30_000, -17, 1, True),
+    "grid14 (-0.1/step, +100) w200": (lambda: grid(400, n=14, goal=100.0, step=-0.1), 40_000, 50, 1, True),
     "FrozenLake8x8": (lambda: gym.make("FrozenLake8x8-v1", is_slippery=False), 50_000, 0.99, 1, False),
     "Taxi-v4": (lambda: gym.make("Taxi-v4"), 50_000, 0.0, 20, False),
     "CartPole-v1": (lambda: gym.make("CartPole-v1"), 50_000, 475, 10, False),
@@ -82,8 +84,13 @@ HELD_OUT = {
     "grid6 (-0.01/step, +1)": (lambda: grid(60, n=6, goal=1.0, step=-0.01), 20_000, 0.9, 1, True),
     "FrozenLake4x4 slippery": (lambda: gym.make("FrozenLake-v1"), 50_000, 0.5, 100, False),
     "grid10 (+1 goal)": (lambda: grid(200, n=10), 50_000, 0.99, 1, False),
+    "grid16 (-1/step, +1000) w300": (lambda: grid(400, n=16, goal=1000.0, step=-1.0), 50_000, 500, 1, False),
+    "grid18 (-0.01/step, +5)": (lambda: grid(500, n=18, goal=5.0, step=-0.01), 50_000, 2.5, 1, False),
 }
 TASKS = {**DEV, **HELD_OUT}
+# make_agent options beside the defaults: "wN" in a name is a warm-up of N steps, short enough that it rarely sees the
+# goal, so the range is set by the step costs and must grow when the goal is found
+OPTIONS = {name: {"warmup_steps": int(name.rsplit(" w", 1)[1])} for name in TASKS if name.rsplit(" w", 1)[-1].isdigit()}
 
 
 def old_range_for(step_max, end_max, gamma):
@@ -96,24 +103,33 @@ def headroom(h, same_t):
     def range_for(step_max, end_max, gamma):
         bound = NEW(step_max, end_max, gamma)
         return None if bound is None else h * bound
-    return range_for, (1.0 / h if same_t else 1.0)
+    return range_for, (1.0 / h if same_t else 1.0), True
 
 
-NEW, TEMPERATURE = connrl.api.range_for, connrl.api.Agent.temperature
-RULES = {"old": (old_range_for, 1.0), "new": (NEW, 1.0), "new-h2": headroom(2, False), "new-h2-T": headroom(2, True)}
+def no_growth(self, sizes):
+    """Agent._check_range without growth: only a provisional range is set (the old rule's ranges never are)."""
+    if not self.range_set:
+        CHECK(self, sizes)
+
+
+NEW, TEMPERATURE, CHECK = connrl.api.range_for, connrl.api.Agent.temperature, connrl.api.Agent._check_range
+# name: (range rule, temperature factor, whether larger rewards seen while learning grow the range)
+RULES = {"old": (old_range_for, 1.0, False), "new": (NEW, 1.0, True), "new-nogrow": (NEW, 1.0, False),
+         "new-h2": headroom(2, False), "new-h2-T": headroom(2, True)}
 
 
 def one(job):
     task, rule, seed = job
     make, steps, threshold, episodes, _ = TASKS[task]
-    connrl.api.range_for, t_factor = RULES[rule]  # this worker's rule (make_agent and learn() read it)
+    connrl.api.range_for, t_factor, grow = RULES[rule]  # this worker's rule (make_agent and learn() read it)
+    connrl.api.Agent._check_range = CHECK if grow else no_growth
     connrl.api.Agent.temperature = (TEMPERATURE if t_factor == 1.0 else
                                     lambda self, trial: t_factor * TEMPERATURE(self, trial))
     env = make()
     t0 = time.process_time()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        agent = connrl.make_agent(env, "QCON-R", seed=seed)
+        agent = connrl.make_agent(env, "QCON-R", seed=seed, **OPTIONS.get(task, {}))
         first = agent.value_range if agent.range_set else float("nan")  # nan: provisional (no reward seen yet)
         agent.learn(steps)
     ret = float(np.mean(connrl.evaluate(agent, env, episodes, seed=500)))
@@ -152,7 +168,7 @@ def main() -> None:
             _, steps, threshold, _, _ = TASKS[t]
             for rule in args.rules:
                 rs = [results[(t, rule, s)] for s in seeds]
-                print(f"  {t:<24} {steps // 1000:>3}k  >= {threshold:<7g} {rule:<4} "
+                print(f"  {t:<30} {steps // 1000:>3}k  >= {threshold:<7g} {rule:<4} "
                       f"{' '.join(f'{r[3]:8.3g}' for r in rs)}   {sum(r[4] for r in rs)}/{len(rs)}   "
                       f"range {rs[0][5]:.3g} -> {rs[0][6]:.3g}")
     if args.out:
