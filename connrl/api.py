@@ -15,9 +15,11 @@ hand-tuning the scales the thesis's tasks set by hand (``Graph``, ``Text`` and `
   sees one fixed input code); a ``Discrete`` observation is one-hot (+-0.5, the thesis's binary code, 5.3.2), a
   ``MultiDiscrete`` one its one-hots side by side, a ``MultiBinary`` bit +-0.5; a ``Dict`` / ``Tuple`` is its parts'
   codes in ``gymnasium.spaces.flatten`` order (connrl.api_spaces).
-- **Values**: the nets' outputs span +-``value_range``, which defaults to the largest |reward| of the warm-up divided by
-  (1 - gamma), the largest discounted return those rewards allow; the temperature acts on Q / value_range, so changing
-  the scale does not change exploration.
+- **Values**: the nets' outputs span +-``value_range``, by default the largest |discounted return| the warm-up's rewards
+  allow: max |reward| / (1 - gamma) for rewards that can recur every step, but only |reward| for one that ends the
+  episode (a goal's +1 gives 1, not 100); until a non-zero reward is seen the range is provisional and the first ones
+  set it, and larger rewards seen later grow it, the Q-values kept (connrl.value_scale). The temperature acts on
+  Q / value_range, so the scale does not change exploration.
 - **Schedules** run over environment steps (``anneal_steps``), not trials: a user states a budget in steps.
 
 Frameworks by the thesis's names: ``"QCON"`` (on-line Q-learning, Fig. 3.4), ``"QCON-R"`` (with backward TD(lambda)
@@ -31,9 +33,8 @@ Files are ``agent.json`` and ``agent.npz`` (no pickle; connrl.api_files).
 
 from __future__ import annotations
 
-import math
 import warnings
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict
 from pathlib import Path
 
 import gymnasium as gym
@@ -51,6 +52,7 @@ from connrl.api_files import (
     space_json,
     write_agent,
 )
+from connrl.api_options import MAX_NET_WEIGHTS, AgentOptions, options_from
 from connrl.api_spaces import affine_scales, check_observation_space, check_single, flat_scales, flatten
 from connrl.core.divergence import network_problem
 from connrl.core.lessons import Lesson
@@ -58,74 +60,12 @@ from connrl.core.rollout import MAX_EPISODE_STEPS, episode_cap, run_trial  # noq
 from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
 from connrl.storage import FileError
+from connrl.value_scale import PROVISIONAL, range_for, rescale, reward_sizes
 
 KINDS = ("QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q", "recurrent-Q")
 MEMORY_KINDS = ("window-Q", "recurrent-Q")  # act on a history: predict() needs one, evaluate() keeps it
 TAUGHT_KINDS = ("QCON-T", "AHCON-T")  # need a lesson file: make_agent(..., lessons=path)
 __all__ = ["Agent", "AgentOptions", "InputScaler", "evaluate", "load", "make_agent", "record_lessons"]
-
-
-# the size-like options' ranges: far beyond any task of the thesis or of Gymnasium's classic control, small enough
-# that no typo asks for gigabytes or centuries before it is noticed
-_SIZES = {"hidden": (0, 1024), "anneal_steps": (1, 10**10), "lessons_per_trial": (0, 10_000),
-          "capacity": (1, 100_000), "warmup_steps": (1, 10**7), "window": (1, 64), "context": (0, 1024)}
-MAX_NET_WEIGHTS = 50_000_000  # inputs x hidden units x actions: 400 MB of float64 per array
-
-
-@dataclass(frozen=True)
-class AgentOptions:
-    """The learner's settings; every one has a default (docs: README, "Your own task")."""
-
-    hidden: int = 16  # hidden units of each action's net
-    lr: float = 0.05  # back-propagation learning rate
-    momentum: float = 0.9
-    init_range: float = 0.5  # initial weights uniform in +-init_range
-    gamma: float = 0.99  # discount factor
-    lam: float = 0.7  # TD(lambda) recency factor of replay (QCON-R)
-    t_start: float = 0.05  # Boltzmann temperature on Q / value_range, from ...
-    t_end: float = 0.005  # ... to this over the first anneal_steps steps
-    anneal_steps: int = 50_000
-    lessons_per_trial: int = 20  # lessons replayed after each trial (QCON-R)
-    capacity: int = 100  # latest lessons kept for replay
-    p_threshold: float | None = None  # actions less likely than this are not replayed (3.5.1); None: the thesis's
-    # value for the framework (4.2.7): 0.01 for Q-learning, 0.2 for AHC
-    value_range: float | None = None  # Q spans +-value_range; None: max |warm-up reward| / (1 - gamma)
-    warmup_steps: int = 1000  # random-policy steps that set the input and value scales
-    window: int = 2  # window-Q: the N latest observations and actions beside the current one (7.3)
-    context: int = 8  # recurrent-Q: context units, at most hidden (7.3-7.4)
-
-    def __post_init__(self):
-        for name, (low, high) in _SIZES.items():
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
-                raise ValueError(f"option {name} must be a whole number from {low} to {high:,}, got {v!r}")
-        for name, lo, hi in (("lr", 0, math.inf), ("init_range", 0, math.inf), ("t_start", 0, math.inf),
-                             ("t_end", 0, math.inf)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo < v < hi:
-                raise ValueError(f"option {name} must be a number > 0, got {v!r}")
-        for name in ("momentum", "p_threshold"):
-            v = getattr(self, name)
-            if v is None and name == "p_threshold":
-                continue
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 1:
-                raise ValueError(f"option {name} must be in [0, 1), got {v!r}")
-        for name in ("gamma", "lam"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
-                raise ValueError(f"option {name} must be in [0, 1], got {v!r}")
-        if self.value_range is not None and (isinstance(self.value_range, bool) or not (
-                isinstance(self.value_range, (int, float)) and 0 < self.value_range < math.inf)):
-            raise ValueError(f"option value_range must be None or a number > 0, got {self.value_range!r}")
-
-
-def options_from(kwargs: dict) -> AgentOptions:
-    """``AgentOptions(**kwargs)``, refusing an unknown option with the allowed ones in one line."""
-    allowed = [f.name for f in fields(AgentOptions)]
-    unknown = sorted(set(kwargs) - set(allowed))
-    if unknown:
-        raise ValueError(f"unknown option(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(allowed)}")
-    return AgentOptions(**kwargs)
 
 
 def check_spaces(env) -> None:
@@ -187,8 +127,9 @@ class _Scaled(gym.ObservationWrapper):
         super().__init__(env)
         self.scaler = scaler
         self.observation_space = spaces.Box(-np.inf, np.inf, (scaler.n_inputs,), np.float64)
-        self.max_abs_reward = 0.0  # the largest |reward| it has passed on
         self.limit, self.steps = None, 0  # a trial is truncated at ``limit`` steps (None: only by the env)
+        self.sizes = (0.0, 0.0)  # connrl.value_scale.reward_sizes of the rewards it has passed on
+        self.on_sizes = None  # called with the new sizes when they grow
 
     def observation(self, observation):
         return self.scaler.encode(observation)
@@ -199,18 +140,22 @@ class _Scaled(gym.ObservationWrapper):
 
     def step(self, action):
         obs, r, terminated, truncated, info = super().step(action)
-        self.max_abs_reward = max(self.max_abs_reward, abs(float(r)))
         self.steps += 1
         if self.limit is not None and self.steps >= self.limit and not terminated:
             truncated = True  # a cut, not a failure: the learner bootstraps through it
+        i = int(bool(terminated))
+        if abs(float(r)) > self.sizes[i]:
+            self.sizes = (abs(float(r)), self.sizes[1]) if i == 0 else (self.sizes[0], abs(float(r)))
+            if self.on_sizes is not None:
+                self.on_sizes(self.sizes)
         return obs, r, terminated, truncated, info
 
 
-def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[list, float, list]:
-    """Observations, the largest |reward| and the episodes (observations, actions, rewards, terminated) of ``steps``
-    random-policy steps (at least one observation)."""
+def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[list, list, list]:
+    """Observations, every step's (reward, terminated) and the episodes (observations, actions, rewards, terminated)
+    of ``steps`` random-policy steps (at least one observation)."""
     obs, _ = env.reset(seed=int(rng.integers(2**31)))
-    seen, r_max, episodes, ep = [obs], 0.0, [], ([obs], [], [])
+    seen, rewards, episodes, ep = [obs], [], [], ([obs], [], [])
     for _ in range(steps):
         a = int(rng.integers(env.action_space.n))
         obs, r, terminated, truncated, _ = env.step(a)
@@ -218,23 +163,26 @@ def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[list, float, lis
         ep[0].append(obs)
         ep[1].append(a)
         ep[2].append(float(r))
-        r_max = max(r_max, abs(float(r)))
+        rewards.append((float(r), bool(terminated)))
         if terminated or truncated:
             episodes.append((*ep, bool(terminated)))
             obs, _ = env.reset(seed=int(rng.integers(2**31)))
             seen.append(obs)
             ep = ([obs], [], [])
-    return seen, r_max, episodes  # raw: a Dict observation is no array
+    return seen, rewards, episodes  # raw: a Dict observation is no array
 
 
 class Agent:
     """A thesis learner bound to one environment's spaces, with its scales (``make_agent`` builds it)."""
 
     def __init__(self, kind: str, options: AgentOptions, observation_space, action_space, scaler: InputScaler,
-                 value_range: float, seed: int, env_id: str | None):
+                 value_range: float | None, seed: int, env_id: str | None):
         if kind not in KINDS:
             raise ValueError(f"unknown agent {kind!r}; available: {', '.join(KINDS)}")
-        self.kind, self.options, self.scaler, self.value_range = kind, options, scaler, float(value_range)
+        # value_range None: provisional until the first non-zero reward sets it (connrl.value_scale)
+        self.range_set = value_range is not None
+        self.kind, self.options, self.scaler = kind, options, scaler
+        self.value_range = float(value_range) if self.range_set else PROVISIONAL
         self.observation_space, self.action_space = observation_space, action_space
         self.env_id, self.seed = env_id, seed
         self.rng = np.random.default_rng(seed)
@@ -281,6 +229,7 @@ class Agent:
         self.check_env(env)
         scaled, end = _Scaled(env, self.scaler), self.steps_done + total_steps
         callbacks.on_training_start(self, end)
+        scaled.on_sizes = self._check_range
         while self.steps_done < end:
             scaled.limit = min(cap, end - self.steps_done)
             try:
@@ -292,7 +241,6 @@ class Agent:
                 raise
             self.steps_done += stats.steps
             self.trials_done += 1
-            self._check_range(scaled.max_abs_reward)
             if progress:
                 print(f"\rsteps {self.steps_done}/{end}  trial {self.trials_done}  return {stats.total_reward:.1f}",
                       end="", flush=True)
@@ -322,12 +270,21 @@ class Agent:
                 raise ValueError(f"this agent was made for {self.env_id or 'another environment'} with {name} "
                                  f"{mine}; the given environment has {theirs}")
 
-    def _check_range(self, r_max: float) -> None:
-        """Warn once when a reward seen while learning allows returns beyond +-value_range (|r| / (1 - gamma) above
-        it): such targets are cut off by the nets' output range and the Q-values stop telling actions apart."""
-        bound = r_max / max(1.0 - self.options.gamma, 1e-3)
-        if not self._range_warned and bound > self.value_range * (1 + 1e-9):
+    def _check_range(self, sizes: tuple[float, float]) -> None:
+        """Called when the rewards seen while learning grow (``sizes``: connrl.value_scale.reward_sizes). The first
+        non-zero ones set a provisional range (the nets rescaled: every target so far was 0); later ones that allow
+        returns beyond +-value_range grow it, keeping the Q-values (connrl.value_scale.rescale). A range the user
+        set is kept, with a warning, once: such targets are cut off and the Q-values stop telling actions apart."""
+        bound = range_for(*sizes, self.options.gamma)
+        if bound is None or self.range_set and bound <= self.value_range * (1 + 1e-9):
+            return
+        if self.options.value_range is None:
+            rescale(_all_nets(self), bound, keep_q=self.range_set)
+            self.range_set, self.value_range = True, bound
+            return
+        if not self._range_warned:
             self._range_warned = True
+            r_max = sizes[0] if bound > sizes[1] else sizes[1]
             warnings.warn(f"a reward of {r_max:.3g} allows returns up to {bound:.3g}, beyond value_range "
                           f"+-{self.value_range:.3g}: such targets are cut off; give a larger value_range "
                           "(make_agent(..., value_range=...) or connrl train --option value_range=...)", RuntimeWarning,
@@ -360,10 +317,16 @@ class Agent:
         write_agent(path, {
             "agent": self.kind, "env_id": self.env_id, "observation_space": space_json(self.observation_space),
             "action_space": space_json(self.action_space), "options": asdict(self.options),
-            "scaler": self.scaler.to_json(), "value_range": self.value_range, "seed": self.seed,
+            "scaler": self.scaler.to_json(), "value_range": self.value_range, "range_set": self.range_set,
+            "seed": self.seed,
             "steps_done": self.steps_done, "trials_done": self.trials_done, "rng": self.rng.bit_generator.state},
             self.nets.state_dict(), memory.lessons if memory is not None else [], self.learner.book.taught)
         return path
+
+
+def _all_nets(agent: Agent) -> list:
+    nets = agent.nets
+    return list(nets.parts.values()) if isinstance(nets, _NetPair) else [nets]
 
 
 class _NetPair:
@@ -416,12 +379,12 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options
     o = options_from(options)
     rng = np.random.default_rng(seed)
     raw_taught = read_taught(lessons, env) if lessons is not None else []  # a file for another task: refused first
-    seen, r_max, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
+    seen, rewards, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
     scaler = InputScaler.fit(env.observation_space, seen)
     taught = [Lesson(np.array([scaler.encode_row(x) for x in lesson.inputs]), lesson.actions, lesson.rewards,
                      terminated=lesson.terminated, truncated=lesson.truncated, taught=True) for lesson in raw_taught]
-    r_max = max([r_max] + [float(np.abs(x.rewards).max()) for x in taught if x.rewards.size])
-    value_range = o.value_range or max(r_max, 1e-3) / max(1.0 - o.gamma, 1e-3)
+    rewards += [(r, x.terminated and k == x.rewards.size - 1) for x in taught for k, r in enumerate(x.rewards)]
+    value_range = o.value_range or range_for(*reward_sizes(rewards), o.gamma)  # None: set by the first reward
     spec = getattr(env, "spec", None)
     agent = Agent(kind, o, env.observation_space, env.action_space, scaler, value_range,
                   int(rng.integers(2**31)), spec.id if spec is not None else None)
@@ -451,6 +414,8 @@ def load(path, env=None) -> Agent:
     obs_space = space_from(m["observation_space"])
     agent = Agent(m["agent"], options, obs_space, space_from(m["action_space"]),
                   InputScaler.from_json(m["scaler"], obs_space), m["value_range"], m["seed"], m.get("env_id"))
+    if m.get("range_set") is False:  # still provisional (files before it was saved: set)
+        agent.range_set = False
     state, memory, taught = check_arrays(path, arrays, agent.nets.state_dict(), m, _input_width(agent),
                                          int(agent.action_space.n))
     agent.nets.load_state_dict(state)

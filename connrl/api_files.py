@@ -128,6 +128,8 @@ def check_record(meta: Path, m: dict, kinds: tuple[str, ...]) -> None:
             if key == "scale" and not abs(v) > 1e-12:
                 raise FileError(meta, f"holds {v!r}; a scale must be a non-zero finite number", "scaler.scale")
     check_number(meta, "value_range", m.get("value_range"), 0, 1e12, low_open=True)
+    if not isinstance(m.get("range_set", True), bool):  # absent in files before it was saved: set
+        raise FileError(meta, "must be true or false (false: no non-zero reward seen yet)", "range_set")
     check_number(meta, "seed", m.get("seed"), 0, 2**63 - 1, integer=True)
     for key in ("steps_done", "trials_done"):
         check_number(meta, key, m.get(key), 0, 2**53, integer=True)

@@ -227,14 +227,17 @@ def cmd_train(args) -> int:
             if not args.quiet and agent is not None:
                 print(flush=True)  # end the progress line
     code = _finish(agent, out, fresh, stopped, saved, save)
-    evals = [r for r in log.rows if r["eval_mean"] is not None]  # a resumed run's earlier ones too: best/ may be
-    if evaluation is not None and evaluation.results and code == 0:  # from before the resume
-        best = max(evals, key=lambda r: r["eval_mean"])  # the first of equals: best/ is replaced only by a better
-        reached = " (--stop-at reached)" if args.stop_at is not None and evaluation.results[-1][1] >= args.stop_at \
-            else ""
-        print(f"best evaluation: mean return {best['eval_mean']:.2f} at step {best['steps']}, kept in "
-              f"{out / 'best'}{reached}")
+    if evaluation is not None and evaluation.results and code == 0:
+        _say_best(log.rows, evaluation, args.stop_at, out)
     return code
+
+
+def _say_best(rows: list[dict], evaluation, stop_at: float | None, out: Path) -> None:
+    # a resumed run's evaluations from before the resume count too: best/ may be from then
+    best = max((r for r in rows if r["eval_mean"] is not None), key=lambda r: r["eval_mean"])  # the first of
+    reached = " (--stop-at reached)" if stop_at is not None and evaluation.results[-1][1] >= stop_at else ""  # equals
+    print(f"best evaluation: mean return {best['eval_mean']:.2f} at step {best['steps']}, kept in {out / 'best'}"
+          f"{reached}")
 
 
 def _train_folder(args, settings: dict) -> tuple[Path, dict]:

@@ -1,0 +1,70 @@
+"""The own-task learner's settings (``AgentOptions``), each checked on construction (connrl.api uses them)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+# the size-like options' ranges: far beyond any task of the thesis or of Gymnasium's classic control, small enough
+# that no typo asks for gigabytes or centuries before it is noticed
+_SIZES = {"hidden": (0, 1024), "anneal_steps": (1, 10**10), "lessons_per_trial": (0, 10_000),
+          "capacity": (1, 100_000), "warmup_steps": (1, 10**7), "window": (1, 64), "context": (0, 1024)}
+MAX_NET_WEIGHTS = 50_000_000  # inputs x hidden units x actions: 400 MB of float64 per array
+
+
+@dataclass(frozen=True)
+class AgentOptions:
+    """The learner's settings; every one has a default (docs: README, "Your own task")."""
+
+    hidden: int = 16  # hidden units of each action's net
+    lr: float = 0.05  # back-propagation learning rate
+    momentum: float = 0.9
+    init_range: float = 0.5  # initial weights uniform in +-init_range
+    gamma: float = 0.99  # discount factor
+    lam: float = 0.7  # TD(lambda) recency factor of replay (QCON-R)
+    t_start: float = 0.05  # Boltzmann temperature on Q / value_range, from ...
+    t_end: float = 0.005  # ... to this over the first anneal_steps steps
+    anneal_steps: int = 50_000
+    lessons_per_trial: int = 20  # lessons replayed after each trial (QCON-R)
+    capacity: int = 100  # latest lessons kept for replay
+    p_threshold: float | None = None  # actions less likely than this are not replayed (3.5.1); None: the thesis's
+    # value for the framework (4.2.7): 0.01 for Q-learning, 0.2 for AHC
+    value_range: float | None = None  # Q spans +-value_range; None: the largest return the rewards seen allow
+    # (max |r| / (1 - gamma), but |r| for a reward that ends the episode; set by the first non-zero reward, grown by
+    # larger ones)
+    warmup_steps: int = 1000  # random-policy steps that set the input and value scales
+    window: int = 2  # window-Q: the N latest observations and actions beside the current one (7.3)
+    context: int = 8  # recurrent-Q: context units, at most hidden (7.3-7.4)
+
+    def __post_init__(self):
+        for name, (low, high) in _SIZES.items():
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
+                raise ValueError(f"option {name} must be a whole number from {low} to {high:,}, got {v!r}")
+        for name, lo, hi in (("lr", 0, math.inf), ("init_range", 0, math.inf), ("t_start", 0, math.inf),
+                             ("t_end", 0, math.inf)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo < v < hi:
+                raise ValueError(f"option {name} must be a number > 0, got {v!r}")
+        for name in ("momentum", "p_threshold"):
+            v = getattr(self, name)
+            if v is None and name == "p_threshold":
+                continue
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 1:
+                raise ValueError(f"option {name} must be in [0, 1), got {v!r}")
+        for name in ("gamma", "lam"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
+                raise ValueError(f"option {name} must be in [0, 1], got {v!r}")
+        if self.value_range is not None and (isinstance(self.value_range, bool) or not (
+                isinstance(self.value_range, (int, float)) and 0 < self.value_range < math.inf)):
+            raise ValueError(f"option value_range must be None or a number > 0, got {self.value_range!r}")
+
+
+def options_from(kwargs: dict) -> AgentOptions:
+    """``AgentOptions(**kwargs)``, refusing an unknown option with the allowed ones in one line."""
+    allowed = [f.name for f in fields(AgentOptions)]
+    unknown = sorted(set(kwargs) - set(allowed))
+    if unknown:
+        raise ValueError(f"unknown option(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(allowed)}")
+    return AgentOptions(**kwargs)
