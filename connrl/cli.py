@@ -1,5 +1,5 @@
 """Command line: ``connrl list | run | reproduce | show | plot | results | sweep | teach | make-lessons |
-train-behaviours | train | evaluate``."""
+train-behaviours | train | evaluate | tune``."""
 
 from __future__ import annotations
 
