@@ -19,7 +19,8 @@ hand-tuning the scales the thesis's tasks set by hand (``Graph``, ``Text`` and `
   allow: max |reward| / (1 - gamma) for rewards that can recur every step, but only |reward| for one that ends the
   episode (a goal's +1 gives 1, not 100); until a non-zero reward is seen the range is provisional and the first ones
   set it, and larger rewards seen later grow it, the Q-values kept (connrl.value_scale). The temperature acts on
-  Q / value_range, so the scale does not change exploration.
+  Q / value_range, so the scale does not change exploration; AHC's merits get a hotter one than Q-learning's, as in
+  the thesis (connrl.api_options.TEMPERATURES).
 - **Schedules** run over environment steps (``anneal_steps``), not trials: a user states a budget in steps.
 
 Frameworks by the thesis's names: ``"QCON"`` (on-line Q-learning, Fig. 3.4), ``"QCON-R"`` (with backward TD(lambda)
@@ -52,7 +53,7 @@ from connrl.api_files import (
     space_json,
     write_agent,
 )
-from connrl.api_options import MAX_NET_WEIGHTS, AgentOptions, options_from
+from connrl.api_options import MAX_NET_WEIGHTS, AgentOptions, options_from, temperatures
 from connrl.api_spaces import affine_scales, check_observation_space, check_single, flat_scales, flatten
 from connrl.core.divergence import network_problem
 from connrl.core.lessons import Lesson
@@ -207,7 +208,8 @@ class Agent:
         """T in Q units at the current step: linear on Q / value_range from t_start to t_end over anneal_steps."""
         o = self.options
         frac = min(self.steps_done / o.anneal_steps, 1.0)
-        return (o.t_start + (o.t_end - o.t_start) * frac) * self.value_range
+        t_start, t_end = temperatures(o, self.kind)  # None: the framework's (AHC's hotter: api_options.TEMPERATURES)
+        return (t_start + (t_end - t_start) * frac) * self.value_range
 
     def learn(self, total_steps: int, callback=None, progress: bool = False, env=None,
               max_trial_steps: int | None = None) -> Agent:

@@ -12,6 +12,21 @@ _SIZES = {"hidden": (0, 1024), "anneal_steps": (1, 10**10), "lessons_per_trial":
 MAX_NET_WEIGHTS = 50_000_000  # inputs x hidden units x actions: 400 MB of float64 per array
 
 
+# the default temperatures (t_start, t_end) on values / value_range. AHC's merits gather whatever TD error the action
+# taken meets, so at Q-learning's temperatures the action a random start favours soon has a merit several T above
+# the other's, the other is almost never tried and the critic's TD errors, now measuring that one policy, average 0:
+# nothing moves the merits again (CartPole: one push for ever, 9-step trials). The thesis gave its AHC agents a
+# temperature ten times its Q agents' (Table 4.1: 1/T 2 -> 10 against 20 -> 60); on CartPole 2.0 -> 0.1 learns
+# (scripts/own_task/ahcon_cartpole.py; docs/PERFORMANCE.md, "AHCON on your own task").
+TEMPERATURES = {"Q": (0.05, 0.005), "AHC": (2.0, 0.1)}
+
+
+def temperatures(options: AgentOptions, kind: str) -> tuple[float, float]:
+    """``(t_start, t_end)`` for the framework ``kind``: the options' where given, else ``TEMPERATURES``'s."""
+    start, end = TEMPERATURES["AHC" if kind.startswith("AHCON") else "Q"]
+    return (start if options.t_start is None else options.t_start, end if options.t_end is None else options.t_end)
+
+
 @dataclass(frozen=True)
 class AgentOptions:
     """The learner's settings; every one has a default (docs: README, "Your own task")."""
@@ -22,8 +37,9 @@ class AgentOptions:
     init_range: float = 0.5  # initial weights uniform in +-init_range
     gamma: float = 0.99  # discount factor
     lam: float = 0.7  # TD(lambda) recency factor of replay (QCON-R)
-    t_start: float = 0.05  # Boltzmann temperature on Q / value_range, from ...
-    t_end: float = 0.005  # ... to this over the first anneal_steps steps
+    t_start: float | None = None  # Boltzmann temperature on Q (or merits) / value_range, from ...
+    t_end: float | None = None  # ... to this over the first anneal_steps steps; None: the framework's (TEMPERATURES:
+    # Q-learning 0.05 -> 0.005; AHC 2.0 -> 0.1, hotter as the thesis's AHC agents were, 4.3.2; issue 30)
     anneal_steps: int = 50_000
     lessons_per_trial: int = 20  # lessons replayed after each trial (QCON-R)
     capacity: int = 100  # latest lessons kept for replay
@@ -44,6 +60,8 @@ class AgentOptions:
         for name, lo, hi in (("lr", 0, math.inf), ("init_range", 0, math.inf), ("t_start", 0, math.inf),
                              ("t_end", 0, math.inf)):
             v = getattr(self, name)
+            if v is None and name in ("t_start", "t_end"):
+                continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo < v < hi:
                 raise ValueError(f"option {name} must be a number > 0, got {v!r}")
         for name in ("momentum", "p_threshold"):

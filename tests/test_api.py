@@ -235,6 +235,34 @@ def test_replay_thresholds_follow_the_framework_unless_given():
     assert make_agent(Toy(), "AHCON-R", warmup_steps=10, p_threshold=0.05).learner.config.replay.p_threshold == 0.05
 
 
+def test_temperatures_follow_the_framework_unless_given():
+    """AHC's merits get a hotter default temperature than Q-values (issue 30; Table 4.1's AHC agents too)."""
+    q, ahc = make_agent(Toy(), "QCON-R", warmup_steps=10), make_agent(Toy(), "AHCON-R", warmup_steps=10)
+    assert q.temperature(0) == pytest.approx(0.05 * q.value_range)
+    assert ahc.temperature(0) == pytest.approx(2.0 * ahc.value_range)
+    ahc.steps_done = q.steps_done = ahc.options.anneal_steps
+    assert q.temperature(0) == pytest.approx(0.005 * q.value_range)
+    assert ahc.temperature(0) == pytest.approx(0.1 * ahc.value_range)
+    given = make_agent(Toy(), "AHCON-R", warmup_steps=10, t_start=0.05, t_end=0.005)
+    assert given.temperature(0) == pytest.approx(0.05 * given.value_range)
+
+
+def test_ahcon_r_learns_cartpole_not_one_push_for_ever():
+    """Issue 30: at Q-learning's temperature AHCON-R's merits favoured one action in every state within 1,000 steps
+    (9-step trials, greedy return 9); at the AHC default both actions stay greedy somewhere and it balances."""
+    env = gym.make("CartPole-v1")
+    agent = make_agent(env, "AHCON-R", seed=0).learn(10_000)
+    rng, obs = np.random.default_rng(0), env.reset(seed=0)[0]
+    greedy = []
+    for _ in range(300):
+        greedy.append(agent.predict(obs))
+        obs, _, term, trunc, _ = env.step(int(rng.integers(2)))
+        if term or trunc:
+            obs = env.reset(seed=int(rng.integers(1000)))[0]
+    assert 0.1 < np.mean(greedy) < 0.9
+    assert np.mean(connrl.evaluate(agent, env, 5, seed=500)) > 100
+
+
 class Shifted(Toy):
     action_space = spaces.Discrete(2, start=1)
 
