@@ -45,6 +45,7 @@ from gymnasium import spaces
 from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
 from connrl.agents.memory import RecurrentQ, RecurrentQConfig, WindowQ, window_input_size
 from connrl.api_files import (
+    MAX_VALUE_RANGE,
     check_arrays,
     read_agent,
     read_taught,
@@ -113,6 +114,8 @@ class InputScaler:
 
     def encode_row(self, row) -> np.ndarray:
         """A lesson file's input row (``observation_row``: a composite observation already flattened) encoded."""
+        if self.kind == "onehot":  # a Discrete observation's row holds the one number
+            return self.encode(np.asarray(row).ravel()[0])
         return (np.asarray(row, float) - self.offset) / self.scale if self.kind == "flat" else self.encode(row)
 
     def to_json(self) -> dict:
@@ -237,9 +240,9 @@ class Agent:
             try:
                 stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
                                   seed=int(self.rng.integers(2**31)))
-            except BaseException:  # Ctrl-C inside a trial: its steps were taken; its lesson is dropped unreplayed,
-                self.steps_done += scaled.steps  # so the next learn() starts a trial of its own
-                self.learner.book.recorder.finish(False, False)
+            except BaseException:  # Ctrl-C inside a trial: its steps were taken; a lesson still being recorded is
+                self.steps_done += scaled.steps  # dropped, so the next learn() starts a trial of its own (one cut in
+                self.learner.book.recorder.finish(False, False)  # the replay after it is kept, partly replayed)
                 raise
             self.steps_done += stats.steps
             self.trials_done += 1
@@ -283,6 +286,8 @@ class Agent:
         if self.options.value_range is None:
             rescale(_all_nets(self), bound, keep_q=self.range_set)
             self.range_set, self.value_range = True, bound
+            # the rest of this trial and its replay explore at the new scale, not the old one
+            self.learner.explore.base = self.temperature(self.trials_done)
             return
         if not self._range_warned:
             self._range_warned = True
@@ -314,6 +319,9 @@ class Agent:
         if problem:
             raise ValueError(f"the agent diverged after {self.steps_done} steps ({problem}); it is not saved: a "
                              "smaller learning rate (option lr) keeps its weights bounded")
+        if self.value_range > MAX_VALUE_RANGE:
+            raise ValueError(f"value_range {self.value_range:.3g} is beyond {MAX_VALUE_RANGE:.0e}, which agent files "
+                             "hold: scale the task's rewards down")
         path = Path(path)
         memory = self.learner.book.memory
         write_agent(path, {

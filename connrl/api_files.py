@@ -86,6 +86,7 @@ def read_agent(path: Path, kinds: tuple[str, ...]) -> tuple[dict, dict[str, np.n
 
 
 MAX_RECORD_BYTES = 16 * 2**20
+MAX_VALUE_RANGE = 1e12  # Agent.save refuses a larger one, so every saved agent loads
 MAX_LESSONS = 100_000
 MAX_INPUTS, MAX_ACTIONS = 100_000, 10_000  # observation width and actions an agent file may declare
 KINDS_OF_SCALER = {"Discrete": "onehot", "Box": "affine"}  # the scaler kind of each space type; others: "flat"
@@ -127,7 +128,7 @@ def check_record(meta: Path, m: dict, kinds: tuple[str, ...]) -> None:
             check_number(meta, f"scaler.{key}", v)
             if key == "scale" and not abs(v) > 1e-12:
                 raise FileError(meta, f"holds {v!r}; a scale must be a non-zero finite number", "scaler.scale")
-    check_number(meta, "value_range", m.get("value_range"), 0, 1e12, low_open=True)
+    check_number(meta, "value_range", m.get("value_range"), 0, MAX_VALUE_RANGE, low_open=True)
     if not isinstance(m.get("range_set", True), bool):  # absent in files before it was saved: set
         raise FileError(meta, "must be true or false (false: no non-zero reward seen yet)", "range_set")
     check_number(meta, "seed", m.get("seed"), 0, 2**63 - 1, integer=True)
@@ -243,8 +244,8 @@ def read_taught(path, env) -> list[Lesson]:
         if isinstance(space, COMPOSITE) and not all(_is_flat_observation(space, row) for row in lesson.inputs):
             raise LessonFileError(f"{path}: lesson {k} holds rows that are not observations of {space} as "
                                   "gymnasium.spaces.flatten writes them (one-hots and bits as 0 / 1)")
-    return [Lesson(x.inputs[:, 0] if discrete else x.inputs, x.actions, x.rewards, terminated=x.terminated,
-                   truncated=x.truncated, taught=True) for x in lessons]
+    return [Lesson(x.inputs, x.actions, x.rewards, terminated=x.terminated, truncated=x.truncated, taught=True)
+            for x in lessons]  # rows as written (a Discrete observation: one column); InputScaler.encode_row codes them
 
 
 def _is_flat_observation(space, row: np.ndarray) -> bool:

@@ -82,6 +82,12 @@ def as_callback(callback) -> Callback:
                      f"them, got {type(callback).__name__}")
 
 
+def _trial_temperature(agent) -> float:
+    """The temperature (Q units) the trial just ended was played at: set when it began (or when its first reward set
+    the value scale), not the one the next trial will use."""
+    return float(agent.learner.explore.base)
+
+
 def _check_every(name: str, every) -> int:
     if isinstance(every, bool) or not isinstance(every, int) or every < 1:
         raise ValueError(f"{name} must be a whole number of steps >= 1, got {every!r}")
@@ -197,7 +203,7 @@ class ProgressLog(Callback):
         ev = self.eval.last if self.eval is not None else None
         ev = ev if ev is not None and ev[0] == agent.steps_done else None  # an evaluation of this trial only
         self.rows.append({"steps": agent.steps_done, "trial": agent.trials_done, "return": float(stats.total_reward),
-                          "length": stats.steps, "temperature": agent.temperature(agent.trials_done),
+                          "length": stats.steps, "temperature": _trial_temperature(agent),
                           "seconds": round(time.perf_counter() - self._t0, 3),
                           "eval_mean": ev[1] if ev else None, "eval_std": ev[2] if ev else None,
                           "eval_min": ev[3] if ev else None})
@@ -245,7 +251,7 @@ class TensorBoardLog(Callback):
         s, w = agent.steps_done, self.writer
         w.add_scalar("rollout/ep_rew", float(stats.total_reward), s)
         w.add_scalar("rollout/ep_len", stats.steps, s)
-        w.add_scalar("train/temperature", agent.temperature(agent.trials_done), s)
+        w.add_scalar("train/temperature", _trial_temperature(agent), s)
         if self.eval is not None and self.eval.last is not None and self.eval.last[0] == s:
             w.add_scalar("eval/mean_reward", self.eval.last[1], s)
         return True

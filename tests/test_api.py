@@ -332,3 +332,20 @@ def test_agent_files_are_strict_json_with_infinite_bounds_kept(tmp_path):
     assert meta["observation_space"]["high"][1] == "inf"
     again = connrl.load(tmp_path / "a", env)  # and the spaces still match the environment's
     assert np.isinf(again.observation_space.high[1])
+
+
+def test_qcon_t_learns_from_lessons_on_a_task_with_a_discrete_observation(tmp_path):
+    env = gym.make("FrozenLake-v1", is_slippery=False)
+    path = [2, 2, 1, 1, 1, 2]  # right, right, down, down, down, right: the 4x4 map's safe way to the goal
+    steps = iter(path * 10)
+    connrl.record_lessons(env, lambda obs: next(steps), episodes=2, path=tmp_path / "t.json")
+    agent = make_agent(env, "QCON-T", seed=0, lessons=tmp_path / "t.json")
+    first = agent.learner.book.taught[0]
+    assert first.inputs.shape == (7, 16) and np.array_equal(first.inputs[0], np.where(np.arange(16) == 0, 0.5, -0.5))
+    assert agent.value_range == 1.0  # the taught goal's +1 ends the episode: counted once
+
+
+def test_an_agent_whose_range_a_file_cannot_hold_is_refused_at_save_in_one_line(tmp_path):
+    agent = make_agent(Toy(), "QCON-R", warmup_steps=10, value_range=2e12)
+    with pytest.raises(ValueError, match="value_range 2e\\+12 is beyond 1e\\+12"):
+        agent.save(tmp_path / "a")
