@@ -17,10 +17,10 @@ import numpy as np
 
 import connrl
 
-
-def teacher(obs) -> int:
-    """The README's teacher: push toward the side the pole falls to (its own returns are printed)."""
-    return int(obs[2] + 0.5 * obs[3] > 0)
+TEACHERS = {  # observation -> action; their own returns are printed
+    "CartPole-v1": lambda obs: int(obs[2] + 0.5 * obs[3] > 0),  # the README's
+    "MountainCar-v0": lambda obs: 2 if obs[1] >= 0 else 0,  # swing: push the way the car already moves
+}
 
 
 def main() -> None:
@@ -28,22 +28,31 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     ap.add_argument("--steps", type=int, default=10_000)
     ap.add_argument("--agents", nargs="+", default=["QCON-R", "QCON-T", "AHCON-R"])
+    ap.add_argument("--task", choices=sorted(TEACHERS), default="CartPole-v1")
+    ap.add_argument("--every", type=int, default=None, help="also evaluate after every N steps")
     args = ap.parse_args()
-    env = gym.make("CartPole-v1")
+    if args.every is not None and not 0 < args.every <= args.steps:
+        raise SystemExit(f"teaching: --every must be in 1..--steps, got {args.every}")
+    env = gym.make(args.task)
     with tempfile.TemporaryDirectory() as tmp:
-        lessons = Path(tmp) / "cartpole-teacher.json"
-        taught = connrl.record_lessons(env, teacher, 3, lessons)  # episodes on seeds 0-2, as the README's snippet
+        lessons = Path(tmp) / "teacher.json"
+        taught = connrl.record_lessons(env, TEACHERS[args.task], 3, lessons)  # episodes on seeds 0-2, as the README
         print(f"teacher: 3 lessons, returns {[float(x.rewards.sum()) for x in taught]}")
         for kind in args.agents:
             means = []
             for seed in args.seeds:
                 t0 = time.perf_counter()
                 extra = {"lessons": lessons} if kind.endswith("-T") else {}
-                agent = connrl.make_agent(env, kind, seed=seed, **extra).learn(args.steps)
-                mean = float(np.mean(connrl.evaluate(agent, env, 10, seed=500)))
+                agent = connrl.make_agent(env, kind, seed=seed, **extra)
+                curve = []
+                while agent.steps_done < args.steps:
+                    agent.learn(min(args.every or args.steps, args.steps - agent.steps_done))
+                    curve.append(float(np.mean(connrl.evaluate(agent, env, 10, seed=500))))
+                mean = curve[-1]
                 means.append(mean)
+                along = f" (every {args.every}: {' / '.join(f'{c:.0f}' for c in curve)})" if args.every else ""
                 print(f"{kind:<8} seed {seed}: {args.steps} steps ({agent.trials_done} trials), greedy return "
-                      f"{mean:.1f} ({time.perf_counter() - t0:.0f} s)", flush=True)
+                      f"{mean:.1f}{along} ({time.perf_counter() - t0:.0f} s)", flush=True)
             print(f"{kind:<8} mean over seeds {args.seeds}: {np.mean(means):.1f}")
 
 
