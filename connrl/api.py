@@ -50,12 +50,18 @@ from connrl.api_files import (
     read_agent,
     read_taught,
     record_lessons,
-    space_from,
-    space_json,
     write_agent,
 )
 from connrl.api_options import MAX_NET_WEIGHTS, AgentOptions, options_from, temperatures
-from connrl.api_spaces import affine_scales, check_observation_space, check_single, flat_scales, flatten
+from connrl.api_spaces import (
+    affine_scales,
+    check_observation_space,
+    check_single,
+    flat_scales,
+    flatten,
+    space_from,
+    space_json,
+)
 from connrl.core.divergence import network_problem
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import MAX_EPISODE_STEPS, episode_cap, run_trial  # noqa: F401  (MAX_EPISODE_STEPS: API)
@@ -131,7 +137,7 @@ class _Scaled(gym.ObservationWrapper):
         super().__init__(env)
         self.scaler = scaler
         self.observation_space = spaces.Box(-np.inf, np.inf, (scaler.n_inputs,), np.float64)
-        self.limit, self.steps = None, 0  # a trial is truncated at ``limit`` steps (None: only by the env)
+        self.steps = 0  # of the current trial: what a trial cut by Ctrl-C took
         self.sizes = (0.0, 0.0)  # connrl.value_scale.reward_sizes of the rewards it has passed on
         self.on_sizes = None  # called with the new sizes when they grow
 
@@ -145,8 +151,6 @@ class _Scaled(gym.ObservationWrapper):
     def step(self, action):
         obs, r, terminated, truncated, info = super().step(action)
         self.steps += 1
-        if self.limit is not None and self.steps >= self.limit and not terminated:
-            truncated = True  # a cut, not a failure: the learner bootstraps through it
         i = int(bool(terminated))
         if abs(float(r)) > self.sizes[i]:
             self.sizes = (abs(float(r)), self.sizes[1]) if i == 0 else (self.sizes[0], abs(float(r)))
@@ -236,10 +240,9 @@ class Agent:
         callbacks.on_training_start(self, end)
         scaled.on_sizes = self._check_range
         while self.steps_done < end:
-            scaled.limit = min(cap, end - self.steps_done)
-            try:
+            try:  # a trial the budget or the cap cuts is a timeout: the learner bootstraps through it
                 stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
-                                  seed=int(self.rng.integers(2**31)))
+                                  seed=int(self.rng.integers(2**31)), max_steps=min(cap, end - self.steps_done))
             except BaseException:  # Ctrl-C inside a trial: its steps were taken; a lesson still being recorded is
                 self.steps_done += scaled.steps  # dropped, so the next learn() starts a trial of its own (one cut in
                 self.learner.book.recorder.finish(False, False)  # the replay after it is kept, partly replayed)

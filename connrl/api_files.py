@@ -18,8 +18,6 @@ import numpy as np
 from gymnasium import spaces
 
 from connrl.api_spaces import COMPOSITE, binary_units, check_single, check_space, flatten
-from connrl.api_spaces import space_from as space_from  # re-exported: connrl.api imports both from here
-from connrl.api_spaces import space_json as space_json
 from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
 from connrl.core.lessons import Lesson
 from connrl.storage import (

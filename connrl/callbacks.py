@@ -99,20 +99,18 @@ class _Every:
     resumed run keeps the schedule)."""
 
     def __init__(self, every: int):
-        self.every, self.done = every, None
+        self.every, self.done = every, 0
+
+    def start(self, steps: int) -> None:
+        """At the start of training: due next at the first multiple past ``steps``."""
+        self.done = steps // self.every
 
     def due(self, steps: int) -> bool:
         k = steps // self.every
-        if self.done is None:  # the first call of this training: due only if a multiple was crossed since start
-            self.done = k
-            return False
         if k > self.done:
             self.done = k
             return True
         return False
-
-    def start(self, steps: int) -> None:
-        self.done = steps // self.every
 
 
 class EvalCallback(Callback):
@@ -133,17 +131,20 @@ class EvalCallback(Callback):
         self.stop_at, self.max_episode_steps, self.verbose = stop_at, max_episode_steps, verbose
         self.results: list[tuple[int, float, float, float]] = []
         self.best_mean = -math.inf
-        self.last: tuple[int, float, float, float] | None = None  # the evaluation of the latest trial, if any
+        self.last: tuple[int, float, float, float] | None = None  # the latest evaluation
 
     def on_training_start(self, agent, total_steps):
         agent.check_env(self.env)
         self.every.start(agent.steps_done)
 
     def on_trial_end(self, agent, stats):
-        self.last = None
         if not self.every.due(agent.steps_done):
             return True
         return self.evaluate(agent)
+
+    def of_trial(self, agent) -> tuple[int, float, float, float] | None:
+        """The evaluation run at the end of the agent's latest trial, or None (for logs that run after this)."""
+        return self.last if self.last is not None and self.last[0] == agent.steps_done else None
 
     def evaluate(self, agent) -> bool:
         """Evaluate now; False when ``stop_at`` is reached."""
@@ -192,7 +193,6 @@ class ProgressLog(Callback):
         self.path, self.eval = Path(path), eval_callback
         self.rows: list[dict] = read_progress(self.path) if resume and self.path.exists() else []
         self.flush_every, self._flushed, self._t0 = flush_every, 0.0, 0.0
-        self.error: OSError | None = None  # the latest failed periodic write
 
     def on_training_start(self, agent, total_steps):
         self.rows = [r for r in self.rows if r["steps"] <= agent.steps_done]  # rows past the checkpoint are redone
@@ -200,8 +200,7 @@ class ProgressLog(Callback):
         self._flushed = time.perf_counter()
 
     def on_trial_end(self, agent, stats):
-        ev = self.eval.last if self.eval is not None else None
-        ev = ev if ev is not None and ev[0] == agent.steps_done else None  # an evaluation of this trial only
+        ev = self.eval.of_trial(agent) if self.eval is not None else None
         self.rows.append({"steps": agent.steps_done, "trial": agent.trials_done, "return": float(stats.total_reward),
                           "length": stats.steps, "temperature": _trial_temperature(agent),
                           "seconds": round(time.perf_counter() - self._t0, 3),
@@ -217,8 +216,8 @@ class ProgressLog(Callback):
     def _try_flush(self) -> None:
         try:
             self.flush()
-        except OSError as exc:  # a full disk must not end training: the next save of the agent reports it
-            self.error = exc
+        except OSError:  # a full disk must not end training: the next save of the agent reports it
+            pass
 
     def flush(self) -> None:
         buf = io.StringIO()
@@ -252,8 +251,9 @@ class TensorBoardLog(Callback):
         w.add_scalar("rollout/ep_rew", float(stats.total_reward), s)
         w.add_scalar("rollout/ep_len", stats.steps, s)
         w.add_scalar("train/temperature", _trial_temperature(agent), s)
-        if self.eval is not None and self.eval.last is not None and self.eval.last[0] == s:
-            w.add_scalar("eval/mean_reward", self.eval.last[1], s)
+        ev = self.eval.of_trial(agent) if self.eval is not None else None
+        if ev is not None:
+            w.add_scalar("eval/mean_reward", ev[1], s)
         return True
 
     def on_training_end(self, agent):

@@ -151,19 +151,26 @@ def _train_settings(args) -> dict:
             "teach": args.teach, "settings_from": source}
 
 
-def _resumed_settings(out: Path, settings: dict, args) -> dict:
-    """The settings of the run in ``out`` that --resume continues; the command may change only --steps."""
+def _read_run_settings(file: Path) -> dict:
+    """A `connrl train` run's settings.json (read by connrl.storage.read_json: strict, size-capped); ValueError in one
+    line naming the file otherwise."""
     from connrl.storage import read_json
 
+    s = read_json(file, "connrl train settings file")
+    if not isinstance(s, dict):
+        raise ValueError(f"{file}: is not a connrl train settings file")
+    return s
+
+
+def _resumed_settings(out: Path, settings: dict, args) -> dict:
+    """The settings of the run in ``out`` that --resume continues; the command may change only --steps."""
     file = out / "settings.json"
     if not (out / "agent.json").exists():
         raise SystemExit(f"connrl: --resume: {out} holds no trained agent (agent.json) to continue")
     try:
-        old = read_json(file, "connrl train settings file")
+        old = _read_run_settings(file)
     except ValueError as exc:
         raise SystemExit(f"connrl: --resume: {exc}") from None
-    if not isinstance(old, dict):
-        raise SystemExit(f"connrl: --resume: {file} is not a connrl train settings file")
     for key in ("env_id", "agent", "seed", "env_kwargs", "options", "teach"):
         if old.get(key) != settings[key]:
             raise SystemExit(f"connrl: --resume: {key} is {settings[key]!r} here but {old.get(key)!r} in {file}; a "
@@ -338,16 +345,14 @@ def _write_curve(out: Path, rows: list[dict], title: str) -> Path:
 
 def plot_training(folder: Path) -> Path:
     """Redraw a trained agent's curve.png from its progress.csv (``connrl plot FOLDER``)."""
-    import json
-
     from connrl.callbacks import read_progress
 
     rows = read_progress(folder / "progress.csv")
     title = str(folder)
     try:
-        s = json.loads((folder / "settings.json").read_text())
+        s = _read_run_settings(folder / "settings.json")
         title = f"{s['env_id']}, {s['agent']}, seed {s['seed']}"
-    except (OSError, ValueError, KeyError, TypeError):
+    except (ValueError, KeyError):  # no settings (an agent saved by the API): the folder names the plot
         pass
     return _write_curve(folder, rows, title)
 
@@ -374,15 +379,13 @@ def _saved_env_id(path: str) -> str | None:
 
 def _saved_env_kwargs(path: Path) -> dict:
     """The env kwargs of the `connrl train` run an agent folder (or its best/ agent) came from; {} without one."""
-    import json
-
     for folder in (path, path.parent) if path.name == "best" else (path,):
         file = folder / "settings.json"
         if file.exists():
             try:
-                kwargs = json.loads(file.read_text()).get("env_kwargs", {})
-            except (OSError, ValueError, AttributeError) as exc:
-                raise SystemExit(f"connrl: {file}: cannot be read as connrl train settings ({exc})") from None
+                kwargs = _read_run_settings(file).get("env_kwargs", {})
+            except ValueError as exc:
+                raise SystemExit(f"connrl: {exc}") from None
             if not isinstance(kwargs, dict):
                 raise SystemExit(f"connrl: {file}: env_kwargs must be a mapping, got {kwargs!r}")
             named = [k for k, v in kwargs.items() if isinstance(v, str) and ":" in v]

@@ -25,7 +25,8 @@ def run_trial(env, agent, *, trial: int, learning: bool, seed: int | None = None
               max_steps: int | None = None, on_step=None) -> TrialStats:
     """Play one trial. With ``learning`` the agent observes each step and replays after the trial;
     without it the agent acts greedily (T = 0) and nothing is learned (the thesis's test phase).
-    ``max_steps`` stops a test early (counted as truncated); ``on_step(info)`` sees every step.
+    ``max_steps`` cuts the trial there: a timeout (truncated), which a learning agent observes as one, so replay
+    bootstraps through it; ``on_step(info)`` sees every step.
     """
     obs, info = env.reset(seed=seed, options=options)
     agent.begin_trial(obs, info, trial=trial, learning=learning)
@@ -36,14 +37,13 @@ def run_trial(env, agent, *, trial: int, learning: bool, seed: int | None = None
         obs, r, terminated, truncated, info = env.step(a)
         steps += 1
         total += float(r)
+        if max_steps is not None and steps >= max_steps and not terminated:
+            truncated = True
         if learning:
             agent.observe(a, r, obs, terminated, truncated, info)
         if on_step is not None:
             on_step(info)
         if terminated or truncated:
-            break
-        if max_steps is not None and steps >= max_steps:
-            truncated = True
             break
     agent.end_trial()
     if learning:
