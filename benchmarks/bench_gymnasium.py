@@ -1,109 +1,125 @@
-"""connrl's QCON-R with its defaults, and SB3's DQN with RL-Zoo's settings and with SB3's own defaults when installed.
+"""connrl's QCON-R against SB3's DQN (RL Zoo's settings and SB3's own defaults) on four Gymnasium tasks.
 
-    python benchmarks/bench_gymnasium.py [--tasks CartPole-v1 Acrobot-v1 MountainCar-v0] [--seeds 3]
-                                         [--sb3 zoo default]
+    python benchmarks/bench_gymnasium.py [--tasks ...] [--seeds 0 1 2 3 4] [--learners QCON-R SB3-zoo SB3-default]
+                                         [--workers 1] [--out DIR] [--write docs/PERFORMANCE.md] [--no-run]
 
-Per task and seed: the environment steps until a *held solve* -- the greedy policy's mean return over 10 episodes at
-or above the task's threshold (CartPole 475, Acrobot -100, MountainCar -110) at five evaluations in a row, one every
-5,000 steps, the steps counted at the fifth -- within RL-Zoo's budget for DQN (50k, 100k, 120k); the training wall time
-(evaluations excluded) as wall and CPU seconds, environment steps per second by each, and the greedy return at the
-last evaluation (the held one, or the one at the budget). connrl's random warm-up (1,000 steps that set its scales) is
-counted in its steps and its time, as SB3's ``learning_starts`` steps are in SB3's; connrl evaluates after the trial
-that crosses each 5,000 mark, SB3 on the mark. SB3's DQN runs only where ``stable_baselines3`` imports
-(``pip install -e ".[bench]"``), on one torch thread, as each connrl run has one core, twice over (``--sb3`` picks):
-``SB3-zoo`` with RL-Zoo's DQN hyperparameters (``RL_ZOO_DQN``, copied from rl-baselines3-zoo's hyperparams/dqn.yml)
-and ``SB3-default`` as ``DQN("MlpPolicy", env, seed=seed)``, nothing else set (SB3's defaults: learning rate 1e-4,
-buffer 1,000,000, learning_starts 100, batch 32, train_freq 4, one gradient step, target update every 10,000 steps,
-exploration 1 -> 0.05 over the first 10 %, net 64-64). The ratios of QCON-R's speed to each follow the table.
+Per task, learner and seed: the greedy policy's mean return over 10 episodes (evaluation seeds 10,000-10,009) every
+5,000 environment steps up to RL Zoo's DQN budget (CartPole-v1 50k, Acrobot-v1 100k, MountainCar-v0 120k,
+LunarLander-v3 100k); the steps to a *held solve* -- the greedy mean at or above the task's threshold (475, -100,
+-110, 200) at five evaluations in a row, counted at the fifth; the training wall and CPU time (evaluations excluded)
+and so the environment steps per second. Training goes on to the budget after a held solve, so the learning curves
+are whole. connrl's random warm-up (1,000 steps that set its scales) is counted in its steps and time, as SB3's
+``learning_starts`` steps are in SB3's; connrl evaluates after the trial that crosses each 5,000 mark, SB3 on the mark.
+
+Learners: ``QCON-R`` with the task's entry of the shipped settings file ``connrl/data/hyperparams/qcon-r.yml``
+(the options chosen for it, docs/PERFORMANCE.md); ``SB3-zoo``: SB3's DQN with RL Zoo's hyperparameters
+(``RL_ZOO_DQN``, from rl-baselines3-zoo's hyperparams/dqn.yml); ``SB3-default``: ``DQN("MlpPolicy", env, seed=seed)``
+(learning rate 1e-4, buffer 1,000,000, learning_starts 100, batch 32, train_freq 4, target update every 10,000 steps,
+exploration 1 -> 0.05 over the first 10 %, net 64-64). SB3 runs only where ``stable_baselines3`` imports (the
+``bench`` extra), on one torch thread, as each connrl run has one core.
+
+Each run is written to ``--out`` as one JSON file (atomically) under a key of what it ran: the learner's settings and,
+for connrl, a hash of connrl's source; for SB3, its and torch's versions. A run whose file exists with the same key
+is read, not redone: an interrupted benchmark resumes, and SB3's runs are reused until SB3 or its settings change.
+``--write`` puts the table, the verdict per task and the learning-curve plot (docs/figures/bench-gymnasium.png)
+between ``<!-- bench_gymnasium:begin -->`` and ``<!-- bench_gymnasium:end -->`` of the given Markdown file.
+With ``--workers 2`` two runs share the machine: read the speeds of such a run with that in mind.
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
+import json
+import multiprocessing
+import sys
 import time
-from functools import partial
-from typing import NamedTuple
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
-import connrl
+sys.path.insert(0, str(Path(__file__).parent))
+from gymnasium_report import Run, summarize, write_block  # noqa: E402
 
-TASKS = {"CartPole-v1": (475.0, 50_000), "Acrobot-v1": (-100.0, 100_000), "MountainCar-v0": (-110.0, 120_000)}
-EVAL_EVERY, EVAL_EPISODES, HELD = 5_000, 10, 5
+import connrl  # noqa: E402
+from connrl.settings import task_settings  # noqa: E402
+from connrl.storage import atomic_write_text, read_json, strict_json  # noqa: E402
+
+TASKS = {"CartPole-v1": (475.0, 50_000), "Acrobot-v1": (-100.0, 100_000), "MountainCar-v0": (-110.0, 120_000),
+         "LunarLander-v3": (200.0, 100_000)}  # threshold, RL Zoo's DQN budget
+EVAL_EVERY, EVAL_EPISODES, HELD, EVAL_SEED = 5_000, 10, 5, 10_000
 _ZOO_COMMON = {"policy": "MlpPolicy", "policy_kwargs": {"net_arch": [256, 256]}}
-RL_ZOO_DQN = {  # rl-baselines3-zoo hyperparams/dqn.yml (n_timesteps is TASKS' budget)
+_ZOO_LUNAR_ACROBOT = dict(learning_rate=6.3e-4, batch_size=128, buffer_size=50_000, learning_starts=0, gamma=0.99,
+                          target_update_interval=250, train_freq=4, gradient_steps=-1, exploration_fraction=0.12,
+                          exploration_final_eps=0.1)
+RL_ZOO_DQN = {  # rl-baselines3-zoo hyperparams/dqn.yml (its LunarLander-v2 entry for v3; n_timesteps is TASKS')
     "CartPole-v1": dict(learning_rate=2.3e-3, batch_size=64, buffer_size=100_000, learning_starts=1000, gamma=0.99,
                         target_update_interval=10, train_freq=256, gradient_steps=128, exploration_fraction=0.16,
                         exploration_final_eps=0.04),
-    "Acrobot-v1": dict(learning_rate=6.3e-4, batch_size=128, buffer_size=50_000, learning_starts=0, gamma=0.99,
-                       target_update_interval=250, train_freq=4, gradient_steps=-1, exploration_fraction=0.12,
-                       exploration_final_eps=0.1),
+    "Acrobot-v1": _ZOO_LUNAR_ACROBOT,
     "MountainCar-v0": dict(learning_rate=4e-3, batch_size=128, buffer_size=10_000, learning_starts=1000, gamma=0.98,
                            target_update_interval=600, train_freq=16, gradient_steps=8, exploration_fraction=0.2,
                            exploration_final_eps=0.07),
+    "LunarLander-v3": _ZOO_LUNAR_ACROBOT,
 }
+LEARNERS = ("QCON-R", "SB3-zoo", "SB3-default")
 
 
-class _Held:
-    """Counts the evaluations in a row at the threshold; ``check(steps, returns)`` is False once a solve is held.
-    ``eval_s`` / ``eval_cpu`` add up the evaluations' wall and CPU seconds, ``last`` is the latest greedy mean."""
+class _Curve:
+    """The evaluations of one run: ``add(steps, returns)`` at each mark; ``held`` is the steps at the fifth
+    evaluation in a row at the threshold (the first such), else None. ``eval_s`` / ``eval_cpu`` add up the
+    evaluations' wall and CPU seconds, which are kept out of the training time."""
 
     def __init__(self, threshold: float):
         self.threshold, self.next, self.streak, self.held = threshold, EVAL_EVERY, 0, None
-        self.eval_s, self.eval_cpu, self.last = 0.0, 0.0, float("nan")
-
-    def timed(self, evaluate):
-        """``evaluate()``'s returns, its wall and CPU time kept apart from training's."""
-        t0, c0 = time.perf_counter(), time.process_time()
-        returns = evaluate()
-        self.eval_s += time.perf_counter() - t0
-        self.eval_cpu += time.process_time() - c0
-        return returns
+        self.points: list[tuple[int, float]] = []
+        self.eval_s = self.eval_cpu = 0.0
 
     def due(self, steps: int) -> bool:
         return steps >= self.next
 
-    def check(self, steps: int, returns) -> bool:
+    def add(self, steps: int, evaluate) -> None:
+        t0, c0 = time.perf_counter(), time.process_time()
+        mean = float(np.mean(evaluate()))
+        self.eval_s += time.perf_counter() - t0
+        self.eval_cpu += time.process_time() - c0
         self.next += EVAL_EVERY
-        self.last = float(np.mean(returns))
-        self.streak = self.streak + 1 if self.last >= self.threshold else 0
-        if self.streak == HELD:
+        self.points.append((steps, mean))
+        self.streak = self.streak + 1 if mean >= self.threshold else 0
+        if self.streak >= HELD and self.held is None:
             self.held = steps
-            return False
-        return True
 
 
-class Result(NamedTuple):
-    held: int | None  # steps to a held solve, None if not within the budget
-    greedy: float  # greedy mean return at the last evaluation
-    wall: float  # training seconds (evaluations excluded)
-    cpu: float  # training CPU seconds of this process (evaluations excluded)
-    steps: int  # training environment steps
+def connrl_options(task: str) -> dict:
+    """QCON-R's options for ``task``: its entry in the shipped settings file (none: the defaults)."""
+    entry, _ = task_settings(task, "QCON-R")
+    return dict(entry["options"]) if entry else {}
 
 
-def run_connrl(task: str, seed: int) -> Result:
-    """QCON-R with its defaults."""
+def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "QCON-R") -> dict:
+    """One connrl run (``options``: AgentOptions fields, default the shipped settings)."""
     threshold, budget = TASKS[task]
+    options = connrl_options(task) if options is None else options
     env, eval_env = gym.make(task), gym.make(task)
     t0, c0 = time.perf_counter(), time.process_time()
-    agent = connrl.make_agent(env, "QCON-R", seed=seed)
+    agent = connrl.make_agent(env, kind, seed=seed, **options)
     warmup = agent.options.warmup_steps  # environment steps too: counted like SB3's learning_starts
-    held = _Held(threshold)
+    curve = _Curve(threshold)
 
     def evaluate(a, _ret):
-        if not held.due(warmup + a.steps_done):
-            return True
-        returns = held.timed(lambda: connrl.evaluate(a, eval_env, EVAL_EPISODES, seed=10_000))
-        return held.check(warmup + a.steps_done, returns)
+        if curve.due(warmup + a.steps_done):
+            curve.add(warmup + a.steps_done, lambda: connrl.evaluate(a, eval_env, EVAL_EPISODES, seed=EVAL_SEED))
+        return True
 
     agent.learn(budget - warmup, callback=evaluate)
-    return Result(held.held, held.last, time.perf_counter() - t0 - held.eval_s,
-                  time.process_time() - c0 - held.eval_cpu, warmup + agent.steps_done)
+    return _record(curve, time.perf_counter() - t0, time.process_time() - c0, warmup + agent.steps_done,
+                   diverged=agent.divergence())
 
 
-def run_sb3(task: str, seed: int, zoo: bool) -> Result:
-    """The same for SB3's DQN, with RL-Zoo's hyperparameters (``zoo``) or SB3's defaults; greedy =
+def run_sb3(task: str, seed: int, zoo: bool) -> dict:
+    """The same for SB3's DQN, with RL Zoo's hyperparameters (``zoo``) or SB3's defaults; greedy is
     ``deterministic=True``."""
     import torch
     from stable_baselines3 import DQN
@@ -111,18 +127,18 @@ def run_sb3(task: str, seed: int, zoo: bool) -> Result:
 
     torch.set_num_threads(1)
     threshold, budget = TASKS[task]
-    eval_env, held = gym.make(task), _Held(threshold)
+    eval_env, curve = gym.make(task), _Curve(threshold)
 
     class Evaluate(BaseCallback):
         def _on_step(self) -> bool:
-            if not held.due(self.num_timesteps):
-                return True
-            return held.check(self.num_timesteps, held.timed(self.greedy_returns))
+            if curve.due(self.num_timesteps):
+                curve.add(self.num_timesteps, self.greedy_returns)
+            return True
 
         def greedy_returns(self) -> list[float]:
             returns = []
             for k in range(EVAL_EPISODES):
-                obs, _ = eval_env.reset(seed=10_000 + k)
+                obs, _ = eval_env.reset(seed=EVAL_SEED + k)
                 done, total = False, 0.0
                 while not done:
                     a, _ = self.model.predict(obs, deterministic=True)
@@ -131,68 +147,119 @@ def run_sb3(task: str, seed: int, zoo: bool) -> Result:
                 returns.append(total)
             return returns
 
-    settings = {**_ZOO_COMMON, **RL_ZOO_DQN[task]} if zoo else {"policy": "MlpPolicy"}
+    settings = sb3_settings(task, zoo)
     # device="cpu" is what "auto" picks on a machine without CUDA; verbose=0 only silences it
     model = DQN(env=gym.make(task), seed=seed, device="cpu", verbose=0, **settings)
     t0, c0 = time.perf_counter(), time.process_time()
     model.learn(budget, callback=Evaluate())
-    return Result(held.held, held.last, time.perf_counter() - t0 - held.eval_s,
-                  time.process_time() - c0 - held.eval_cpu, int(model.num_timesteps))
+    return _record(curve, time.perf_counter() - t0, time.process_time() - c0, int(model.num_timesteps))
 
 
-SB3_RUNS = {"zoo": ("SB3-zoo", True), "default": ("SB3-default", False)}
+def sb3_settings(task: str, zoo: bool) -> dict:
+    return {**_ZOO_COMMON, **RL_ZOO_DQN[task]} if zoo else {"policy": "MlpPolicy"}
+
+
+def _record(curve: _Curve, wall: float, cpu: float, steps: int, diverged: str | None = None) -> dict:
+    return {"held": curve.held, "curve": curve.points, "wall": wall - curve.eval_s, "cpu": cpu - curve.eval_cpu,
+            "steps": steps, "diverged": diverged}
+
+
+def _source_hash() -> str:
+    """A hash of connrl's source: a connrl run is redone when the code that ran it changes."""
+    h = hashlib.sha256()
+    for f in sorted(Path(connrl.__file__).parent.rglob("*")):
+        if f.suffix in (".py", ".yml") and "__pycache__" not in f.parts:
+            h.update(f.relative_to(Path(connrl.__file__).parent).as_posix().encode() + f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def run_key(learner: str, task: str) -> dict:
+    """What a run depends on besides its seed (a cached run with another key is redone)."""
+    protocol = {"threshold_budget": TASKS[task], "eval": [EVAL_EVERY, EVAL_EPISODES, HELD, EVAL_SEED]}
+    if learner == "QCON-R":
+        return {"learner": learner, "protocol": protocol, "options": connrl_options(task),
+                "connrl_source": _source_hash(), "numpy": np.__version__, "gymnasium": gym.__version__}
+    import stable_baselines3
+    import torch
+    return {"learner": learner, "protocol": protocol, "settings": sb3_settings(task, learner == "SB3-zoo"),
+            "gymnasium": gym.__version__, "stable_baselines3": stable_baselines3.__version__,
+            "torch": torch.__version__}
+
+
+def _job(args: tuple) -> dict:
+    learner, task, seed = args
+    if learner == "QCON-R":
+        return run_connrl(task, seed)
+    return run_sb3(task, seed, zoo=learner == "SB3-zoo")
+
+
+def _cached(path: Path, key: dict) -> dict | None:
+    if not path.exists():
+        return None
+    try:
+        doc = read_json(path, "benchmark run")
+    except ValueError as exc:
+        print(f"{exc}: redone", flush=True)
+        return None
+    return doc if isinstance(doc, dict) and doc.get("key") == json.loads(strict_json(key)) else None
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--tasks", nargs="*", default=list(TASKS), choices=list(TASKS))
-    ap.add_argument("--seeds", type=int, default=3)
-    ap.add_argument("--sb3", nargs="*", default=list(SB3_RUNS), choices=list(SB3_RUNS),
-                    help="SB3 DQN references: RL-Zoo's settings, SB3's defaults (default: both; none: QCON-R only)")
+    ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=list(TASKS))
+    ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2, 3, 4])
+    ap.add_argument("--learners", nargs="+", default=list(LEARNERS), choices=LEARNERS)
+    ap.add_argument("--workers", type=int, default=1, help="runs at once (default 1: speeds from a quiet machine)")
+    ap.add_argument("--out", type=Path, default=Path("benchmarks/results/gymnasium"))
+    ap.add_argument("--write", type=Path, default=None, help="Markdown file to put the results block in")
+    ap.add_argument("--no-run", action="store_true", help="report the runs on disk only; run none")
     args = ap.parse_args()
-    try:
-        import stable_baselines3
-        import torch
-        sb3 = [SB3_RUNS[k] for k in args.sb3]
-        print(f"stable-baselines3 {stable_baselines3.__version__}, torch {torch.__version__}, one torch thread; "
-              f"seeds 0-{args.seeds - 1}")
-    except ImportError:
-        sb3 = []
-    learners = {"QCON-R": run_connrl, **{name: partial(run_sb3, zoo=zoo) for name, zoo in sb3}}
-    print(f"{'task':<16} {'learner':<12} {'seed':>4} {'held at':>9} {'greedy':>8} {'wall s':>7} {'cpu s':>7} "
-          f"{'steps/s wall':>13} {'steps/s cpu':>12}")
-    summary = {}
+    if args.workers < 1:
+        ap.error(f"--workers must be 1 or more, got {args.workers}")
+    if args.write is not None and not args.write.is_file():
+        ap.error(f"--write {args.write}: no such Markdown file (give docs/PERFORMANCE.md or another existing file)")
+    learners = list(args.learners)
+    if any(name.startswith("SB3") for name in learners):
+        try:
+            import stable_baselines3  # noqa: F401
+        except ImportError:
+            print("SB3-DQN: not run (stable_baselines3 is not installed: pip install -e \".[bench]\")", flush=True)
+            learners = [name for name in learners if not name.startswith("SB3")]
+    for task in list(args.tasks):
+        try:
+            gym.make(task).close()
+        except gym.error.DependencyNotInstalled:
+            print(f"{task}: not run (Box2D is not installed: pip install -e \".[bench]\")", flush=True)
+            args.tasks.remove(task)
+    args.out.mkdir(parents=True, exist_ok=True)
+    runs, todo = [], []
     for task in args.tasks:
-        for name, run in learners.items():
-            results = []
-            for seed in range(args.seeds):
-                r = run(task, seed)
-                results.append(r)
-                print(f"{task:<16} {name:<12} {seed:>4} {r.held if r.held else 'not held':>9} {r.greedy:>8.1f} "
-                      f"{r.wall:>7.1f} {r.cpu:>7.1f} {r.steps / r.wall:>13.0f} {r.steps / r.cpu:>12.0f}", flush=True)
-            summary[task, name] = results
-            print(f"{task:<16} {name} held a solve in {sum(r.held is not None for r in results)} of {args.seeds} "
-                  f"seeds within {TASKS[task][1]:,} steps; greedy return at the last evaluation "
-                  f"{' / '.join(f'{r.greedy:.1f}' for r in results)}")
-    if not sb3:
-        if not args.sb3:
-            print("SB3-DQN: not run (--sb3 names none); no ratios")
-        else:
-            print("SB3-DQN: not run (stable_baselines3 is not installed: pip install -e \".[bench]\"); no ratios")
-        return
-    print("\nratios, connrl QCON-R / SB3 DQN (steps/s: mean over the seeds; steps to held solve: mean over the seeds "
-          "where both held, none such: n/a)")
-    for task in args.tasks:
-        ours = summary[task, "QCON-R"]
-        for name, _ in sb3:
-            theirs = summary[task, name]
-            both = [(a.held, b.held) for a, b in zip(ours, theirs, strict=True) if a.held and b.held]
-            steps = f"{np.mean([a for a, _ in both]) / np.mean([b for _, b in both]):.2f}x" if both else "n/a"
-            held_ours, held_theirs = (sum(r.held is not None for r in rs) for rs in (ours, theirs))
-            cpu, wall = (float(np.mean([r.steps / getattr(r, t) for r in ours]) /
-                               np.mean([r.steps / getattr(r, t) for r in theirs])) for t in ("cpu", "wall"))
-            print(f"{task:<16} vs {name:<12} held {held_ours} vs {held_theirs} of {args.seeds}; steps to held solve "
-                  f"{steps}; steps/s cpu {cpu:.1f}x, wall {wall:.1f}x")
+        for learner in learners:
+            key = run_key(learner, task)
+            for seed in args.seeds:
+                path = args.out / f"{task}_{learner}_{seed}.json"
+                doc = _cached(path, key)
+                if doc is not None:
+                    runs.append(Run(task, learner, seed, doc))
+                else:
+                    todo.append((path, key, (learner, task, seed)))
+    print(f"{len(runs)} runs read from {args.out}, {0 if args.no_run else len(todo)} to run", flush=True)
+    if args.no_run:
+        todo = []
+    with ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = {pool.submit(_job, job): (path, key, job) for path, key, job in todo}
+        for future in as_completed(futures):  # each run is on disk as soon as it ends: a stop loses only those running
+            path, key, (learner, task, seed) = futures[future]
+            doc = json.loads(strict_json({"key": key, **future.result()}))
+            atomic_write_text(path, strict_json(doc))
+            runs.append(Run(task, learner, seed, doc))
+            last = doc["curve"][-1][1] if doc["curve"] else float("nan")
+            print(f"{task:<16} {learner:<12} seed {seed:>4}: held at {doc['held'] or 'not held'}, last greedy "
+                  f"{last:.1f}, cpu {doc['cpu']:.1f} s", flush=True)
+    text = summarize(runs, args.tasks, learners, TASKS, args.seeds)
+    print(text)
+    if args.write is not None:
+        write_block(args.write, text, runs, args.tasks, learners, TASKS, " ".join(sys.argv[1:]))
 
 
 if __name__ == "__main__":

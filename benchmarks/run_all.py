@@ -16,7 +16,8 @@ import time
 from pathlib import Path
 
 SCRIPTS = ["bench_survival_env.py", "bench_robot.py", "bench_recurrent.py", "bench_memory.py",
-           "bench_survival_agents.py", "bench_robot_agent.py", "bench_recharge.py", "bench_gymnasium.py"]
+           "bench_survival_agents.py", "bench_robot_agent.py",
+           "bench_recharge.py"]  # bench_gymnasium.py writes its own block (--write)
 
 
 def main() -> None:

@@ -218,6 +218,13 @@ class Agent:
         t_start, t_end = temperatures(o, self.kind)  # None: the framework's (AHC's hotter: api_options.TEMPERATURES)
         return (t_start + (t_end - t_start) * frac) * self.value_range
 
+    def learning_rate(self) -> float:
+        """The learning rate at the current step: lr, or linear from lr to lr_end over anneal_steps."""
+        o = self.options
+        if o.lr_end is None:
+            return o.lr
+        return o.lr + (o.lr_end - o.lr) * min(self.steps_done / o.anneal_steps, 1.0)
+
     def learn(self, total_steps: int, callback=None, progress: bool = False, env=None,
               max_trial_steps: int | None = None) -> Agent:
         """Train for exactly ``total_steps`` environment steps in ``env`` (the one given to ``make_agent`` by
@@ -240,6 +247,8 @@ class Agent:
         callbacks.on_training_start(self, end)
         scaled.on_sizes = self._check_range
         while self.steps_done < end:
+            for net in _all_nets(self):  # a trial and its replay learn at the rate of the step it starts at
+                net.lr = self.learning_rate()
             try:  # a trial the budget or the cap cuts is a timeout: the learner bootstraps through it
                 stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
                                   seed=int(self.rng.integers(2**31)), max_steps=min(cap, end - self.steps_done))

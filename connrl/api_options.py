@@ -32,7 +32,8 @@ class AgentOptions:
     """The learner's settings; every one has a default (docs: README, "Your own task")."""
 
     hidden: int = 16  # hidden units of each action's net
-    lr: float = 0.05  # back-propagation learning rate
+    lr: float = 0.05  # back-propagation learning rate, ...
+    lr_end: float | None = None  # ... going linearly to this over the first anneal_steps steps; None: lr throughout
     momentum: float = 0.9
     init_range: float = 0.5  # initial weights uniform in +-init_range
     gamma: float = 0.99  # discount factor
@@ -57,10 +58,10 @@ class AgentOptions:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
                 raise ValueError(f"option {name} must be a whole number from {low} to {high:,}, got {v!r}")
-        for name, lo, hi in (("lr", 0, math.inf), ("init_range", 0, math.inf), ("t_start", 0, math.inf),
-                             ("t_end", 0, math.inf)):
+        for name, lo, hi in (("lr", 0, math.inf), ("lr_end", 0, math.inf), ("init_range", 0, math.inf),
+                             ("t_start", 0, math.inf), ("t_end", 0, math.inf)):
             v = getattr(self, name)
-            if v is None and name in ("t_start", "t_end"):
+            if v is None and name in ("t_start", "t_end", "lr_end"):
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo < v < hi:
                 raise ValueError(f"option {name} must be a number > 0, got {v!r}")

@@ -349,3 +349,22 @@ def test_an_agent_whose_range_a_file_cannot_hold_is_refused_at_save_in_one_line(
     agent = make_agent(Toy(), "QCON-R", warmup_steps=10, value_range=2e12)
     with pytest.raises(ValueError, match="value_range 2e\\+12 is beyond 1e\\+12"):
         agent.save(tmp_path / "a")
+
+
+def test_the_learning_rate_goes_linearly_to_lr_end_each_trial_at_the_rate_of_its_first_step(tmp_path):
+    agent = make_agent(Toy(), "QCON-R", seed=1, warmup_steps=10, lr=0.1, lr_end=0.01, anneal_steps=20)
+    assert agent.learning_rate() == pytest.approx(0.1)
+    agent.learn(10)  # two 5-step trials, started at steps 0 and 5
+    assert agent.nets.lr == pytest.approx(0.1 + (0.01 - 0.1) * 5 / 20)
+    agent.learn(20)
+    assert agent.learning_rate() == pytest.approx(0.01) and agent.nets.lr == pytest.approx(0.01)
+    again = connrl.load(agent.save(tmp_path / "a"), Toy())
+    assert again.options.lr_end == 0.01 and again.learning_rate() == pytest.approx(0.01)
+    # lr_end equal to lr is the constant rate: the same weights as without a schedule
+    same = [make_agent(Toy(), "QCON-R", seed=2, warmup_steps=10, lr=0.1, **kw).learn(30)
+            for kw in ({}, {"lr_end": 0.1})]
+    np.testing.assert_array_equal(same[0].nets.w1, same[1].nets.w1)
+    slower = make_agent(Toy(), "QCON-R", seed=2, warmup_steps=10, lr=0.1, lr_end=0.001, anneal_steps=5).learn(30)
+    assert not np.array_equal(slower.nets.w1, same[0].nets.w1)
+    with pytest.raises(ValueError, match="option lr_end must be a number > 0, got 0"):
+        make_agent(Toy(), lr_end=0)

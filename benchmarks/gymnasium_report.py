@@ -1,0 +1,158 @@
+"""bench_gymnasium.py's table, verdicts and learning-curve plot, and the block it writes into docs/PERFORMANCE.md."""
+
+from __future__ import annotations
+
+import math
+import re
+import subprocess
+import time
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+FIGURE = Path("docs/figures/bench-gymnasium.png")
+SPEED_GOAL = 10.0  # issue 30: at 10x or more SB3-DQN's environment steps per second
+
+
+class Run(NamedTuple):
+    task: str
+    learner: str
+    seed: int
+    doc: dict  # held, curve [[steps, greedy mean], ...], wall, cpu, steps, diverged
+
+
+def median_held(runs: list[Run]) -> float:
+    """The median of the steps to a held solve, a run that never held counting as infinitely many."""
+    return float(np.median([r.doc["held"] if r.doc["held"] is not None else math.inf for r in runs]))
+
+
+def first_reach(run: Run, threshold: float) -> float:
+    """The steps at the first evaluation at or above the threshold (inf: none)."""
+    return next((float(steps) for steps, v in run.doc["curve"] if v >= threshold), math.inf)
+
+
+def relapses(runs: list[Run], threshold: float) -> tuple[int, int]:
+    """(evaluations below the threshold, evaluations) after each run's first one at it: how often a policy that
+    reached a solve lost it again, which a held solve (five in a row) does not forgive."""
+    below = total = 0
+    for r in runs:
+        after = [v for steps, v in r.doc["curve"] if steps > first_reach(r, threshold)]
+        below, total = below + sum(v < threshold for v in after), total + len(after)
+    return below, total
+
+
+def _steps(v: float, budget: int) -> str:
+    return f"{v:,.0f}" if math.isfinite(v) else f"> {budget:,}"
+
+
+def _rate(runs: list[Run], clock: str) -> float:
+    return float(np.mean([r.doc["steps"] / r.doc[clock] for r in runs]))
+
+
+def _select(runs: list[Run], task: str, learner: str) -> list[Run]:
+    return sorted((r for r in runs if r.task == task and r.learner == learner), key=lambda r: r.seed)
+
+
+def summarize(runs: list[Run], tasks: list[str], learners: list[str], task_info: dict, seeds: list[int]) -> str:
+    """The table (one row per task and learner) and, where QCON-R and SB3-zoo both ran, the verdict per task."""
+    lines = [f"seeds {' '.join(map(str, seeds))}; held = greedy mean at the threshold at 5 evaluations in a row "
+             "(every 5,000 steps); median over the seeds, a run that never held counting as more than the budget",
+             "",
+             f"{'task':<15} {'learner':<12} {'held':>5} {'median steps':>13}  {'held at, per seed':<44} "
+             f"{'greedy at budget, per seed':<30} {'reached':>8} {'lost':>7} {'cpu steps/s':>11} {'wall steps/s':>12}"]
+    for task in tasks:
+        threshold, budget = task_info[task]
+        for learner in learners:
+            rs = _select(runs, task, learner)
+            if not rs:
+                continue
+            held = " ".join(f"{r.doc['held']:,}" if r.doc["held"] else "-" for r in rs)
+            last = " ".join(f"{r.doc['curve'][-1][1]:.0f}" + ("!" if r.doc.get("diverged") else "") for r in rs)
+            reached = float(np.median([first_reach(r, threshold) for r in rs]))
+            below, total = relapses(rs, threshold)
+            lost = f"{below}/{total}" if total else "-"
+            lines.append(f"{task:<15} {learner:<12} {sum(r.doc['held'] is not None for r in rs):>2}/{len(rs):<2} "
+                         f"{_steps(median_held(rs), budget):>13}  {held:<44} {last:<30} "
+                         f"{f'{reached / 1000:.0f}k' if math.isfinite(reached) else '-':>8} {lost:>7} "
+                         f"{_rate(rs, 'cpu'):>11,.0f} {_rate(rs, 'wall'):>12,.0f}")
+    lines += ["", "(held at - : not held within the budget; ! : the run diverged; reached: median steps to the first "
+              "evaluation at the threshold, - if most runs never reached it; lost: evaluations below the threshold "
+              "after each run's first at it, of all evaluations after it)"]
+    lines += _verdicts(runs, tasks, learners, task_info)
+    return "\n".join(lines)
+
+
+def _verdicts(runs: list[Run], tasks: list[str], learners: list[str], task_info: dict) -> list[str]:
+    if "QCON-R" not in learners or "SB3-zoo" not in learners:
+        return []
+    out = ["", "issue 30's goal per task: QCON-R's median steps to a held solve below SB3-zoo's, at >= 10x its steps/s"]
+    for task in tasks:
+        ours, theirs = _select(runs, task, "QCON-R"), _select(runs, task, "SB3-zoo")
+        if not ours or not theirs:
+            continue
+        budget = task_info[task][1]
+        a, b = median_held(ours), median_held(theirs)
+        speed = _rate(ours, "cpu") / _rate(theirs, "cpu")
+        fewer = math.isfinite(a) and a < b
+        verdict = "met" if fewer and speed >= SPEED_GOAL else "not met"
+        ratio = f" ({a / b:.2f}x SB3-zoo's steps)" if math.isfinite(a) and math.isfinite(b) else ""
+        out.append(f"{task:<15} {verdict:<8} median steps {_steps(a, budget)} vs {_steps(b, budget)}{ratio}; "
+                   f"steps/s {speed:.1f}x by CPU time")
+        for other in (n for n in learners if n not in ("QCON-R", "SB3-zoo")):
+            theirs = _select(runs, task, other)
+            if theirs:
+                out.append(f"{'':<15} {'':<8} against {other}: median steps {_steps(median_held(theirs), budget)}; "
+                           f"steps/s {_rate(ours, 'cpu') / _rate(theirs, 'cpu'):.1f}x by CPU time")
+    return out
+
+
+def plot(runs: list[Run], tasks: list[str], learners: list[str], task_info: dict, path: Path) -> None:
+    """One panel per task: each learner's greedy mean at the k-th evaluation (drawn at k x 5,000 steps) averaged
+    over the seeds, shaded from the lowest to the highest seed."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cols = min(len(tasks), 2)
+    fig, axes = plt.subplots(math.ceil(len(tasks) / cols), cols, figsize=(6 * cols, 3.6 * math.ceil(len(tasks) / cols)),
+                             squeeze=False)
+    for ax, task in zip(axes.flat, tasks, strict=False):
+        threshold, budget = task_info[task]
+        for learner in learners:
+            rs = _select(runs, task, learner)
+            if not rs:
+                continue
+            k = min(len(r.doc["curve"]) for r in rs)
+            y = np.array([[p[1] for p in r.doc["curve"][:k]] for r in rs])
+            x = 5_000 * np.arange(1, k + 1)
+            line, = ax.plot(x, y.mean(axis=0), label=f"{learner} ({len(rs)} seeds)")
+            ax.fill_between(x, y.min(axis=0), y.max(axis=0), color=line.get_color(), alpha=0.2)
+        ax.axhline(threshold, color="grey", ls="--", lw=0.8)
+        ax.set(title=task, xlabel="environment steps", ylabel="greedy return (10 episodes)", xlim=(0, budget))
+        ax.legend(fontsize=8, loc="lower right")
+    for ax in list(axes.flat)[len(tasks):]:
+        ax.set_visible(False)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def write_block(doc_path: Path, text: str, runs: list[Run], tasks: list[str], learners: list[str], task_info: dict,
+                argv: str) -> None:
+    """The results block of ``doc_path`` (between the bench_gymnasium markers) and the figure beside it."""
+    figure = doc_path.parent / "figures" / FIGURE.name
+    plot(runs, tasks, learners, task_info, figure)
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "connrl", "benchmarks"], capture_output=True,
+                           text=True).stdout.strip()
+    block = (f"<!-- bench_gymnasium:begin -->\n`python benchmarks/bench_gymnasium.py {argv}` "
+             f"({time.strftime('%Y-%m-%d')}, commit {commit or 'unknown'}{' with local changes' if dirty else ''}):\n"
+             f"\n```\n{text.strip()}\n```\n\n![learning curves: greedy return against environment steps, mean over "
+             f"the seeds, shaded from the lowest to the highest seed](figures/{figure.name})\n"
+             "<!-- bench_gymnasium:end -->")
+    doc = doc_path.read_text()
+    pattern = r"<!-- bench_gymnasium:begin -->.*?<!-- bench_gymnasium:end -->"
+    doc = re.sub(pattern, lambda _: block, doc, flags=re.S) if re.search(pattern, doc, re.S) else doc + "\n" + block
+    doc_path.write_text(doc)

@@ -1,0 +1,38 @@
+"""benchmarks/gymnasium_report.py's numbers on small hand-made runs: the median steps to a held solve (a run that
+never held counts as infinitely many), the first evaluation at the threshold, and the evaluations lost after it."""
+
+import math
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from gymnasium_report import Run, first_reach, median_held, relapses, summarize  # noqa: E402
+
+
+def _run(seed, held, values, learner="QCON-R"):
+    curve = [[5000 * (k + 1), v] for k, v in enumerate(values)]
+    return Run("T", learner, seed, {"held": held, "curve": curve, "wall": 2.0, "cpu": 4.0, "steps": 100,
+                                    "diverged": None})
+
+
+def test_median_counts_a_run_that_never_held_as_more_than_any_budget():
+    assert median_held([_run(0, 10_000, []), _run(1, None, []), _run(2, 30_000, [])]) == 30_000
+    assert median_held([_run(0, 10_000, []), _run(1, None, []), _run(2, None, [])]) == math.inf
+    assert median_held([_run(0, 10_000, []), _run(1, 20_000, [])]) == 15_000
+
+
+def test_first_reach_and_the_evaluations_lost_after_it():
+    a, b = _run(0, None, [1, 5, 2, 6, 7]), _run(1, None, [1, 1, 1])
+    assert first_reach(a, 5) == 10_000 and first_reach(b, 5) == math.inf
+    assert relapses([a, b], 5) == (1, 3)  # after 10,000 steps: 2 (below), 6, 7
+
+
+def test_the_table_states_who_met_the_goal():
+    runs = [_run(s, 10_000, [9] * 4) for s in range(3)]  # 100 steps in 4 CPU s: 25 steps/s
+    runs += [_run(s, 20_000 if s else None, [9] * 4, "SB3-zoo") for s in range(3)]
+    runs = [r._replace(doc={**r.doc, "cpu": 100.0}) if r.learner == "SB3-zoo" else r for r in runs]  # 1 step/s
+    text = summarize(runs, ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, [0, 1, 2])
+    assert "T               met      median steps 10,000 vs 20,000 (0.50x SB3-zoo's steps); steps/s 25.0x" in text
+    slow = [r._replace(doc={**r.doc, "cpu": 40.0}) if r.learner == "QCON-R" else r for r in runs]  # 2.5x
+    assert "not met  median steps 10,000 vs 20,000" in summarize(slow, ["T"], ["QCON-R", "SB3-zoo"],
+                                                                {"T": (5.0, 20_000)}, [0, 1, 2])
