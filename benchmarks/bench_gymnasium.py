@@ -32,9 +32,11 @@ import argparse
 import hashlib
 import json
 import multiprocessing
+import platform
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import gymnasium as gym
@@ -65,6 +67,7 @@ RL_ZOO_DQN = {  # rl-baselines3-zoo hyperparams/dqn.yml (its LunarLander-v2 entr
     "LunarLander-v3": _ZOO_LUNAR_ACROBOT,
 }
 LEARNERS = ("QCON-R", "SB3-zoo", "SB3-default")
+PROTOCOL = 1  # raise it when the evaluation or timing above changes: every cached run is redone
 
 
 class _Curve:
@@ -175,15 +178,23 @@ def _source_hash() -> str:
 
 def run_key(learner: str, task: str) -> dict:
     """What a run depends on besides its seed (a cached run with another key is redone)."""
-    protocol = {"threshold_budget": TASKS[task], "eval": [EVAL_EVERY, EVAL_EPISODES, HELD, EVAL_SEED]}
-    if learner == "QCON-R":
-        return {"learner": learner, "protocol": protocol, "options": connrl_options(task),
-                "connrl_source": _source_hash(), "numpy": np.__version__, "gymnasium": gym.__version__}
-    import stable_baselines3
-    import torch
-    return {"learner": learner, "protocol": protocol, "settings": sb3_settings(task, learner == "SB3-zoo"),
-            "gymnasium": gym.__version__, "stable_baselines3": stable_baselines3.__version__,
-            "torch": torch.__version__}
+    common = {"learner": learner, "protocol": {"version": PROTOCOL, "threshold_budget": TASKS[task],
+                                               "eval": [EVAL_EVERY, EVAL_EPISODES, HELD, EVAL_SEED]},
+              "machine": platform.machine(), **_versions("numpy", "gymnasium", "box2d")}
+    if learner == "QCON-R":  # numba: the kernels are compiled with fastmath
+        return {**common, "options": connrl_options(task), "connrl_source": _source_hash(), **_versions("numba")}
+    return {**common, "settings": sb3_settings(task, learner == "SB3-zoo"),
+            **_versions("stable-baselines3", "torch")}
+
+
+def _versions(*packages: str) -> dict:
+    out = {}
+    for name in packages:
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:
+            out[name] = None
+    return out
 
 
 def _job(args: tuple) -> dict:
@@ -216,6 +227,14 @@ def main() -> None:
     args = ap.parse_args()
     if args.workers < 1:
         ap.error(f"--workers must be 1 or more, got {args.workers}")
+    for name in ("tasks", "seeds", "learners"):
+        values = getattr(args, name)
+        if len(set(values)) < len(values):
+            ap.error(f"--{name} names one twice: {' '.join(map(str, values))}")
+    if min(args.seeds) < 0:
+        ap.error(f"--seeds must be whole numbers >= 0, got {min(args.seeds)}")
+    if args.out.exists() and not args.out.is_dir():
+        ap.error(f"--out {args.out}: is a file, not a folder of runs")
     if args.write is not None and not args.write.is_file():
         ap.error(f"--write {args.write}: no such Markdown file (give docs/PERFORMANCE.md or another existing file)")
     learners = list(args.learners)
@@ -250,7 +269,12 @@ def main() -> None:
         futures = {pool.submit(_job, job): (path, key, job) for path, key, job in todo}
         for future in as_completed(futures):  # each run is on disk as soon as it ends: a stop loses only those running
             path, key, (learner, task, seed) = futures[future]
-            doc = json.loads(strict_json({"key": key, **future.result()}))
+            try:
+                result = future.result()
+            except Exception as exc:  # one failed run is reported; the others are kept
+                print(f"{task:<16} {learner:<12} seed {seed:>4}: failed ({type(exc).__name__}: {exc})", flush=True)
+                continue
+            doc = json.loads(strict_json({"key": key, "workers": args.workers, **result}))
             atomic_write_text(path, strict_json(doc))
             runs.append(Run(task, learner, seed, doc))
             last = doc["curve"][-1][1] if doc["curve"] else float("nan")

@@ -77,19 +77,23 @@ def summarize(runs: list[Run], tasks: list[str], learners: list[str], task_info:
                          f"{f'{reached / 1000:.0f}k' if math.isfinite(reached) else '-':>8} {lost:>7} "
                          f"{_rate(rs, 'cpu'):>11,.0f} {_rate(rs, 'wall'):>12,.0f}")
     lines += ["", "(held at - : not held within the budget; ! : the run diverged; reached: median steps to the first "
-              "evaluation at the threshold, - if most runs never reached it; lost: evaluations below the threshold "
-              "after each run's first at it, of all evaluations after it)"]
-    lines += _verdicts(runs, tasks, learners, task_info)
+              "evaluation at the threshold, - if the median run never reached it; lost: evaluations below the "
+              "threshold after each run's first at it, of all evaluations after it)"]
+    lines += _verdicts(runs, tasks, learners, task_info, seeds)
     return "\n".join(lines)
 
 
-def _verdicts(runs: list[Run], tasks: list[str], learners: list[str], task_info: dict) -> list[str]:
+def _verdicts(runs: list[Run], tasks: list[str], learners: list[str], task_info: dict, seeds: list[int]) -> list[str]:
     if "QCON-R" not in learners or "SB3-zoo" not in learners:
         return []
     out = ["", "issue 30's goal per task: QCON-R's median steps to a held solve below SB3-zoo's, at >= 10x its steps/s"]
     for task in tasks:
         ours, theirs = _select(runs, task, "QCON-R"), _select(runs, task, "SB3-zoo")
         if not ours or not theirs:
+            continue
+        if not [r.seed for r in ours] == [r.seed for r in theirs] == sorted(seeds):  # an interrupted or partial run
+            out.append(f"{task:<15} no verdict: QCON-R ran seeds {[r.seed for r in ours]}, SB3-zoo "
+                       f"{[r.seed for r in theirs]}")
             continue
         budget = task_info[task][1]
         a, b = median_held(ours), median_held(theirs)
@@ -145,8 +149,8 @@ def write_block(doc_path: Path, text: str, runs: list[Run], tasks: list[str], le
     figure = doc_path.parent / "figures" / FIGURE.name
     plot(runs, tasks, learners, task_info, figure)
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-    dirty = subprocess.run(["git", "status", "--porcelain", "connrl", "benchmarks"], capture_output=True,
-                           text=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "connrl", "benchmarks"],
+                           capture_output=True, text=True).stdout.strip()
     block = (f"<!-- bench_gymnasium:begin -->\n`python benchmarks/bench_gymnasium.py {argv}` "
              f"({time.strftime('%Y-%m-%d')}, commit {commit or 'unknown'}{' with local changes' if dirty else ''}):\n"
              f"\n```\n{text.strip()}\n```\n\n![learning curves: greedy return against environment steps, mean over "

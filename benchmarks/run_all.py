@@ -1,4 +1,5 @@
-"""Run every environment/agent benchmark script and paste its output into docs/PERFORMANCE.md.
+"""Run the environment/agent benchmark scripts and paste their output into docs/PERFORMANCE.md (bench_gymnasium.py,
+which takes an hour and more, writes its own block: ``--write``).
 
     python benchmarks/run_all.py --write docs/PERFORMANCE.md
 

@@ -225,6 +225,10 @@ class Agent:
             return o.lr
         return o.lr + (o.lr_end - o.lr) * min(self.steps_done / o.anneal_steps, 1.0)
 
+    def _set_learning_rate(self) -> None:
+        for net in _all_nets(self):
+            net.lr = self.learning_rate()
+
     def learn(self, total_steps: int, callback=None, progress: bool = False, env=None,
               max_trial_steps: int | None = None) -> Agent:
         """Train for exactly ``total_steps`` environment steps in ``env`` (the one given to ``make_agent`` by
@@ -247,8 +251,8 @@ class Agent:
         callbacks.on_training_start(self, end)
         scaled.on_sizes = self._check_range
         while self.steps_done < end:
-            for net in _all_nets(self):  # a trial and its replay learn at the rate of the step it starts at
-                net.lr = self.learning_rate()
+            if self.options.lr_end is not None:  # a trial and its replay learn at the rate of the step it starts at
+                self._set_learning_rate()
             try:  # a trial the budget or the cap cuts is a timeout: the learner bootstraps through it
                 stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
                                   seed=int(self.rng.integers(2**31)), max_steps=min(cap, end - self.steps_done))
@@ -449,6 +453,8 @@ def load(path, env=None) -> Agent:
     except (ValueError, TypeError, KeyError, OverflowError) as exc:
         raise FileError(meta, f"is not a NumPy {type(agent.rng.bit_generator).__name__} state ({exc})", "rng") from None
     agent.steps_done, agent.trials_done = int(m["steps_done"]), int(m["trials_done"])
+    if agent.options.lr_end is not None:
+        agent._set_learning_rate()  # the schedule's rate at the saved step, as learn() would set it
     if env is not None:
         try:
             agent.check_env(env)

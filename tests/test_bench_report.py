@@ -36,3 +36,21 @@ def test_the_table_states_who_met_the_goal():
     slow = [r._replace(doc={**r.doc, "cpu": 40.0}) if r.learner == "QCON-R" else r for r in runs]  # 2.5x
     assert "not met  median steps 10,000 vs 20,000" in summarize(slow, ["T"], ["QCON-R", "SB3-zoo"],
                                                                 {"T": (5.0, 20_000)}, [0, 1, 2])
+
+
+def test_no_verdict_unless_both_ran_every_seed():
+    runs = [_run(s, 10_000, [9]) for s in range(3)] + [_run(s, 20_000, [9], "SB3-zoo") for s in range(2)]
+    text = summarize(runs, ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, [0, 1, 2])
+    assert "no verdict: QCON-R ran seeds [0, 1, 2], SB3-zoo [0, 1]" in text and " met " not in text
+
+
+def test_a_held_solve_is_the_fifth_evaluation_in_a_row_at_the_threshold_and_the_first_such():
+    from bench_gymnasium import _Curve
+
+    curve = _Curve(threshold=5.0)
+    values = [5, 6, 7, 8, 4, 5, 5, 5, 5, 9, 9, 9, 9, 9, 9]  # a streak of four broken, then five from the sixth
+    for k, v in enumerate(values):
+        assert curve.due(5000 * (k + 1)) and not curve.due(5000 * (k + 1) - 1)
+        curve.add(5000 * (k + 1), lambda v=v: [v, v])
+    assert curve.held == 5000 * 10  # evaluations 6-10; the longer streak after it does not move it
+    assert [v for _, v in curve.points] == values

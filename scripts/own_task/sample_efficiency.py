@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from connrl.api import KINDS, options_from
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from bench_gymnasium import TASKS, connrl_options, run_connrl  # noqa: E402
 
@@ -55,13 +57,22 @@ def main() -> None:
     ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101, 102, 103, 104])
     ap.add_argument("--base", nargs="*", default=[], help="option=value on top of the shipped settings")
     ap.add_argument("--vary", nargs="*", default=[], help="option=v1,v2,...: one row per value")
-    ap.add_argument("--kind", default="QCON-R")
+    ap.add_argument("--kind", default="QCON-R", choices=[k for k in KINDS if not k.endswith("-T")])
     ap.add_argument("--workers", type=int, default=1)
     args = ap.parse_args()
+    if args.workers < 1:
+        ap.error(f"--workers must be 1 or more, got {args.workers}")
+    if len(args.vary) > len({item.split("=", 1)[0] for item in args.vary}):
+        ap.error("--vary names an option twice: give its values in one list (lr=0.02,0.1)")
     base = {**connrl_options(args.task), **{k: _value(v) for k, v in _pairs(args.base, "--base").items()}}
     rows = [("base", base)]
     for k, values in _pairs(args.vary, "--vary").items():
         rows += [(f"{k}={v}", {**base, k: _value(v)}) for v in values.split(",")]
+    for name, options in rows:  # every setting checked before anything runs
+        try:
+            options_from(options)
+        except (ValueError, TypeError) as exc:
+            ap.error(f"{name}: {exc}")
     jobs = [(args.task, seed, options, args.kind) for _, options in rows for seed in args.seeds]
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(_job, jobs))
