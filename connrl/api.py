@@ -258,7 +258,7 @@ class Agent:
                                   seed=int(self.rng.integers(2**31)), max_steps=min(cap, end - self.steps_done))
             except BaseException:  # Ctrl-C inside a trial: its steps were taken; a lesson still being recorded is
                 self.steps_done += scaled.steps  # dropped, so the next learn() starts a trial of its own (one cut in
-                self.learner.book.recorder.finish(False, False)  # the replay after it is kept, partly replayed)
+                self.learner.book.recorder.discard()  # the replay after it is kept, partly replayed)
                 raise
             self.steps_done += stats.steps
             self.trials_done += 1

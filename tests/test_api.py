@@ -368,3 +368,27 @@ def test_the_learning_rate_goes_linearly_to_lr_end_each_trial_at_the_rate_of_its
     assert not np.array_equal(slower.nets.w1, same[0].nets.w1)
     with pytest.raises(ValueError, match="option lr_end must be a number > 0, got 0"):
         make_agent(Toy(), lr_end=0)
+
+
+def test_ctrl_c_between_a_steps_parts_is_still_ctrl_c_and_learning_goes_on(monkeypatch):
+    """A signal after a step's action and reward were recorded but before its next input: the half lesson is
+    dropped (building it would fail its own check and turn the Ctrl-C into a ValueError)."""
+    from connrl.core.lessons import LessonRecorder
+
+    agent = make_agent(Toy(), "QCON-R", seed=0, warmup_steps=10)
+    real_add, calls = LessonRecorder.add, []
+
+    def add(self, x, a, r, y):
+        calls.append(1)
+        if len(calls) == 7:  # inside the second trial
+            self.actions.append(int(a))
+            self.rewards.append(float(r))
+            raise KeyboardInterrupt
+        real_add(self, x, a, r, y)
+
+    monkeypatch.setattr(LessonRecorder, "add", add)
+    with pytest.raises(KeyboardInterrupt):
+        agent.learn(20)
+    assert agent.steps_done == 7 and len(agent.learner.book.recorder) == 0
+    monkeypatch.setattr(LessonRecorder, "add", real_add)
+    assert agent.learn(5).steps_done == 12

@@ -70,6 +70,10 @@ class LessonRecorder:
     def __len__(self) -> int:
         return len(self.actions)
 
+    def discard(self) -> None:
+        """Drop what was recorded, even a step half-added when a signal arrived (no lesson is built from it)."""
+        self.__init__()
+
     def finish(self, terminated: bool, truncated: bool) -> Lesson | None:
         if not self.actions:
             return None
