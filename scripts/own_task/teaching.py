@@ -1,8 +1,9 @@
-"""Teaching on a user's task (3.7 through connrl.api): QCON-R against QCON-T given the three episodes of the README's
-CartPole teacher, and AHCON-R, each on the same seeds and step budget; prints the greedy return (mean of 10
-episodes, evaluation seeds 500-509) per seed.
+"""Teaching on a user's task (3.7 through connrl.api): QCON-R against QCON-T given three episodes of a hand-written
+teacher (``TEACHERS``: CartPole's is the README's), and AHCON-R, each on the same seeds and step budget; prints the
+greedy return (mean of 10 episodes, evaluation seeds 500-509) per seed, and with ``--every N`` along the way.
 
-    python scripts/own_task/teaching_cartpole.py [--seeds 0 1 2] [--steps 10000] [--agents QCON-R QCON-T AHCON-R]
+    python scripts/own_task/teaching.py [--task CartPole-v1|MountainCar-v0|Acrobot-v1] [--seeds 0 1 2]
+        [--steps 10000] [--every N] [--agents QCON-R QCON-T AHCON-R]
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import connrl
 TEACHERS = {  # observation -> action; their own returns are printed
     "CartPole-v1": lambda obs: int(obs[2] + 0.5 * obs[3] > 0),  # the README's
     "MountainCar-v0": lambda obs: 2 if obs[1] >= 0 else 0,  # swing: push the way the car already moves
+    "Acrobot-v1": lambda obs: 2 if obs[5] > 0 else 0,  # pump: torque the way the second joint already turns
 }
 
 
