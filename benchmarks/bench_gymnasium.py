@@ -12,11 +12,13 @@ are whole. connrl's random warm-up (1,000 steps that set its scales) is counted 
 ``learning_starts`` steps are in SB3's; connrl evaluates after the trial that crosses each 5,000 mark, SB3 on the mark.
 
 Learners: ``QCON-R`` with the task's entry of the shipped settings file ``connrl/data/hyperparams/qcon-r.yml``
-(the options chosen for it, docs/PERFORMANCE.md); ``SB3-zoo``: SB3's DQN with RL Zoo's hyperparameters
-(``RL_ZOO_DQN``, from rl-baselines3-zoo's hyperparams/dqn.yml); ``SB3-default``: ``DQN("MlpPolicy", env, seed=seed)``
-(learning rate 1e-4, buffer 1,000,000, learning_starts 100, batch 32, train_freq 4, target update every 10,000 steps,
-exploration 1 -> 0.05 over the first 10 %, net 64-64). SB3 runs only where ``stable_baselines3`` imports (the
-``bench`` extra), on one torch thread, as each connrl run has one core.
+(the options chosen for it, docs/PERFORMANCE.md); ``QCON-T``, the same given three episodes of a hand-written
+teacher (``TEACHERS``; not on LunarLander, which has none), the teacher's steps counted in its budget; ``SB3-zoo``:
+SB3's DQN with RL Zoo's hyperparameters (``RL_ZOO_DQN``, from rl-baselines3-zoo's hyperparams/dqn.yml);
+``SB3-default``: ``DQN("MlpPolicy", env, seed=seed)`` (learning rate 1e-4, buffer 1,000,000, learning_starts 100,
+batch 32, train_freq 4, target update every 10,000 steps, exploration 1 -> 0.05 over the first 10 %, net 64-64).
+SB3 runs only where ``stable_baselines3`` imports (the ``bench`` extra), on one torch thread, as each connrl run has
+one core.
 
 Each run is written to ``--out`` as one JSON file (atomically) under a key of what it ran: the learner's settings and,
 for connrl, a hash of connrl's source; for SB3, its and torch's versions. A run whose file exists with the same key
@@ -34,6 +36,7 @@ import json
 import multiprocessing
 import platform
 import sys
+import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from importlib.metadata import PackageNotFoundError, version
@@ -66,7 +69,13 @@ RL_ZOO_DQN = {  # rl-baselines3-zoo hyperparams/dqn.yml (its LunarLander-v2 entr
                            exploration_final_eps=0.07),
     "LunarLander-v3": _ZOO_LUNAR_ACROBOT,
 }
-LEARNERS = ("QCON-R", "SB3-zoo", "SB3-default")
+TEACHERS = {  # QCON-T's teacher per task: (what it does, observation -> action); three episodes, env seeds 0-2
+    "CartPole-v1": ("push the way the pole falls (angle + 0.5 angular velocity)", lambda o: int(o[2] + 0.5 * o[3] > 0)),
+    "Acrobot-v1": ("pump: torque the way the second joint turns", lambda o: 2 if o[5] > 0 else 0),
+    "MountainCar-v0": ("swing: push the way the car moves", lambda o: 2 if o[1] >= 0 else 0),
+}
+TAUGHT_EPISODES = 3
+LEARNERS = ("QCON-R", "QCON-T", "SB3-zoo", "SB3-default")
 PROTOCOL = 1  # raise it when the evaluation or timing above changes: every cached run is redone
 
 
@@ -102,13 +111,22 @@ def connrl_options(task: str) -> dict:
 
 
 def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "QCON-R") -> dict:
-    """One connrl run (``options``: AgentOptions fields, default the shipped settings)."""
+    """One connrl run (``options``: AgentOptions fields, default the shipped settings). QCON-T first records
+    ``TAUGHT_EPISODES`` episodes of the task's teacher; their steps count in its budget and time."""
     threshold, budget = TASKS[task]
     options = connrl_options(task) if options is None else options
     env, eval_env = gym.make(task), gym.make(task)
     t0, c0 = time.perf_counter(), time.process_time()
-    agent = connrl.make_agent(env, kind, seed=seed, **options)
-    warmup = agent.options.warmup_steps  # environment steps too: counted like SB3's learning_starts
+    taught_steps = 0
+    if kind == "QCON-T":
+        with tempfile.TemporaryDirectory() as tmp:
+            lessons = connrl.record_lessons(env, TEACHERS[task][1], TAUGHT_EPISODES, Path(tmp) / "teacher.json")
+            taught_steps = sum(len(x) for x in lessons)
+            agent = connrl.make_agent(env, kind, seed=seed, lessons=Path(tmp) / "teacher.json", **options)
+    else:
+        agent = connrl.make_agent(env, kind, seed=seed, **options)
+    # the warm-up's environment steps count like SB3's learning_starts, and so do the teacher's
+    warmup = agent.options.warmup_steps + taught_steps
     curve = _Curve(threshold)
 
     def evaluate(a, _ret):
@@ -181,8 +199,10 @@ def run_key(learner: str, task: str) -> dict:
     common = {"learner": learner, "protocol": {"version": PROTOCOL, "threshold_budget": TASKS[task],
                                                "eval": [EVAL_EVERY, EVAL_EPISODES, HELD, EVAL_SEED]},
               "machine": platform.machine(), **_versions("numpy", "gymnasium", "box2d")}
-    if learner == "QCON-R":  # numba: the kernels are compiled with fastmath
-        return {**common, "options": connrl_options(task), "connrl_source": _source_hash(), **_versions("numba")}
+    if learner.startswith("QCON"):  # numba: the kernels are compiled with fastmath
+        teacher = {"teacher": [TEACHERS[task][0], TAUGHT_EPISODES]} if learner == "QCON-T" else {}
+        return {**common, "options": connrl_options(task), **teacher, "connrl_source": _source_hash(),
+                **_versions("numba")}
     return {**common, "settings": sb3_settings(task, learner == "SB3-zoo"),
             **_versions("stable-baselines3", "torch")}
 
@@ -199,8 +219,8 @@ def _versions(*packages: str) -> dict:
 
 def _job(args: tuple) -> dict:
     learner, task, seed = args
-    if learner == "QCON-R":
-        return run_connrl(task, seed)
+    if learner.startswith("QCON"):
+        return run_connrl(task, seed, kind=learner)
     return run_sb3(task, seed, zoo=learner == "SB3-zoo")
 
 
@@ -254,6 +274,8 @@ def main() -> None:
     runs, todo = [], []
     for task in args.tasks:
         for learner in learners:
+            if learner == "QCON-T" and task not in TEACHERS:
+                continue  # no teacher written for it
             key = run_key(learner, task)
             for seed in args.seeds:
                 path = args.out / f"{task}_{learner}_{seed}.json"

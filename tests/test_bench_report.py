@@ -32,7 +32,8 @@ def test_the_table_states_who_met_the_goal():
     runs += [_run(s, 20_000 if s else None, [9] * 4, "SB3-zoo") for s in range(3)]
     runs = [r._replace(doc={**r.doc, "cpu": 100.0}) if r.learner == "SB3-zoo" else r for r in runs]  # 1 step/s
     text = summarize(runs, ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, [0, 1, 2])
-    assert "T               met      median steps 10,000 vs 20,000 (0.50x SB3-zoo's steps); steps/s 25.0x" in text
+    assert ("T               QCON-R: met      median steps 10,000 vs 20,000 (0.50x SB3-zoo's steps); steps/s 25.0x"
+            in text)
     slow = [r._replace(doc={**r.doc, "cpu": 40.0}) if r.learner == "QCON-R" else r for r in runs]  # 2.5x
     assert "not met  median steps 10,000 vs 20,000" in summarize(slow, ["T"], ["QCON-R", "SB3-zoo"],
                                                                 {"T": (5.0, 20_000)}, [0, 1, 2])
@@ -41,7 +42,7 @@ def test_the_table_states_who_met_the_goal():
 def test_no_verdict_unless_both_ran_every_seed():
     runs = [_run(s, 10_000, [9]) for s in range(3)] + [_run(s, 20_000, [9], "SB3-zoo") for s in range(2)]
     text = summarize(runs, ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, [0, 1, 2])
-    assert "no verdict: QCON-R ran seeds [0, 1, 2], SB3-zoo [0, 1]" in text and " met " not in text
+    assert "QCON-R: no verdict: it ran seeds [0, 1, 2], SB3-zoo [0, 1]" in text and " met " not in text
 
 
 def test_a_held_solve_is_the_fifth_evaluation_in_a_row_at_the_threshold_and_the_first_such():
