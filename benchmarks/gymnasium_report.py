@@ -136,8 +136,9 @@ def plot(runs: list[Run], tasks: list[str], learners: list[str], task_info: dict
             k = min(len(r.doc["curve"]) for r in rs)
             y = np.array([[p[1] for p in r.doc["curve"][:k]] for r in rs])
             x = 5_000 * np.arange(1, k + 1)
-            line, = ax.plot(x, y.mean(axis=0), label=f"{learner} ({len(rs)} seeds)")
-            ax.fill_between(x, y.min(axis=0), y.max(axis=0), color=line.get_color(), alpha=0.2)
+            color = f"C{learners.index(learner)}"  # one colour per learner in every panel
+            ax.plot(x, y.mean(axis=0), color=color, label=f"{learner} ({len(rs)} seeds)")
+            ax.fill_between(x, y.min(axis=0), y.max(axis=0), color=color, alpha=0.2)
         ax.axhline(threshold, color="grey", ls="--", lw=0.8)
         ax.set(title=task, xlabel="environment steps", ylabel="greedy return (10 episodes)", xlim=(0, budget))
         ax.legend(fontsize=8, loc="lower right")
