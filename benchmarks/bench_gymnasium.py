@@ -13,7 +13,8 @@ are whole. connrl's random warm-up (1,000 steps that set its scales) is counted 
 
 Learners: ``QCON-R`` with the task's entry of the shipped settings file ``connrl/data/hyperparams/qcon-r.yml``
 (the options chosen for it, docs/PERFORMANCE.md); ``QCON-T``, the same given three episodes of a hand-written
-teacher (``TEACHERS``; not on LunarLander, which has none), the teacher's steps counted in its budget; ``SB3-zoo``:
+teacher (``TEACHERS``; on LunarLander, Gymnasium's own demonstration heuristic), the teacher's steps counted in its
+budget; ``SB3-zoo``:
 SB3's DQN with RL Zoo's hyperparameters (``RL_ZOO_DQN``, from rl-baselines3-zoo's hyperparams/dqn.yml);
 ``SB3-default``: ``DQN("MlpPolicy", env, seed=seed)`` (learning rate 1e-4, buffer 1,000,000, learning_starts 100,
 batch 32, train_freq 4, target update every 10,000 steps, exploration 1 -> 0.05 over the first 10 %, net 64-64).
@@ -69,10 +70,19 @@ RL_ZOO_DQN = {  # rl-baselines3-zoo hyperparams/dqn.yml (its LunarLander-v2 entr
                            exploration_final_eps=0.07),
     "LunarLander-v3": _ZOO_LUNAR_ACROBOT,
 }
+def _lander_heuristic(obs) -> int:
+    from types import SimpleNamespace
+
+    from gymnasium.envs.box2d.lunar_lander import heuristic  # needs Box2D, as the task does
+    return int(heuristic(SimpleNamespace(continuous=False), obs))
+
+
 TEACHERS = {  # QCON-T's teacher per task: (what it does, observation -> action); three episodes, env seeds 0-2
     "CartPole-v1": ("push the way the pole falls (angle + 0.5 angular velocity)", lambda o: int(o[2] + 0.5 * o[3] > 0)),
     "Acrobot-v1": ("pump: torque the way the second joint turns", lambda o: 2 if o[5] > 0 else 0),
     "MountainCar-v0": ("swing: push the way the car moves", lambda o: 2 if o[1] >= 0 else 0),
+    "LunarLander-v3": ("Gymnasium's demonstration heuristic (gymnasium.envs.box2d.lunar_lander.heuristic)",
+                       _lander_heuristic),
 }
 TAUGHT_EPISODES = 3
 LEARNERS = ("QCON-R", "QCON-T", "SB3-zoo", "SB3-default")
