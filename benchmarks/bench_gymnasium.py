@@ -74,7 +74,7 @@ def _lander_heuristic(obs) -> int:
     from types import SimpleNamespace
 
     from gymnasium.envs.box2d.lunar_lander import heuristic  # needs Box2D, as the task does
-    return int(heuristic(SimpleNamespace(continuous=False), obs))
+    return int(heuristic(SimpleNamespace(unwrapped=SimpleNamespace(continuous=False)), obs))
 
 
 TEACHERS = {  # QCON-T's teacher per task: (what it does, observation -> action); three episodes, env seeds 0-2
