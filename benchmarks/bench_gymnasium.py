@@ -32,6 +32,7 @@ With ``--workers 2`` two runs share the machine: read the speeds of such a run w
 from __future__ import annotations
 
 import argparse
+import functools
 import hashlib
 import json
 import multiprocessing
@@ -70,6 +71,8 @@ RL_ZOO_DQN = {  # rl-baselines3-zoo hyperparams/dqn.yml (its LunarLander-v2 entr
                            exploration_final_eps=0.07),
     "LunarLander-v3": _ZOO_LUNAR_ACROBOT,
 }
+
+
 def _lander_heuristic(obs) -> int:
     from types import SimpleNamespace
 
@@ -136,16 +139,16 @@ def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "Q
     else:
         agent = connrl.make_agent(env, kind, seed=seed, **options)
     # the warm-up's environment steps count like SB3's learning_starts, and so do the teacher's
-    warmup = agent.options.warmup_steps + taught_steps
+    before = agent.options.warmup_steps + taught_steps
     curve = _Curve(threshold)
 
     def evaluate(a, _ret):
-        if curve.due(warmup + a.steps_done):
-            curve.add(warmup + a.steps_done, lambda: connrl.evaluate(a, eval_env, EVAL_EPISODES, seed=EVAL_SEED))
+        if curve.due(before + a.steps_done):
+            curve.add(before + a.steps_done, lambda: connrl.evaluate(a, eval_env, EVAL_EPISODES, seed=EVAL_SEED))
         return True
 
-    agent.learn(budget - warmup, callback=evaluate)
-    return _record(curve, time.perf_counter() - t0, time.process_time() - c0, warmup + agent.steps_done,
+    agent.learn(budget - before, callback=evaluate)
+    return _record(curve, time.perf_counter() - t0, time.process_time() - c0, before + agent.steps_done,
                    diverged=agent.divergence())
 
 
@@ -195,6 +198,7 @@ def _record(curve: _Curve, wall: float, cpu: float, steps: int, diverged: str | 
             "steps": steps, "diverged": diverged}
 
 
+@functools.cache  # run_key asks once per task and learner; the source does not change within a run
 def _source_hash() -> str:
     """A hash of connrl's source: a connrl run is redone when the code that ran it changes."""
     h = hashlib.sha256()

@@ -9,6 +9,7 @@ greedy return (mean of 10 episodes, evaluation seeds 500-509) per seed, and with
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -18,11 +19,10 @@ import numpy as np
 
 import connrl
 
-TEACHERS = {  # observation -> action; their own returns are printed
-    "CartPole-v1": lambda obs: int(obs[2] + 0.5 * obs[3] > 0),  # the README's
-    "MountainCar-v0": lambda obs: 2 if obs[1] >= 0 else 0,  # swing: push the way the car already moves
-    "Acrobot-v1": lambda obs: 2 if obs[5] > 0 else 0,  # pump: torque the way the second joint already turns
-}
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+from bench_gymnasium import TEACHERS as _BENCH_TEACHERS  # noqa: E402  (one table of teachers: QCON-T's there)
+
+TEACHERS = {task: teacher for task, (_, teacher) in _BENCH_TEACHERS.items()}  # observation -> action
 
 
 def main() -> None:
