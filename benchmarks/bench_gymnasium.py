@@ -123,9 +123,10 @@ def connrl_options(task: str) -> dict:
     return dict(entry["options"]) if entry else {}
 
 
-def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "QCON-R") -> dict:
+def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "QCON-R", setup=None) -> dict:
     """One connrl run (``options``: AgentOptions fields, default the shipped settings). QCON-T first records
-    ``TAUGHT_EPISODES`` episodes of the task's teacher; their steps count in its budget and time."""
+    ``TAUGHT_EPISODES`` episodes of the task's teacher; their steps count in its budget and time. ``setup(agent,
+    env)``, when given, changes the agent before it learns (scripts/own_task/planning_grouping.py)."""
     threshold, budget = TASKS[task]
     options = connrl_options(task) if options is None else options
     env, eval_env = gym.make(task), gym.make(task)
@@ -138,6 +139,8 @@ def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "Q
             agent = connrl.make_agent(env, kind, seed=seed, lessons=Path(tmp) / "teacher.json", **options)
     else:
         agent = connrl.make_agent(env, kind, seed=seed, **options)
+    if setup is not None:
+        setup(agent, env)
     # the warm-up's environment steps count like SB3's learning_starts, and so do the teacher's
     before = agent.options.warmup_steps + taught_steps
     curve = _Curve(threshold)

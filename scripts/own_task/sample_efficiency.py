@@ -51,6 +51,18 @@ def _job(args):
     return run_connrl(task, seed, options, kind)
 
 
+def summary_line(name: str, rs: list[dict]) -> str:
+    """One row of the table: held count, median held steps, area under the curve, greedy return at the budget and
+    per seed (held at / greedy at budget, ``!`` for a diverged run)."""
+    held = [r["held"] if r["held"] is not None else math.inf for r in rs]
+    med = float(np.median(held))
+    area = np.mean([np.mean([p[1] for p in r["curve"]]) for r in rs])
+    last = np.mean([r["curve"][-1][1] for r in rs])
+    per = "  ".join(f"{r['held'] or '-'}/{r['curve'][-1][1]:.0f}{'!' if r['diverged'] else ''}" for r in rs)
+    return (f"{name:<28} {sum(math.isfinite(h) for h in held):>2}/{len(rs):<2} "
+            f"{f'{med:,.0f}' if math.isfinite(med) else '> budget':>12} {area:>8.1f} {last:>10.1f}   {per}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--task", required=True, choices=list(TASKS))
@@ -83,15 +95,7 @@ def main() -> None:
           "greedy at budget")
     n = len(args.seeds)
     for i, (name, _) in enumerate(rows):
-        rs = results[i * n:(i + 1) * n]
-        held = [r["held"] if r["held"] is not None else math.inf for r in rs]
-        med = float(np.median(held))
-        area = np.mean([np.mean([p[1] for p in r["curve"]]) for r in rs])
-        last = np.mean([r["curve"][-1][1] for r in rs])
-        per = "  ".join(f"{r['held'] or '-'}/{r['curve'][-1][1]:.0f}{'!' if r['diverged'] else ''}" for r in rs)
-        print(f"{name:<28} {sum(math.isfinite(h) for h in held):>2}/{n:<2} "
-              f"{f'{med:,.0f}' if math.isfinite(med) else '> budget':>12} {area:>8.1f} {last:>10.1f}   {per}",
-              flush=True)
+        print(summary_line(name, results[i * n:(i + 1) * n]), flush=True)
 
 
 if __name__ == "__main__":
