@@ -3,13 +3,15 @@
     python scripts/own_task/planning_grouping.py --task CartPole-v1 [--seeds 100 101 102 103 104]
         [--arms base plan group:0.1,0.5 ...] [--workers 1]
 
-Arms, each on top of the shipped settings (QCON-R):
+Arms, each with the shipped settings of the task:
 
 * ``base`` — QCON-R as shipped.
 * ``plan`` — QCON-R with relaxation planning (Fig. 3.6, ``connrl.core.planning``) through a *perfect* model: the
   task's own dynamics, stepped from a copy of the true state for every promising action. That bounds what a learned
   model could bring (the thesis measured both, 4.4.3); a model's steps are hypothetical and not counted as
   environment steps, and the table gives them per environment step.
+* ``QCON`` and ``QCON+plan`` — the same without experience replay: on-line Q-learning alone and with the perfect
+  model's planning, the comparison the thesis made (QCON-M against QCON, 4.4.3).
 * ``group:LOW,HIGH`` — QCON-R whose replay groups runs of similar states (6.6.4, ``connrl.core.grouping``) with mu
   drawn from U(LOW, HIGH), in the agent's input units (bounded inputs on [-1, 1]); the table gives the mean group.
 
@@ -64,7 +66,7 @@ class PerfectModel:
 def _setup(arm: str, tally: dict):
     def setup(agent, env):
         learner = agent.learner
-        if arm == "plan":
+        if arm.endswith("plan"):
             tally["model"] = PerfectModel(env, agent.scaler)
             learner.planner = RelaxationPlanner(tally["model"], PlanningConfig())
         elif arm.startswith("group:"):
@@ -78,7 +80,7 @@ def _setup(arm: str, tally: dict):
 def _job(job):
     task, seed, arm = job
     tally: dict = {}
-    result = run_connrl(task, seed, setup=_setup(arm, tally))
+    result = run_connrl(task, seed, kind="QCON" if arm.startswith("QCON") else "QCON-R", setup=_setup(arm, tally))
     learner = tally["learner"]
     if "model" in tally:
         result["extra"] = tally["model"].calls / max(result["steps"], 1)
@@ -88,7 +90,7 @@ def _job(job):
 
 
 def _arm(text: str) -> str:
-    if text in ("base", "plan"):
+    if text in ("base", "plan", "QCON", "QCON+plan"):
         return text
     if text.startswith("group:"):
         try:
@@ -98,7 +100,7 @@ def _arm(text: str) -> str:
         if not 0 <= lo <= hi:
             raise argparse.ArgumentTypeError(f"{text!r}: need 0 <= LOW <= HIGH")
         return text
-    raise argparse.ArgumentTypeError(f"unknown arm {text!r}; allowed: base, plan, group:LOW,HIGH")
+    raise argparse.ArgumentTypeError(f"unknown arm {text!r}; allowed: base, plan, QCON, QCON+plan, group:LOW,HIGH")
 
 
 def main() -> None:
@@ -113,7 +115,7 @@ def main() -> None:
     jobs = [(args.task, seed, arm) for arm in args.arms for seed in args.seeds]
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(_job, jobs))
-    print(f"{args.task}, QCON-R, {TASKS[args.task][1]:,} steps, seeds {' '.join(map(str, args.seeds))}; "
+    print(f"{args.task}, QCON-R unless named, {TASKS[args.task][1]:,} steps, seeds {' '.join(map(str, args.seeds))}; "
           "extra: model steps per env step (plan), mean group size (group)")
     print(f"{'arm':<28} {'held':>5} {'median held':>12} {'area':>8} {'at budget':>10}   per seed: held at / "
           "greedy at budget")
