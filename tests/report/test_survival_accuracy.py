@@ -11,8 +11,10 @@ from tests.tiny_runs import run_tiny
 def test_learned_model_runs_record_errors_per_play_and_probes_every_fifth():
     p = SurvivalParams(framework="QCON-M", model="learned", train_plays=6, test_envs=1, test_every=0)
     rows = [r for r in run_survival(p, np.random.default_rng(0)).rows if r["kind"] == "train"]
-    assert all("model_reward_abs" in r and "model_enemy_bits" in r for r in rows)
+    assert all("model_reward_abs" in r and "model_reward_sq" in r and "model_enemy_bits" in r for r in rows)
+    assert all(r["model_reward_sq"] >= r["model_reward_abs"] ** 2 - 1e-12 for r in rows)  # mean of squares >= square
     assert [r["plays"] for r in rows if "model_probe_reward_abs" in r] == [1, 5]
+    assert [r["plays"] for r in rows if "model_probe_reward_sq" in r] == [1, 5]
     perfect = run_survival(SurvivalParams(framework="QCON-M", model="perfect", train_plays=2, test_envs=1,
                                           test_every=0), np.random.default_rng(0)).rows
     assert not any("model_probe_reward_abs" in r for r in perfect)  # the perfect model has nothing to measure
@@ -40,7 +42,8 @@ def test_section_reads_the_stored_runs(tmp_path):
     text = "\n".join(model_accuracy(tmp_path, tmp_path / "docs" / "RESULTS.md"))
     assert "### 4.4.3: the learned model's prediction accuracy" in text
     rows = [line for line in text.splitlines() if line.startswith("| survival-study")]
-    assert len(rows) == 2 * 2 * 4 and all(len(line.split("|")) == 10 for line in rows)  # studies x agents x errors
+    assert len(rows) == 2 * 2 * 6 and all(len(line.split("|")) == 10 for line in rows)  # studies x agents x errors
+    assert "in squared error, the error they are trained to reduce" in text
     assert (tmp_path / "docs" / "figures" / "survival-model-accuracy.png").exists()
     assert model_accuracy(tmp_path / "none", tmp_path / "x.md") == []
 

@@ -105,6 +105,7 @@ def test_probe_errors_of_a_blank_model_by_hand():
     probes = probe_experiences("local", 3, 200)
     errs = model.probe_errors(probes)
     assert errs["probe_reward_abs"] == pytest.approx(np.mean([abs(r) for _, _, r, _ in probes]))
+    assert errs["probe_reward_sq"] == pytest.approx(np.mean([r * r for _, _, r, _ in probes]))
     assert errs["probe_enemy_bits"] == pytest.approx(np.mean([np.mean(y[52:84] > 0) for _, _, _, y in probes]))
 
 
@@ -124,3 +125,18 @@ def test_probe_errors_fall_as_the_model_learns_and_leave_it_alone():
     after = model.probe_errors(probes)
     assert after["probe_reward_abs"] < before["probe_reward_abs"]
     assert after["probe_enemy_bits"] < before["probe_enemy_bits"]
+
+
+@pytest.mark.parametrize("representation", ["global", "local"])
+def test_the_learned_reinforcement_net_beats_predicting_zero_on_other_plays(representation):
+    """Issue 31: the reinforcement net's squared error, after learning on-line from one set of plays, is below that
+    of predicting r = 0 on plays it never saw (at the old learning rate 0.1 it was above it)."""
+    from connrl.tasks.survival_models import probe_experiences
+    env = SurvivalEnv(representation)
+    env.reset(seed=1)
+    model = LearnedSurvivalModel(env, np.random.default_rng(0))
+    for x, a, r, y in probe_experiences(representation, 21, 6000):
+        model.learn(x, a, r, y, r == -1.0)
+    held_out = probe_experiences(representation, 22, 1500)
+    zero = np.mean([r * r for _, _, r, _ in held_out])
+    assert model.probe_errors(held_out)["probe_reward_sq"] < 0.75 * zero
