@@ -58,6 +58,11 @@ def same_word(c: Comparison | None) -> str:
 AGREES, CONTRADICTED, OPEN = "agrees", "contradicted", verdicts.UNDETERMINED
 
 
+def p_text(p: float) -> str:
+    """A p-value as the page prints it; one below double precision's resolution is not printed as 0."""
+    return "p < 1e-15" if p < 1e-15 else f"p = {p:.2g}"
+
+
 def relation_check(xs, ys, symbol: str) -> tuple[str, str]:
     """Does X (``xs``, per run) stand to Y (``ys``) as the thesis's symbol says (higher is better)? ">" / "<": X
     significantly better / worse (one-sided Welch); "~": the same within 10 % of Y's mean (TOST); ">=" / "<=":
@@ -69,11 +74,11 @@ def relation_check(xs, ys, symbol: str) -> tuple[str, str]:
         return word, same_word(c)
     up = symbol in (">", ">=")
     verdict, p = better_runs(ys, xs, higher_is_better=up)
-    shown = "" if p is None else f" (p = {p:.2g})"
+    shown = "" if p is None else f" ({p_text(p)})"
     if verdict == "yes":
         return AGREES, ("better" if up else "worse") + shown
     if verdict == "no":
-        return CONTRADICTED, ("worse" if up else "better") + f" (p = {1 - p:.2g})"
+        return CONTRADICTED, ("worse" if up else "better") + f" ({p_text(1 - p)})"
     if symbol in (">=", "<="):
         c = compare_runs(ys, xs)
         if c is not None and c.verdict == SAME:

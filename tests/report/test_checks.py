@@ -76,3 +76,11 @@ def test_meets_claims_put_one_claim_per_thesis_number():
     assert [c.verdict for c in claims] == [verdicts.REPRODUCED, verdicts.NOT_REPRODUCED]
     assert verdicts.BOARD == claims and "≤" in claims[0].criterion
     verdicts.BOARD.clear()
+
+
+def test_a_p_value_below_double_precision_is_not_printed_as_zero():
+    far = [100.0 + k * 0.01 for k in range(7)]
+    near = [0.0 + k * 0.01 for k in range(7)]
+    word, text = checks.relation_check(far, near, ">")
+    assert word == AGREES and text == "better (p < 1e-15)"
+    assert checks.p_text(0.0123) == "p = 0.012"

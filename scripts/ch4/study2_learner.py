@@ -1,0 +1,69 @@
+"""Where Study 2's Q-agents fall short: food, deaths and starvation by representation, learning rate and input code.
+
+    python scripts/ch4/study2_learner.py [--framework QCON] [--arms global:2 local:2 local:1 ...]
+        [--seeds 100 101 102] [--coding pm|01]
+
+Each arm is ``REPRESENTATION:LR_SCALE`` (Study 1 is global at 1; the thesis doubles every rate for Study 2, 4.3.3),
+run with ``connrl.experiments.survival.run_survival`` (the full 4.3.1 protocol: 300 plays, 50 test environments
+every 20) on each seed. Per arm, averaged over the seeds: the mean test curve (every 40 plays), the final food (last
+three tests), and how the last three tests' 50 plays ended (all food, killed, starved), with the training plays'
+mean length and stuck steps over the last 50 plays. ``--coding 01`` feeds every input unit as 0/1 instead of the
+reconstruction's -0.5/+0.5 (Ch. 4 does not say which; 5.3.2's convention is ±0.5). Development seeds only.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from connrl.envs.survival import SurvivalEnv
+from connrl.experiments.survival import SurvivalParams, run_survival
+
+
+def arm(text: str) -> tuple[str, float]:
+    rep, _, scale = text.partition(":")
+    try:
+        value = float(scale)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: give REPRESENTATION:LR_SCALE, e.g. local:2") from None
+    if rep not in ("global", "local") or value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: representation global or local, lr scale > 0")
+    return rep, value
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--framework", default="QCON")
+    ap.add_argument("--arms", nargs="+", type=arm, default=[("global", 1.0), ("local", 2.0), ("local", 1.0),
+                                                           ("local", 0.5)])
+    ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101, 102])
+    ap.add_argument("--coding", choices=["pm", "01"], default="pm")
+    args = ap.parse_args()
+    try:
+        SurvivalParams(framework=args.framework)
+    except ValueError as exc:
+        ap.error(str(exc))
+    if args.coding == "01":  # every unit of the observation is binary or coarse-coded at +-0.5
+        observe = SurvivalEnv._observe
+        SurvivalEnv._observe = lambda self: observe(self) + 0.5
+    print(f"{args.framework}, inputs {'0/1' if args.coding == '01' else '-0.5/+0.5'}, seeds "
+          f"{' '.join(map(str, args.seeds))}; last three tests' 50 plays: all food / killed / starved")
+    for rep, scale in args.arms:
+        curves, ends, train = [], [], []
+        for seed in args.seeds:
+            rows = run_survival(SurvivalParams(framework=args.framework, representation=rep, lr_scale=scale),
+                                np.random.default_rng(seed)).rows
+            tests = [r for r in rows if r["kind"] == "test"]
+            curves.append([t["food"] for t in tests])
+            ends.append([np.mean([t[k] for t in tests[-3:]]) for k in ("all_food", "killed", "starved")])
+            last = [r for r in rows if r["kind"] == "train"][-50:]
+            train.append([np.mean([r[k] for r in last]) for k in ("steps", "stuck_steps")])
+        curve, (all_food, killed, starved), (steps, stuck) = np.mean(curves, 0), np.mean(ends, 0), np.mean(train, 0)
+        print(f"{rep:<6} lr x{scale:<4g} curve {' '.join(f'{v:4.1f}' for v in curve[::2])}  final "
+              f"{curve[-3:].mean():5.2f}  ends {all_food:4.1f} / {killed:4.1f} / {starved:4.1f}  training plays "
+              f"{steps:4.0f} steps, {stuck:3.1f} stuck", flush=True)
+
+
+if __name__ == "__main__":
+    main()
