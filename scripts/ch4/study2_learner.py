@@ -1,24 +1,30 @@
 """Where Study 2's Q-agents fall short: food, deaths and starvation by representation, learning rate and input code.
 
     python scripts/ch4/study2_learner.py [--framework QCON] [--arms global:2 local:2 local:1 ...]
-        [--seeds 100 101 102] [--coding pm|01]
+        [--seeds 100 101 102] [--coding pm|01] [--agent KEY=VALUE ...]
 
 Each arm is ``REPRESENTATION:LR_SCALE`` (Study 1 is global at 1; the thesis doubles every rate for Study 2, 4.3.3),
 run with ``connrl.experiments.survival.run_survival`` (the full 4.3.1 protocol: 300 plays, 50 test environments
 every 20) on each seed. Per arm, averaged over the seeds: the mean test curve (every 40 plays), the final food (last
 three tests), and how the last three tests' 50 plays ended (all food, killed, starved), with the training plays'
 mean length and stuck steps over the last 50 plays. ``--coding 01`` feeds every input unit as 0/1 instead of the
-reconstruction's -0.5/+0.5 (Ch. 4 does not say which; 5.3.2's convention is ±0.5). Development seeds only.
+reconstruction's -0.5/+0.5 (Ch. 4 does not say which; 5.3.2's convention is ±0.5). ``--agent`` sets fields of
+``connrl.tasks.survival.SurvivalAgentParams`` (VALUE is JSON: ``hidden=60``, ``stuck_boost=2.0``) for every arm.
+Development seeds only.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import json
 
 import numpy as np
 
+import connrl.experiments.survival as survival
 from connrl.envs.survival import SurvivalEnv
 from connrl.experiments.survival import SurvivalParams, run_survival
+from connrl.tasks.survival import SurvivalAgentParams
 
 
 def arm(text: str) -> tuple[str, float]:
@@ -39,7 +45,22 @@ def main() -> None:
                                                            ("local", 0.5)])
     ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101, 102])
     ap.add_argument("--coding", choices=["pm", "01"], default="pm")
+    ap.add_argument("--agent", nargs="*", default=[], help="SurvivalAgentParams field=JSON value, for every arm")
     args = ap.parse_args()
+    overrides = {}
+    for item in args.agent:
+        key, _, value = item.partition("=")
+        try:
+            overrides[key] = json.loads(value)
+        except json.JSONDecodeError:
+            ap.error(f"--agent {item!r}: give field=JSON value, e.g. hidden=60")
+    try:
+        dataclasses.replace(SurvivalAgentParams(), **overrides)
+    except (TypeError, ValueError) as exc:
+        ap.error(f"--agent: {exc}")
+    if overrides:
+        build = survival._agent_params
+        survival._agent_params = lambda p: dataclasses.replace(build(p), **overrides)
     try:
         SurvivalParams(framework=args.framework)
     except ValueError as exc:
@@ -47,8 +68,8 @@ def main() -> None:
     if args.coding == "01":  # every unit of the observation is binary or coarse-coded at +-0.5
         observe = SurvivalEnv._observe
         SurvivalEnv._observe = lambda self: observe(self) + 0.5
-    print(f"{args.framework}, inputs {'0/1' if args.coding == '01' else '-0.5/+0.5'}, seeds "
-          f"{' '.join(map(str, args.seeds))}; last three tests' 50 plays: all food / killed / starved")
+    print(f"{args.framework}, inputs {'0/1' if args.coding == '01' else '-0.5/+0.5'}, agent {overrides or 'as is'}, "
+          f"seeds {' '.join(map(str, args.seeds))}; last three tests' 50 plays: all food / killed / starved")
     for rep, scale in args.arms:
         curves, ends, train = [], [], []
         for seed in args.seeds:
