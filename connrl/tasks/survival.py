@@ -78,6 +78,8 @@ class SurvivalAgentParams:
     stuck_window: int = 20  # stuck detection: steps looked at (R)
     stuck_radius: float = 1.5  # ... all within this many cells of their mean (R)
     stuck_boost: float = 5.0  # ... multiplies T (R)
+    symmetry: bool = True  # global: one net for all four actions by rotating its inputs (4.2.4); False: four nets,
+    # one per action, on the global inputs (not a thesis agent: scripts/ch4/study2_learner.py's diagnostic arm)
 
     def __post_init__(self):
         if self.framework not in FRAMEWORKS:
@@ -205,7 +207,7 @@ def make_survival_agent(params: SurvivalAgentParams, env, rng: np.random.Generat
             model = LearnedSurvivalModel(env, rng, LearnedModelConfig(momentum=p.momentum, init_range=p.init_range))
             planner = RelaxationPlanner(model, PlanningConfig(p.promising, p.model_start))
     stuck = StuckConfig(p.stuck_window, p.stuck_radius, p.stuck_boost)
-    rotated = p.representation == "global"
+    rotated = p.representation == "global" and p.symmetry
     if rotated:
         perms = np.stack([ROTATION_PERMUTATIONS[ACTION_ROTATION[a]] for a in range(4)])
     if base == "QCON":

@@ -23,10 +23,10 @@ from connrl.tasks.survival import (
 from connrl.tasks.survival_models import LearnedSurvivalModel, PerfectSurvivalModel
 
 
-def agent_for(framework, rep="global", model="learned", lr_scale=1.0, seed=0):
+def agent_for(framework, rep="global", model="learned", lr_scale=1.0, seed=0, **more):
     env = SurvivalEnv(rep)
     env.reset(seed=seed)
-    return make_survival_agent(SurvivalAgentParams(framework, rep, model, lr_scale), env,
+    return make_survival_agent(SurvivalAgentParams(framework, rep, model, lr_scale, **more), env,
                                np.random.default_rng(seed)), env
 
 
@@ -74,6 +74,13 @@ def test_global_agents_use_one_rotated_net_and_respect_action_symmetry():
     np.testing.assert_allclose(agent.q.values(rotate_observation(x, 1)), np.roll(agent.q.values(x), -1), atol=1e-12)
     ahc, _ = agent_for("AHCON")
     assert isinstance(ahc.policy, RotatedNet) and ahc.v.n_nets == 1
+
+
+def test_global_agents_without_symmetry_have_one_net_per_action():
+    agent, env = agent_for("QCON", symmetry=False)
+    assert agent.q.n_nets == 4 and not isinstance(agent.q, RotatedNet)
+    x, _ = env.reset(seed=4)  # four independent nets: a quarter turn of the world no longer permutes the values
+    assert not np.allclose(agent.q.values(rotate_observation(x, 1)), np.roll(agent.q.values(x), -1), atol=1e-6)
 
 
 def test_stuck_detection_raises_t_until_food_is_eaten():
