@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from connrl.report import verdicts
-from connrl.report.verdicts import DIFFERENT, SAME, Comparison
+from connrl.report.verdicts import DIFFERENT, SAME, Comparison, p_text
 
 RULE_SAME = (f"same = equivalence within ±{verdicts.REL_MARGIN:.0%} of the reference's mean, two one-sided t-tests "
              f"(TOST) at {verdicts.ALPHA:g}; different = Welch t-test at {verdicts.ALPHA:g}; otherwise undetermined")
@@ -56,11 +56,6 @@ def same_word(c: Comparison | None) -> str:
 
 
 AGREES, CONTRADICTED, OPEN = "agrees", "contradicted", verdicts.UNDETERMINED
-
-
-def p_text(p: float) -> str:
-    """A p-value as the page prints it; one below double precision's resolution is not printed as 0."""
-    return "p < 1e-15" if p < 1e-15 else f"p = {p:.2g}"
 
 
 def relation_check(xs, ys, symbol: str) -> tuple[str, str]:

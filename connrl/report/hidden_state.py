@@ -12,7 +12,7 @@ from connrl.experiments.hidden_state import CUP_FIGURES, EXPERIMENTS
 from connrl.report.checks import better_runs
 from connrl.report.hidden_state_models import frozen_model, imperfect_model
 from connrl.report.page import fixed, load_summary, note
-from connrl.report.verdicts import NOT_REPRODUCED, OPEN, PARTLY, REPRODUCED, claim, ordering
+from connrl.report.verdicts import NOT_REPRODUCED, OPEN, PARTLY, REPRODUCED, claim, ordering, p_text
 
 
 def best_k_mean(values, k: int = 5, fail_value: float | None = None) -> tuple[float | None, int]:
@@ -86,7 +86,7 @@ def _cup_claims(s: dict, task: int, fig: str, section: str, title: str) -> None:
         verdict = REPRODUCED if yes == len(votes) else NOT_REPRODUCED if all(v == "no" for _, v, _ in votes) else \
             PARTLY if yes else OPEN
         claim(f"{fig}: λ = 0 much worse than λ = 0.8", section, "much worse for each architecture",
-              "; ".join(f"{a}: {'better' if v == 'yes' else v} (p = {p:.2g})" for a, v, p in votes),
+              "; ".join(f"{a}: {'better' if v == 'yes' else v} ({p_text(p)})" for a, v, p in votes),
               "λ = 0.8 better, one-sided Welch on the share of optimal tests, last 100", verdict, anchor=anchor)
     b1 = next((label for label in kept if label.startswith("window-Q") and "10->30" in label), None)
     if b1:

@@ -18,7 +18,18 @@ from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS
 from connrl.envs.robot.render import draw_layout
 from connrl.report.page import run_rows
 from connrl.report.plots import save_figure
-from connrl.report.verdicts import DIFFERENT, NOT_REPRODUCED, OPEN, PARTLY, REPRODUCED, SAME, better, claim, compare
+from connrl.report.verdicts import (
+    DIFFERENT,
+    NOT_REPRODUCED,
+    OPEN,
+    PARTLY,
+    REPRODUCED,
+    SAME,
+    better,
+    claim,
+    compare,
+    p_text,
+)
 
 EXP2, EXP3 = "Exp. 2: W = 0/1", "Exp. 3: persistence rule"
 EXP4 = ("Exp. 4, no grouping, lambda 0.9", "Exp. 4, state grouping, lambda 0.8")
@@ -106,7 +117,7 @@ def level_test(vals: list[float], level: float, above: bool = True) -> tuple[str
     if all(v == level for v in vals):  # no spread, no difference: not above (below) it
         return "no", f"every run at {level:g}: not {word} it ({len(vals)} runs)"
     verdict, p = better([level, level], vals, higher_is_better=above)
-    return verdict, f"mean {np.mean(vals):.2f} {word} {level:g}? {verdict} (one-sided p = {p:.2g}, {len(vals)} runs)"
+    return verdict, f"mean {np.mean(vals):.2f} {word} {level:g}? {verdict} (one-sided {p_text(p)}, {len(vals)} runs)"
 
 
 def gain_test(reference: list[float], other: list[float], what: str, higher: bool = True) -> tuple[str, str]:
@@ -115,7 +126,7 @@ def gain_test(reference: list[float], other: list[float], what: str, higher: boo
         return OPEN, f"{what}: fewer than 2 runs a side, no test"
     verdict, p = better(reference, other, higher_is_better=higher)
     return verdict, (f"{what}: {np.mean(other):.2f} vs {np.mean(reference):.2f}, better? {verdict} "
-                     f"(one-sided Welch p = {p:.2g})")
+                     f"(one-sided Welch {p_text(p)})")
 
 
 def same_test(reference: list[float], other: list[float], what: str, rel_margin: float | None = None,

@@ -346,7 +346,7 @@ def _chapter_claims(summaries: dict, curves) -> list[str]:
         word, p = checks.better_runs(xs, ys)
         verdict = {"yes": verdicts.REPRODUCED, "no": verdicts.NOT_REPRODUCED}.get(word, verdicts.OPEN)
         ours = f"mean perf. {most} {np.mean(checks.finite(ys)):.2f} vs none {np.mean(checks.finite(xs)):.2f}"
-        lines.append(f"{name}: {ours}, {most} better: {word}" + ("" if p is None else f" (p = {p:.2g})"))
+        lines.append(f"{name}: {ours}, {most} better: {word}" + ("" if p is None else f" ({verdicts.p_text(p)})"))
         task = name.split("-")[-1].upper()
         verdicts.claim(f"Fig. {specs[name].section.split()[-1]}: teaching helps ({task})", "5.4.1",
                        "the usefulness of teaching is very clear", ours,
@@ -363,7 +363,8 @@ def _chapter_claims(summaries: dict, curves) -> list[str]:
             word, p = checks.better_runs(xs, ys)
             words.append({"yes": checks.AGREES, "no": checks.CONTRADICTED}.get(word, checks.OPEN))
             ours.append(f"{label.replace('lambda=', 'lambda ')}: {np.mean(checks.finite(ys)):.2f}")
-            lines.append(f"{name}: {label} better than {zero}: {word}" + ("" if p is None else f" (p = {p:.2g})"))
+            shown = "" if p is None else f" ({verdicts.p_text(p)})"
+            lines.append(f"{name}: {label} better than {zero}: {word}{shown}")
         verdicts.claim(f"Fig. {specs[name].section.split()[-1]}: lambda = 0 clearly the worst "
                        f"({name.split('-')[-1].upper()})", "5.4.2", "lambda = 0 clearly gave the worst performance",
                        ", ".join(ours), "every other lambda better in mean performance over the run (one-sided "

@@ -156,7 +156,8 @@ def _copy_reading(per_run) -> str:
     later = [(k, x) for k, x in rows.items() if k > 10 and x is not None and x.verdict == verdicts.DIFFERENT]
     if later:
         text += " Later it separates: " + "; ".join(
-            f"at {k} passes QCON-T is {'below' if x.diff < 0 else 'above'} the copy (Welch p = {x.p_difference:.2g})"
+            f"at {k} passes QCON-T is {'below' if x.diff < 0 else 'above'} the copy "
+            f"(Welch {verdicts.p_text(x.p_difference)})"
             for k, x in later) + "."
     hundred = [(k, x) for k, _, _, x in _rows(per_run, ("robot-dp-copy", "copy 100 demonstrations"),
                                                 ("robot-dp-lesson-use", "100 lessons")) if x is not None]

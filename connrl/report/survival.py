@@ -316,7 +316,8 @@ def _planning(out: Path, doc: Path) -> list[str]:
         words.append(word)
         kind = label.split("(")[-1].split()[0]
         ours.append(f"{label.split()[0]} ({kind}) {np.mean(first):.2f} → {np.mean(last):.2f}")
-        shown = {"yes": "drops", "no": "**rises**"}.get(drop, "not separated") + ("" if p is None else f", p = {p:.2g}")
+        shown = {"yes": "drops", "no": "**rises**"}.get(drop, "not separated")
+        shown += "" if p is None else f", {verdicts.p_text(p)}"
         lines.append(f"| {label} | {np.mean(h[:20]):.2f} | {mid} | {np.mean(h[-20:]):.2f} | {shown} |")
     lines += ["", f"Rule: per agent, the last 20 plays' mean below plays 1-20's (one-sided Welch over runs at 0.05) "
               f"and every run's last-20 mean at least {PLANNING_FLOOR:g} (a tenth of the maximum 4: \"not close to "

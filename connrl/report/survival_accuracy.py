@@ -164,13 +164,14 @@ def model_accuracy(out: Path, doc: Path) -> list[str]:
         commands += [command] if command else []
     if not rows:
         return []
-    probes = [f for f in found if "probe" in f["column"]]
+    # the squared reward error measures the same predictions as the absolute one: it is shown, not counted again
+    probes = [f for f in found if "probe" in f["column"] and not f["column"].endswith("_sq")]
     near = [f for f in probes if f["settles"] is not None and f["settles"] <= 2 * THESIS_SETTLES]
     never_zero = all(f["last"].min() > 0 for f in found)
     kept = [f["kept"] for f in probes]  # final probe error as a share of plays 1-10's
     where = "; ".join(f"{text.split(',')[0]}: " + ", ".join(f"{f['who']} {_play(f['settles'])}" for f in probes
                                                           if f["column"] == column)
-                      for column, text in MEASURES if "probe" in column)
+                      for column, text in MEASURES if "probe" in column and not column.endswith("_sq"))
     head = ["### 4.4.3: the learned model's prediction accuracy (Studies 1 and 2)", "",
             " and ".join(commands) + ": the -M agents with the learned model, errors per play from the run records.",
             "", "The thesis: \"In both studies, the model's prediction accuracy approached its asymptote after "
@@ -191,7 +192,7 @@ def model_accuracy(out: Path, doc: Path) -> list[str]:
            else "**not reproduced** — some run's error reaches 0")
         + (f"; the last {BLOCK} plays' probe errors are {min(kept):.0%}-{max(kept):.0%} of those of plays "
            f"1-{BLOCK}." if kept else "."), ""]
-    verdict += _scale_lines(probes)
+    verdict += _scale_lines([f for f in found if "probe" in f["column"]])
     heading = "4.4.3: the learned model's prediction accuracy (Studies 1 and 2)"
     if probes:
         verdicts.claim("4.4.3: model accuracy near its asymptote after ~50 plays", "4.4.3", "about 50 plays",

@@ -119,7 +119,13 @@ class Comparison:
                                                      if self.runs_needed else " (more than "
                                                      f"{MAX_RUNS_NEEDED} a side would be needed)")
         return (f"{head}: difference {self.diff:+.3g}, 90 % CI [{self.ci[0]:+.3g}, {self.ci[1]:+.3g}], "
-                f"margin ±{self.margin:.3g}, Welch p = {self.p_difference:.2g}")
+                f"margin ±{self.margin:.3g}, Welch {p_text(self.p_difference)}")
+
+
+def p_text(p: float) -> str:
+    """A p-value as the page prints it: one below double precision's resolution (a tail computed as 1 - (1 - p))
+    is not printed as 0."""
+    return "p < 1e-15" if p < 1e-15 else f"p = {p:.2g}"
 
 
 def _stats(reference, other) -> tuple[np.ndarray, np.ndarray, float, float, float]:
@@ -195,7 +201,7 @@ def ordering(samples: dict[str, list[float]], expected: list[str], *, higher_is_
         verdict, p = better(samples[second], samples[first], higher_is_better=higher_is_better, alpha=alpha)
         m1, m2 = float(np.nanmean(samples[first])), float(np.nanmean(samples[second]))
         word = {"yes": "in order", "no": "**reversed**", UNDETERMINED: "not separated"}[verdict]
-        lines.append(f"{first} ({m1:.3g}) before {second} ({m2:.3g}): {word} (one-sided Welch p = {p:.2g})")
+        lines.append(f"{first} ({m1:.3g}) before {second} ({m2:.3g}): {word} (one-sided Welch {p_text(p)})")
         if verdict == "no":
             worst = "contradicted"
         elif verdict == UNDETERMINED and worst == "agrees":

@@ -78,8 +78,9 @@ class SurvivalAgentParams:
     stuck_window: int = 20  # stuck detection: steps looked at (R)
     stuck_radius: float = 1.5  # ... all within this many cells of their mean (R)
     stuck_boost: float = 5.0  # ... multiplies T (R)
-    symmetry: bool = True  # global: one net for all four actions by rotating its inputs (4.2.4); False: four nets,
-    # one per action, on the global inputs (not a thesis agent: scripts/ch4/study2_learner.py's diagnostic arm)
+    symmetry: bool = True  # global: one Q- or policy net for all four actions by rotating its inputs (4.2.4); False:
+    # four, one per action, on the global inputs (not a thesis agent: scripts/ch4/study2_learner.py's diagnostic arm;
+    # a -M agent's learned model keeps its one rotated net of each kind)
 
     def __post_init__(self):
         if self.framework not in FRAMEWORKS:
@@ -88,6 +89,10 @@ class SurvivalAgentParams:
             raise ValueError(f"representation must be 'global' or 'local', got {self.representation!r}")
         if self.model not in MODELS:
             raise ValueError(f"model must be one of {MODELS}, got {self.model!r}")
+        if not isinstance(self.symmetry, bool):
+            raise ValueError(f"symmetry must be true or false, got {self.symmetry!r}")
+        if not self.symmetry and self.representation == "local":
+            raise ValueError("symmetry=False is for the global representation (the local one has no shared net)")
 
 
 # Table 4.1: (eta_v, eta_p) for AHC agents, eta_q for Q agents; the basic agents learn faster because the

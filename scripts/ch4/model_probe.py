@@ -15,6 +15,7 @@ not used here.
 from __future__ import annotations
 
 import argparse
+import math
 
 import numpy as np
 
@@ -40,8 +41,8 @@ def main() -> None:
     ap.add_argument("--train", type=int, default=20_000)
     ap.add_argument("--test", type=int, default=3_000)
     args = ap.parse_args()
-    if min(args.lr) <= 0 or args.train < 1 or args.test < 1:
-        ap.error("--lr must be > 0, --train and --test 1 or more")
+    if not all(0 < v < math.inf for v in args.lr) or args.train < 1 or args.test < 1:
+        ap.error("--lr must be numbers > 0, --train and --test 1 or more")
     train = probe_experiences(args.representation, 11, args.train)
     test = probe_experiences(args.representation, 12, args.test)
     r = np.array([e[2] for e in test])

@@ -20,6 +20,7 @@ Development seeds only.
 from __future__ import annotations
 
 import argparse
+import math
 
 import numpy as np
 
@@ -84,8 +85,8 @@ def main() -> None:
     ap.add_argument("--lr", type=float, default=0.02)
     ap.add_argument("--representations", nargs="+", choices=["global", "local"], default=["global", "local"])
     args = ap.parse_args()
-    if args.plays < 1 or args.rounds < 0 or args.epochs < 1 or args.lr <= 0:
-        ap.error("--plays and --epochs must be 1 or more, --rounds 0 or more, --lr > 0")
+    if args.plays < 1 or args.rounds < 0 or args.epochs < 1 or not 0 < args.lr < math.inf or min(args.seeds) < 0:
+        ap.error("--plays and --epochs must be 1 or more, --rounds and --seeds 0 or more, --lr a number > 0")
     for rep in args.representations:
         for seed in args.seeds:
             print("\n".join(run(rep, seed, args.plays, args.rounds, args.lr, args.epochs)), flush=True)

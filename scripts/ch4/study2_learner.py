@@ -6,10 +6,11 @@
 Each arm is ``REPRESENTATION:LR_SCALE`` (Study 1 is global at 1; the thesis doubles every rate for Study 2, 4.3.3),
 run with ``connrl.experiments.survival.run_survival`` (the full 4.3.1 protocol: 300 plays, 50 test environments
 every 20) on each seed. Per arm, averaged over the seeds: the mean test curve (every 40 plays), the final food (last
-three tests), and how the last three tests' 50 plays ended (all food, killed, starved), with the training plays'
-mean length and stuck steps over the last 50 plays. ``--coding 01`` feeds every input unit as 0/1 instead of the
-reconstruction's -0.5/+0.5 (Ch. 4 does not say which; 5.3.2's convention is ±0.5). ``--agent`` sets fields of
-``connrl.tasks.survival.SurvivalAgentParams`` (VALUE is JSON: ``hidden=60``, ``stuck_boost=2.0``) for every arm.
+three tests; mean ± standard deviation over the seeds, then each seed's), and how the last three tests' 50 plays
+ended (all food, killed, starved), with the training plays' mean length and stuck steps over the last 50 plays.
+``--coding 01`` feeds every input unit as 0/1 instead of the reconstruction's -0.5/+0.5 (Ch. 4 does not say which;
+5.3.2's convention is ±0.5). ``--agent`` sets fields of ``connrl.tasks.survival.SurvivalAgentParams`` (VALUE is JSON:
+``hidden=60``, ``stuck_boost=2.0``) for every arm.
 Development seeds only.
 """
 
@@ -18,13 +19,14 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 
 import numpy as np
 
 import connrl.experiments.survival as survival
 from connrl.envs.survival import SurvivalEnv
 from connrl.experiments.survival import SurvivalParams, run_survival
-from connrl.tasks.survival import SurvivalAgentParams
+from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 
 
 def arm(text: str) -> tuple[str, float]:
@@ -33,9 +35,35 @@ def arm(text: str) -> tuple[str, float]:
         value = float(scale)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r}: give REPRESENTATION:LR_SCALE, e.g. local:2") from None
-    if rep not in ("global", "local") or value <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: representation global or local, lr scale > 0")
+    if rep not in ("global", "local") or not 0 < value < math.inf:
+        raise argparse.ArgumentTypeError(f"{text!r}: representation global or local, lr scale a number > 0")
     return rep, value
+
+
+RUN_LEVEL = ("framework", "representation", "lr_scale", "plays", "model")  # set by the arm and the protocol
+
+
+def agent_overrides(items: list[str]) -> dict:
+    """``--agent`` field=JSON pairs, each of its field's type; a bad one raises ValueError in one line."""
+    defaults = SurvivalAgentParams()
+    out = {}
+    for item in items:
+        key, _, value = item.partition("=")
+        if key in RUN_LEVEL or not hasattr(defaults, key):
+            allowed = [f.name for f in dataclasses.fields(defaults) if f.name not in RUN_LEVEL]
+            raise ValueError(f"--agent {key!r}: not a field to set here; allowed: {', '.join(allowed)}")
+        try:
+            v = json.loads(value)
+        except json.JSONDecodeError:
+            raise ValueError(f"--agent {item!r}: give field=JSON value, e.g. hidden=60") from None
+        want = type(getattr(defaults, key))
+        ok = (isinstance(v, bool) if want is bool else isinstance(v, int) and not isinstance(v, bool) if want is int
+              else isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) if want is float
+              else v is None or isinstance(v, (int, float)) and not isinstance(v, bool))
+        if not ok:
+            raise ValueError(f"--agent {item!r}: {key} takes a value of type {want.__name__}")
+        out[key] = v
+    return out
 
 
 def main() -> None:
@@ -47,24 +75,20 @@ def main() -> None:
     ap.add_argument("--coding", choices=["pm", "01"], default="pm")
     ap.add_argument("--agent", nargs="*", default=[], help="SurvivalAgentParams field=JSON value, for every arm")
     args = ap.parse_args()
-    overrides = {}
-    for item in args.agent:
-        key, _, value = item.partition("=")
-        try:
-            overrides[key] = json.loads(value)
-        except json.JSONDecodeError:
-            ap.error(f"--agent {item!r}: give field=JSON value, e.g. hidden=60")
+    if min(args.seeds) < 0:
+        ap.error(f"--seeds must be 0 or more, got {min(args.seeds)}")
     try:
-        dataclasses.replace(SurvivalAgentParams(), **overrides)
+        overrides = agent_overrides(args.agent)
+        for rep, scale in args.arms:  # every arm's agent is built once before anything runs
+            env = SurvivalEnv(rep)
+            env.reset(seed=0)
+            params = SurvivalAgentParams(args.framework, rep, lr_scale=scale, **overrides)
+            make_survival_agent(params, env, np.random.default_rng(0))
     except (TypeError, ValueError) as exc:
-        ap.error(f"--agent: {exc}")
+        ap.error(str(exc))
     if overrides:
         build = survival._agent_params
         survival._agent_params = lambda p: dataclasses.replace(build(p), **overrides)
-    try:
-        SurvivalParams(framework=args.framework)
-    except ValueError as exc:
-        ap.error(str(exc))
     if args.coding == "01":  # every unit of the observation is binary or coarse-coded at +-0.5
         observe = SurvivalEnv._observe
         SurvivalEnv._observe = lambda self: observe(self) + 0.5
@@ -81,9 +105,11 @@ def main() -> None:
             last = [r for r in rows if r["kind"] == "train"][-50:]
             train.append([np.mean([r[k] for r in last]) for k in ("steps", "stuck_steps")])
         curve, (all_food, killed, starved), (steps, stuck) = np.mean(curves, 0), np.mean(ends, 0), np.mean(train, 0)
+        finals = [np.mean(c[-3:]) for c in curves]
         print(f"{rep:<6} lr x{scale:<4g} curve {' '.join(f'{v:4.1f}' for v in curve[::2])}  final "
-              f"{curve[-3:].mean():5.2f}  ends {all_food:4.1f} / {killed:4.1f} / {starved:4.1f}  training plays "
-              f"{steps:4.0f} steps, {stuck:3.1f} stuck", flush=True)
+              f"{np.mean(finals):5.2f} ± {np.std(finals):4.2f} ({' / '.join(f'{v:.2f}' for v in finals)})  ends "
+              f"{all_food:4.1f} / {killed:4.1f} / {starved:4.1f}  training plays {steps:4.0f} steps, "
+              f"{stuck:3.1f} stuck", flush=True)
 
 
 if __name__ == "__main__":
