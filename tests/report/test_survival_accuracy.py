@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from connrl.experiments.survival import SurvivalParams, run_survival
-from connrl.report.survival_accuracy import block_curve, model_accuracy, settles
+from connrl.report.survival_accuracy import _scale_lines, block_curve, model_accuracy, settles
 from tests.tiny_runs import run_tiny
 
 
@@ -51,3 +51,10 @@ def test_section_reads_the_stored_runs(tmp_path):
 @pytest.mark.parametrize("column", ["model_reward_abs", "model_probe_enemy_bits"])
 def test_block_curve_of_a_missing_column_is_empty(column):
     assert block_curve([[{"kind": "train", "plays": 1.0}]], column)[0].size == 0
+
+
+@pytest.mark.parametrize(("final", "word"), [(0.0, "and beat it in squared error"),
+                                             (1.0, "and do **not** beat it in squared error")])
+def test_scale_lines_compare_the_squared_error_with_predicting_zero(final, word):
+    probes = [{"column": "model_probe_reward_sq", "final": final, "rep": rep} for rep in ("global", "local")]
+    assert word in _scale_lines(probes)[0]

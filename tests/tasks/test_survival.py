@@ -83,6 +83,17 @@ def test_global_agents_without_symmetry_have_one_net_per_action():
     assert not np.allclose(agent.q.values(rotate_observation(x, 1)), np.roll(agent.q.values(x), -1), atol=1e-6)
 
 
+def test_ahcon_without_symmetry_has_four_policy_nets_and_one_v_net():
+    agent, _ = agent_for("AHCON", symmetry=False)
+    assert agent.policy.n_nets == 4 and not isinstance(agent.policy, RotatedNet) and agent.v.n_nets == 1
+
+
+@pytest.mark.parametrize("bad", [{"symmetry": "no"}, {"symmetry": False, "representation": "local"}])
+def test_symmetry_must_be_a_bool_and_global(bad):
+    with pytest.raises(ValueError, match="symmetry"):
+        SurvivalAgentParams(**{"framework": "QCON", **bad})
+
+
 def test_stuck_detection_raises_t_until_food_is_eaten():
     exp = SurvivalExploration(TemperatureSchedule.inverse(20, 20, 1), StuckConfig(window=4, radius=1.0, boost=5))
     exp.begin(0)

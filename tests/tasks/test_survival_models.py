@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv, rotate_observation
-from connrl.tasks.survival_models import LearnedSurvivalModel, PerfectSurvivalModel
+from connrl.tasks.survival_models import LearnedModelConfig, LearnedSurvivalModel, PerfectSurvivalModel
 
 PERMS = np.stack([ROTATION_PERMUTATIONS[ACTION_ROTATION[a]] for a in range(4)])
 
@@ -140,3 +140,19 @@ def test_the_learned_reinforcement_net_beats_predicting_zero_on_other_plays(repr
     held_out = probe_experiences(representation, 22, 1500)
     zero = np.mean([r * r for _, _, r, _ in held_out])
     assert model.probe_errors(held_out)["probe_reward_sq"] < 0.75 * zero
+
+
+def test_pop_errors_by_hand_and_reset():
+    """On-line errors: each experience is predicted before learning; pop_errors gives the means and starts again."""
+    env = SurvivalEnv("local")
+    x, _ = env.reset(seed=1)
+    model = LearnedSurvivalModel(env, np.random.default_rng(0))
+    model.w_r[:] = 0.0  # predicts r = 0 until it learns
+    y, *_ = env.step(0)
+    model.config = LearnedModelConfig(lr=1e-300)  # learning changes nothing measurable
+    model.learn(x, 0, 0.4, y, False)
+    model.learn(x, 1, -1.0, y, True)
+    errs = model.pop_errors()
+    assert errs["reward_abs"] == pytest.approx((0.4 + 1.0) / 2)
+    assert errs["reward_sq"] == pytest.approx((0.16 + 1.0) / 2)  # the mean of squares, not the squared mean
+    assert model.pop_errors()["reward_sq"] == 0.0 and model.errors["n"] == 0
