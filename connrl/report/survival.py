@@ -55,9 +55,11 @@ PLANNING_FLOOR = 0.4  # Fig. 4.5 "did not drop close to zero": a tenth of the ma
 _COMPARISONS_HEADING = "Comparisons of 4.4.1-4.4.5, re-derived from our runs"
 _REPRESENTATION_HEADING = "4.4.1: final performance under the two action representations"
 # measured on development seeds (docs/notes/survival-study2-gap.md); shown only where the verdict is not "reproduced"
-_GAP_CAUSE = ("measured (development seeds): giving up the shared rotated net costs as much on the global inputs, and "
-              "a copy of the teacher does better on the local inputs than on the global ones, so the loss is the four "
-              "action nets' (a quarter of the moves each), not the local frame's; see \"Why Study 2 falls short\"")
+_GAP_CAUSE = ("partly measured (3 development seeds; QCON, QCON-R, AHCON): with four action nets on the global inputs "
+              "instead of one rotated net these agents end about as low as with the local representation, and "
+              "four-net copies of the teacher do no worse on the local inputs than on the global ones; so our "
+              "shortfall goes with giving up the shared net, not with the local frame. Why the thesis's agents did "
+              "not pay it is open; see \"Why Study 2 falls short\"")
 
 
 def _load_records(out: Path, name: str) -> tuple[dict | None, list[dict]]:

@@ -9,7 +9,8 @@ state) by one-vs-rest regression (``connrl.agents.cloning``: the taught action's
 -0.5). Round 0 fits the teacher's own ``--plays`` plays; each further round lets the copy play ``--plays`` plays
 greedily, labels the states it visits with the teacher's choice and refits on everything so far (DAgger), so the
 copy is trained on the states its own mistakes lead to. Each round ends with the copy's greedy food per play on 50
-test environments (the layouts ``connrl.tasks.survival.environment_sets`` draws for the run's seed, as a run's tests).
+test environments (``connrl.tasks.survival.environment_sets(seed, 0, 50)``: drawn from the seed itself, so not the
+layouts a ``run_survival`` run with that seed tests on).
 
 Both representations get the same nets, so a gap between them is the representation's; the teacher's own food on the
 same tests is the reference. The copy is a reference for what these inputs support, not a strict bound: a
