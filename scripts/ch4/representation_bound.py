@@ -12,7 +12,8 @@ copy is trained on the states its own mistakes lead to. Each round ends with the
 test environments (``connrl.tasks.survival.environment_sets(seed, 0, 50)``: drawn from the seed itself, so not the
 layouts a ``run_survival`` run with that seed tests on).
 
-Both representations get the same nets, so a gap between them is the representation's; the teacher's own food on the
+``global-rotated`` copies onto Study 1's one rotated net instead (4.2.4). The global and local copies get the same
+four nets, so a gap between them is the representation's; the teacher's own food on the
 same tests is the reference. The copy is a reference for what these inputs support, not a strict bound: a
 reinforcement learner optimises food and survival, not agreement with this teacher (docs/RECONSTRUCTION.md).
 Development seeds only.
@@ -26,8 +27,9 @@ import math
 import numpy as np
 
 from connrl.agents.cloning import agreement, copy_epoch
-from connrl.envs.survival import SurvivalEnv, scripted_teacher_action
+from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv, scripted_teacher_action
 from connrl.nets import OAON, NetConfig
+from connrl.nets.rotated import RotatedNet
 from connrl.tasks.survival import environment_sets
 
 MARGIN = 0.5  # one-vs-rest targets, a quarter of the outputs' +-1 range's span
@@ -49,9 +51,14 @@ def play(env, choose, seed: int, layout: int | None, label: bool):
 
 def run(representation: str, seed: int, plays: int, rounds: int, lr: float, epochs: int) -> list[str]:
     rng = np.random.default_rng(seed)
-    env = SurvivalEnv(representation)
+    env = SurvivalEnv(representation.split("-")[0])
     _, tests = environment_sets(seed, 0, 50)
-    nets = OAON(NetConfig(145, 30, value_range=1.0, init_range=0.1, lr=lr, momentum=0.9), 4, rng)
+    config = NetConfig(145, 30, value_range=1.0, init_range=0.1, lr=lr, momentum=0.9)
+    if representation == "global-rotated":  # Study 1's one net, its inputs rotated per action (4.2.4)
+        nets = RotatedNet(config, np.stack([ROTATION_PERMUTATIONS[ACTION_ROTATION[a]] for a in range(4)]), rng)
+        nets.n_nets = nets.n_actions  # what connrl.agents.cloning asks of a set of action nets
+    else:
+        nets = OAON(config, 4, rng)
 
     def greedy(obs):
         return int(np.argmax(nets.values(obs)))
@@ -84,7 +91,8 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--epochs", type=int, default=3)
     ap.add_argument("--lr", type=float, default=0.02)
-    ap.add_argument("--representations", nargs="+", choices=["global", "local"], default=["global", "local"])
+    ap.add_argument("--representations", nargs="+", choices=["global", "local", "global-rotated"],
+                    default=["global", "local"])
     args = ap.parse_args()
     if args.plays < 1 or args.rounds < 0 or args.epochs < 1 or not 0 < args.lr < math.inf or min(args.seeds) < 0:
         ap.error("--plays and --epochs must be 1 or more, --rounds and --seeds 0 or more, --lr a number > 0")
