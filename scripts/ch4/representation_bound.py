@@ -13,9 +13,9 @@ test environments (``connrl.tasks.survival.environment_sets(seed, 0, 50)``: draw
 layouts a ``run_survival`` run with that seed tests on).
 
 ``global-rotated`` copies onto Study 1's one rotated net instead (4.2.4). The global and local copies get the same
-four nets, so a gap between them is the representation's; the teacher's own food on the
-same tests is the reference. The copy is a reference for what these inputs support, not a strict bound: a
-reinforcement learner optimises food and survival, not agreement with this teacher (docs/RECONSTRUCTION.md).
+four nets, so a gap between them is the representation's; the teacher's own food on the same tests is the reference.
+The copy is a reference for what these inputs support, not a strict bound: a reinforcement learner optimises food and
+survival, not agreement with this teacher (docs/RESULTS.md, "Why Study 2 falls short").
 Development seeds only.
 """
 
