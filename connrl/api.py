@@ -226,6 +226,9 @@ class Agent:
         return o.lr + (o.lr_end - o.lr) * min(self.steps_done / o.anneal_steps, 1.0)
 
     def _set_learning_rate(self) -> None:
+        """Set the schedule's rate on every net; without a schedule a rate set by hand is left as it is."""
+        if self.options.lr_end is None:
+            return
         for net in _all_nets(self):
             net.lr = self.learning_rate()
 
@@ -251,8 +254,7 @@ class Agent:
         callbacks.on_training_start(self, end)
         scaled.on_sizes = self._check_range
         while self.steps_done < end:
-            if self.options.lr_end is not None:  # a trial and its replay learn at the rate of the step it starts at
-                self._set_learning_rate()
+            self._set_learning_rate()  # a trial and its replay learn at the rate of the step it starts at
             try:  # a trial the budget or the cap cuts is a timeout: the learner bootstraps through it
                 stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
                                   seed=int(self.rng.integers(2**31)), max_steps=min(cap, end - self.steps_done))
@@ -453,8 +455,7 @@ def load(path, env=None) -> Agent:
     except (ValueError, TypeError, KeyError, OverflowError) as exc:
         raise FileError(meta, f"is not a NumPy {type(agent.rng.bit_generator).__name__} state ({exc})", "rng") from None
     agent.steps_done, agent.trials_done = int(m["steps_done"]), int(m["trials_done"])
-    if agent.options.lr_end is not None:
-        agent._set_learning_rate()  # the schedule's rate at the saved step, as learn() would set it
+    agent._set_learning_rate()  # the schedule's rate at the saved step, as learn() would set it
     if env is not None:
         try:
             agent.check_env(env)

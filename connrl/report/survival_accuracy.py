@@ -33,6 +33,12 @@ BAND = 0.1  # "settled": every later block within 10 % of the asymptote (or 2 SD
 THESIS_SETTLES = 50  # 4.4.3: "approached its asymptote after approximately 50 plays"
 
 
+def _counted(column: str) -> bool:
+    """A fixed-probe error that the settling verdict counts: the squared reward error measures the same predictions as
+    the absolute one, so it is shown but not counted again."""
+    return "probe" in column and not column.endswith("_sq")
+
+
 def block_curve(runs: list[list[dict]], column: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(block ends, mean over runs of each run's BLOCK-play means, each run's last-block mean) of a column of the
     training rows; rows without it (plays between probes) are skipped."""
@@ -164,14 +170,13 @@ def model_accuracy(out: Path, doc: Path) -> list[str]:
         commands += [command] if command else []
     if not rows:
         return []
-    # the squared reward error measures the same predictions as the absolute one: it is shown, not counted again
-    probes = [f for f in found if "probe" in f["column"] and not f["column"].endswith("_sq")]
+    probes = [f for f in found if _counted(f["column"])]
     near = [f for f in probes if f["settles"] is not None and f["settles"] <= 2 * THESIS_SETTLES]
     never_zero = all(f["last"].min() > 0 for f in found)
     kept = [f["kept"] for f in probes]  # final probe error as a share of plays 1-10's
     where = "; ".join(f"{text.split(',')[0]}: " + ", ".join(f"{f['who']} {_play(f['settles'])}" for f in probes
                                                           if f["column"] == column)
-                      for column, text in MEASURES if "probe" in column and not column.endswith("_sq"))
+                      for column, text in MEASURES if _counted(column))
     head = ["### 4.4.3: the learned model's prediction accuracy (Studies 1 and 2)", "",
             " and ".join(commands) + ": the -M agents with the learned model, errors per play from the run records.",
             "", "The thesis: \"In both studies, the model's prediction accuracy approached its asymptote after "

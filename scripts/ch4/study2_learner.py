@@ -25,6 +25,7 @@ import numpy as np
 
 import connrl.experiments.survival as survival
 from connrl.envs.survival import SurvivalEnv
+from connrl.experiments.spec import check_types
 from connrl.experiments.survival import SurvivalParams, run_survival
 from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 
@@ -44,7 +45,8 @@ RUN_LEVEL = ("framework", "representation", "lr_scale", "plays", "model")  # set
 
 
 def agent_overrides(items: list[str]) -> dict:
-    """``--agent`` field=JSON pairs, each of its field's type; a bad one raises ValueError in one line."""
+    """``--agent`` field=JSON pairs, each checked against its field's annotation by the sweep's own checker
+    (``connrl.experiments.spec.check_types``); a bad one raises ValueError in one line."""
     defaults = SurvivalAgentParams()
     out = {}
     for item in items:
@@ -53,16 +55,10 @@ def agent_overrides(items: list[str]) -> dict:
             allowed = [f.name for f in dataclasses.fields(defaults) if f.name not in RUN_LEVEL]
             raise ValueError(f"--agent {key!r}: not a field to set here; allowed: {', '.join(allowed)}")
         try:
-            v = json.loads(value)
+            out[key] = json.loads(value)
         except json.JSONDecodeError:
             raise ValueError(f"--agent {item!r}: give field=JSON value, e.g. hidden=60") from None
-        want = type(getattr(defaults, key))
-        ok = (isinstance(v, bool) if want is bool else isinstance(v, int) and not isinstance(v, bool) if want is int
-              else isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) if want is float
-              else v is None or isinstance(v, (int, float)) and not isinstance(v, bool))
-        if not ok:
-            raise ValueError(f"--agent {item!r}: {key} takes a value of type {want.__name__}")
-        out[key] = v
+    check_types(dataclasses.replace(defaults, **out))
     return out
 
 
