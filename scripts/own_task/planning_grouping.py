@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from connrl.core.grouping import check_mu_range
 from connrl.core.planning import PlanningConfig, RelaxationPlanner
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -70,7 +71,7 @@ def _setup(arm: str, tally: dict):
             tally["model"] = PerfectModel(env, agent.scaler)
             learner.planner = RelaxationPlanner(tally["model"], PlanningConfig())
         elif arm.startswith("group:"):
-            mu = tuple(float(v) for v in arm.split(":", 1)[1].split(","))
+            mu = _mu(arm)
             learner.config = dataclasses.replace(
                 learner.config, replay=dataclasses.replace(learner.config.replay, grouping=mu))
         tally["learner"] = learner
@@ -89,16 +90,20 @@ def _job(job):
     return result
 
 
+def _mu(arm: str) -> tuple[float, float]:
+    """A ``group:LOW,HIGH`` arm's mu range, checked as replay checks it."""
+    return check_mu_range(arm.split(":", 1)[1].split(","))
+
+
 def _arm(text: str) -> str:
     if text in ("base", "plan", "QCON", "QCON+plan"):
         return text
     if text.startswith("group:"):
         try:
-            lo, hi = (float(v) for v in text.split(":", 1)[1].split(","))
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r}: give group:LOW,HIGH, for example group:0.1,0.5") from None
-        if not 0 <= lo <= hi:
-            raise argparse.ArgumentTypeError(f"{text!r}: need 0 <= LOW <= HIGH")
+            _mu(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(f"{text!r}: give group:LOW,HIGH, for example group:0.1,0.5 ({exc})") \
+                from None
         return text
     raise argparse.ArgumentTypeError(f"unknown arm {text!r}; allowed: base, plan, QCON, QCON+plan, group:LOW,HIGH")
 
