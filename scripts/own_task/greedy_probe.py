@@ -19,6 +19,7 @@ import gymnasium as gym
 import numpy as np
 
 import connrl
+from connrl.api import options_from
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sample_efficiency import _pairs, _value  # noqa: E402
@@ -39,6 +40,10 @@ def main() -> None:
     if args.every < 1 or (args.steps is not None and args.steps < 1):
         ap.error("--every and --steps must be whole numbers >= 1")
     options = {**connrl_options(args.task), **{k: _value(v) for k, v in _pairs(args.option, "--option").items()}}
+    try:  # every option checked before anything runs, as sample_efficiency.py checks its rows
+        options_from(options)
+    except (ValueError, TypeError) as exc:
+        ap.error(str(exc))
     steps = args.steps or TASKS[args.task][1]
     env, eval_env = gym.make(args.task), gym.make(args.task)
     agent = connrl.make_agent(env, args.kind, seed=args.seed, **options)
