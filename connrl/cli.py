@@ -58,7 +58,8 @@ def cmd_run(args) -> int:
         raise SystemExit(f"connrl: {exc}") from None
     _check_executor(args)
     _writable(args.out)
-    return _run_and_report(spec, args, profile=args.profile, runs=args.runs, seed=args.seed)
+    seed = spec.seed if args.seed is None else args.seed
+    return _run_and_report(spec, args, profile=args.profile, runs=args.runs, seed=seed)
 
 
 def cmd_reproduce(args) -> int:
@@ -314,7 +315,8 @@ def _add_experiment_commands(sub) -> None:
     s.add_argument("--profile", choices=PROFILES, default="quick",
                    help="quick: minutes, a first look (default); full: the thesis's protocol; tiny: a smoke test")
     s.add_argument("--runs", type=_run_count, default=None, help="runs per variant (overrides the profile)")
-    s.add_argument("--seed", type=_seed, default=0, help="base seed; run i uses seed+i (default 0)")
+    s.add_argument("--seed", type=_seed, default=None,
+                   help="base seed; run i uses seed+i (default: the experiment's own, 0 but for fresh-seed checks)")
     s.add_argument("--out", default="runs", help="output directory (default ./runs)")
     s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")
     s.add_argument("--quiet", action="store_true", help="no live progress display")

@@ -72,8 +72,9 @@ def test_same_tells_bit_noise_from_a_change():
 
 @pytest.mark.parametrize("name", sorted(all_experiments()))
 def test_every_experiment_runs_on_the_tiny_profile(name, tmp_path, capsys):
-    """A smoke run through the CLI; its numbers and run folder equal those commit e172482 produced."""
-    assert cli.main(["run", name, "--profile", "tiny", "--out", str(tmp_path), "--workers", "1", "--quiet"]) == 0
+    """A smoke run through the CLI; its numbers and run folder equal those commit e172482 produced (at seed 0)."""
+    assert cli.main(["run", name, "--profile", "tiny", "--seed", "0", "--out", str(tmp_path), "--workers", "1",
+                     "--quiet"]) == 0
     summary = json.loads((tmp_path / name / "summary.json").read_text())
     assert summary["profile"] == "tiny" and summary["variants"]
     per_run = {v: {q: x["per_run"] for q, x in d["quantities"].items()} for v, d in summary["variants"].items()}
@@ -86,6 +87,16 @@ def test_every_experiment_runs_on_the_tiny_profile(name, tmp_path, capsys):
     assert (tmp_path / name / "curve.png").exists()
     assert cli.main(["plot", name, "--out", str(tmp_path)]) == 0
     assert cli.main(["show", name, "--out", str(tmp_path)]) == 0
+
+
+def test_run_without_seed_starts_at_the_experiments_own(tmp_path):
+    """A fresh-seed check run without --seed uses the seeds its title names, not development seed 0."""
+    assert cli.main(["run", "survival-study2-fresh", "--profile", "tiny", "--out", str(tmp_path), "--workers", "1",
+                     "--quiet"]) == 0
+    summary = json.loads((tmp_path / "survival-study2-fresh" / "summary.json").read_text())
+    assert summary["base_seed"] == 2000 and "seeds 2000-2006" in all_experiments()["survival-study2-fresh"].title
+    assert cli.main(["run", "td-depth", "--profile", "tiny", "--out", str(tmp_path), "--workers", "1", "--quiet"]) == 0
+    assert json.loads((tmp_path / "td-depth" / "summary.json").read_text())["base_seed"] == 0
 
 
 @pytest.mark.parametrize("args, message", [

@@ -47,6 +47,7 @@ from connrl.tasks.survival_models import probe_experiences
 # the learned model's yardstick (4.4.3): fixed experiences, the same for every run of a representation (not
 # parameters: they are measurement, and leave the runs and their folders as they were)
 PROBE_SEED, PROBE_SIZE, PROBE_EVERY = 4403, 1000, 5
+FRESH_SEED = 2000  # first seed of the fresh-seed runs: Ch. 4 development used 0-6, 11-12 and 100-102
 
 
 @dataclass(frozen=True)
@@ -240,6 +241,12 @@ EXPERIMENTS = [
         section="4.3.3", run="connrl.experiments.survival:run_survival", params=_STUDY2,
         profiles=_PROFILES, variants=_variants(2), quantities=_CURVE_QUANTITIES,
         x_label="plays", y_label="food per test play", y_reference={"8 food (4.5 table)": 8.0}),
+    *(ExperimentSpec(  # issue 31's check: the same runs on seeds no development choice saw
+        name=f"survival-study{k}-fresh", title=f"Survival, Study {k} again on fresh seeds (seeds {FRESH_SEED}-"
+        f"{FRESH_SEED + 6}, never used in development)", section=sec, run="connrl.experiments.survival:run_survival",
+        params=params, profiles=_PROFILES, variants=_variants(k), quantities=_CURVE_QUANTITIES, x_label="plays",
+        y_label="food per test play", y_reference={"8 food (4.5 table)": 8.0}, seed=FRESH_SEED)
+      for k, sec, params in ((1, "4.3.2, 4.4", SurvivalParams()), (2, "4.3.3, 4.4, 4.5", _STUDY2))),
     ExperimentSpec(
         name="survival-planning", title="Hypothetical actions per step, Study 2 -M agents (Fig. 4.5)",
         section="4.4.3", run="connrl.experiments.survival:run_survival",
