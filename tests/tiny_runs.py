@@ -8,7 +8,7 @@ from connrl.report.plots import plot_experiment
 
 
 def run_tiny(name: str, out: Path) -> RunOutcome:
-    """What ``connrl run NAME --profile tiny --workers 1`` does, without the CLI: the runs, then the plot."""
+    """What ``connrl run NAME --profile tiny --seed 0 --workers 1`` does, without the CLI: the runs, then the plot."""
     spec = get_experiment(name)
     outcome = run_experiment(spec, profile="tiny", out=out, workers=1, show_progress=False)
     plot_experiment(spec, outcome.records, Path(out) / name)

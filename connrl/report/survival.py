@@ -12,13 +12,12 @@ from pathlib import Path
 import numpy as np
 
 from connrl.envs.survival import GRID_SIZE, render_rgb
-from connrl.experiments.survival import EXPERIMENTS
+from connrl.experiments.survival import EXPERIMENTS, FRESH_SEED  # noqa: F401 (the page lists the sections' experiments)
 from connrl.report import checks, verdicts
-from connrl.report.page import figure, note, stored
+from connrl.report.page import figure, note
 from connrl.report.plots import save_figure
 from connrl.report.survival_accuracy import model_accuracy
-
-_SPECS = {s.name: s for s in EXPERIMENTS}
+from connrl.report.survival_speedup import by_variant, command, crossing, load_records, mean_curve, speedup
 
 # 4.3.4 histogram: % of plays with 0..15 pieces of food
 THESIS_HISTOGRAM = [0.1, 0.3, 0.8, 1.8, 2.2, 2.9, 4.0, 4.1, 3.8, 3.7, 3.4, 4.1, 5.4, 8.2, 15.2, 39.9]
@@ -62,57 +61,25 @@ _GAP_CAUSE = ("partly measured (3 development seeds; QCON, QCON-R, AHCON): with 
               "not pay it is open; see \"Why Study 2 falls short\"")
 
 
-def _load_records(out: Path, name: str) -> tuple[dict | None, list[dict]]:
-    return stored(_SPECS[name], out)
-
-
-def crossing(xs, ys, level: float) -> float | None:
-    """First x at which the piecewise-linear curve (xs, ys) reaches ``level`` (None if never)."""
-    for i, (x, y) in enumerate(zip(xs, ys, strict=True)):
-        if y >= level:
-            if i == 0:
-                return float(x)
-            x0, y0 = xs[i - 1], ys[i - 1]
-            return float(x0 + (level - y0) * (x - x0) / (y - y0))
-    return None
-
-
-def _mean_curve(recs: list[dict]) -> tuple[list[float], list[float]]:
-    n = min(len(r["curve_x"]) for r in recs)
-    return recs[0]["curve_x"][:n], list(np.mean(np.array([r["curve_y"][:n] for r in recs], dtype=float), axis=0))
-
-
-def _command(summary: dict) -> str:
-    n, s = summary["runs_per_variant"], summary["base_seed"]
-    return (f"`connrl run {summary['experiment']} --profile {summary['profile']} --runs {n} --seed {s}` "
-            f"({n} run(s) per agent, seeds {s}..{s + n - 1}, wall time {summary['timing']['wall_time_s'] / 60:.1f} "
-            f"min, {sum(summary['timing']['run_wall_time_s']) / 60:.1f} min of run time)")
-
-
-def _by_variant(recs: list[dict]) -> dict[str, list[dict]]:
-    out: dict[str, list[dict]] = {}
-    for r in sorted(recs, key=lambda r: r["seed"]):
-        out.setdefault(r["variant"], []).append(r)
-    return out
-
-
-def _study_section(out: Path, name: str, fig: str, doc: Path) -> tuple[list[str], dict[str, list[dict]]]:
-    summary, recs = _load_records(out, name)
+def _study_section(out: Path, name: str, fig: str, doc: Path,
+                   compared: bool = True) -> tuple[list[str], dict[str, list[dict]]]:
+    summary, recs = load_records(out, name)
     if summary is None:
         return [], {}
-    byv = _by_variant(recs)
-    lines = [f"### {fig}: `{name}`", "", _command(summary), "",
+    byv = by_variant(recs)
+    lines = [f"### {fig}: `{name}`", "", command(summary), "",
              "| agent | final food (plays 260-300) | mean food over all tests | plays to 8 (mean curve) |",
              "|---|---|---|---|"]
     for label, rs in byv.items():
         fin = [r["metrics"]["final_food"] for r in rs]
         auc = [r["metrics"]["food_auc"] for r in rs]
-        cx, cy = _mean_curve(rs)
+        cx, cy = mean_curve(rs)
         c8 = crossing(cx, cy, 8.0)
         lines.append(f"| {label} | {np.mean(fin):.2f} ± {np.std(fin):.2f} | {np.mean(auc):.2f} ± {np.std(auc):.2f} | "
                      f"{'not reached' if c8 is None else f'{c8:.0f}'} |")
-    lines += ["", "The thesis's curves are lost (only the text survives), so there are no numbers to set beside "
-              "these; the orderings of 4.4 are compared below.", "", figure(out / name / "curve.png", doc, name), ""]
+    lost = ("The thesis's curves are lost (only the text survives), so there are no numbers to set beside these; "
+            "the orderings of 4.4 are compared below.")
+    lines += ["", *([lost, ""] if compared else []), figure(out / name / "curve.png", doc, name), ""]
     return lines, byv
 
 
@@ -129,12 +96,30 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     if studies:
         parts += _comparisons(studies) + _representation(studies)
         parts += [note("survival-study2-gap"), ""] if {"global", "local"} <= set(studies) else []
-    parts += _speedup(out_dir, doc)
+    parts += speedup(out_dir, doc)
+    parts += _fresh(out_dir, doc)
     parts += _planning(out_dir, doc)
     parts += model_accuracy(out_dir, doc)
     parts += _tuning(out_dir) + _food(out_dir)
     parts += _evaluation(out_dir, doc)
     return "\n".join(parts) if len(parts) > 6 else ""
+
+
+def _fresh(out: Path, doc: Path) -> list[str]:
+    """Issue 31's check: Study 1 and 2 again on seeds no development choice saw; every verdict rule re-applied."""
+    tag = f" (fresh seeds {FRESH_SEED}-{FRESH_SEED + 6})"
+    parts, studies = [], {}
+    for name, fig, rep in (("survival-study1-fresh", "Study 1 (global) on fresh seeds", "global"),
+                           ("survival-study2-fresh", "Study 2 (local) on fresh seeds", "local")):
+        lines, byv = _study_section(out, name, fig, doc, compared=False)
+        parts += lines
+        if byv:
+            studies[rep] = byv
+    if not studies:
+        return []
+    parts += _comparisons(studies, tag) + _representation(studies, tag)
+    parts += speedup(out, doc, "survival-study2-fresh", tag, factor=1.5)
+    return [note("survival-fresh"), "", *parts]
 
 
 def _values(byv: dict, who: str, model: str | None, metric: str) -> list[float]:
@@ -145,8 +130,8 @@ def _values(byv: dict, who: str, model: str | None, metric: str) -> list[float]:
     return [r["metrics"][metric] for k in labels for r in byv.get(k, [])]
 
 
-def _comparisons(studies: dict) -> list[str]:
-    lines = [f"### {_COMPARISONS_HEADING}", "",
+def _comparisons(studies: dict, tag: str = "") -> list[str]:
+    lines = [f"### {_COMPARISONS_HEADING}{tag}", "",
              "Speed = mean food over all tests; final = mean food over the last three tests; X vs Y per run "
              "(\"Q\" / \"AHC\" pool the runs of all agents of a kind, as 4.4.1 does). The rules "
              "(`connrl/report/verdicts.py`): > and < need X significantly better / worse than Y (one-sided Welch "
@@ -178,9 +163,9 @@ def _comparisons(studies: dict) -> list[str]:
     what = {"4.4.1": "AHC- vs Q-agents", "4.4.2": "experience replay", "4.4.3": "action models",
             "4.4.4": "teaching", "4.4.5": "experience replay vs action models"}
     for sec, words in by_sec.items():
-        verdicts.claim(f"Table of {sec} ({what[sec]})", sec, "the table's > / ~ / < cells (speed, final)",
+        verdicts.claim(f"Table of {sec} ({what[sec]}){tag}", sec, "the table's > / ~ / < cells (speed, final)",
                        checks.tally(words), "each cell by the rules above (Welch one-sided for > <; TOST ±10 % "
-                       "for ~); all agree = reproduced", checks.claim_verdict(words), anchor=_COMPARISONS_HEADING)
+                       "for ~); all agree = reproduced", checks.claim_verdict(words), anchor=_COMPARISONS_HEADING + tag)
     return lines
 
 
@@ -188,12 +173,12 @@ def _gap_cause(words) -> str:
     return "" if checks.claim_verdict(words) == verdicts.REPRODUCED else _GAP_CAUSE
 
 
-def _representation(studies: dict) -> list[str]:
+def _representation(studies: dict, tag: str = "") -> list[str]:
     """4.4.1's sentence on the action representations, per agent: final food, global (Study 1) against local."""
     if not {"global", "local"} <= set(studies):
         return []
     g, lo = studies["global"], studies["local"]
-    lines = [f"### {_REPRESENTATION_HEADING}", "",
+    lines = [f"### {_REPRESENTATION_HEADING}{tag}", "",
              "The thesis (4.4.1): \"Q-agents' final performance was basically unaffected by using different action "
              "representations, while for AHC-agents, the local action representation apparently worked better than "
              "the global action representation as far as the final performance is concerned.\" Per agent, final "
@@ -227,86 +212,28 @@ def _representation(studies: dict) -> list[str]:
     lines += ["", f"Q-agents basically unaffected: {checks.claim_verdict(q_words)} ({checks.tally(q_words)}); "
               f"AHC-agents better with the local representation: {checks.claim_verdict(a_words)} "
               f"({checks.tally(a_words)}).", ""]
-    verdicts.claim("4.4.1: Q-agents' final performance unaffected by the representation", "4.4.1",
+    verdicts.claim(f"4.4.1: Q-agents' final performance unaffected by the representation{tag}", "4.4.1",
                    "basically unaffected (global vs local)", "; ".join(q_ours),
                    "per Q-agent, final food global vs local the same within ±10 % of global (TOST at 0.05)",
-                   checks.claim_verdict(q_words), _gap_cause(q_words), anchor=_REPRESENTATION_HEADING)
-    verdicts.claim("4.4.1: AHC-agents' final performance better with the local representation", "4.4.1",
+                   checks.claim_verdict(q_words), _gap_cause(q_words), anchor=_REPRESENTATION_HEADING + tag)
+    verdicts.claim(f"4.4.1: AHC-agents' final performance better with the local representation{tag}", "4.4.1",
                    "local apparently better", "; ".join(a_ours),
                    "per AHC-agent, final food local > global (one-sided Welch at 0.05)",
-                   checks.claim_verdict(a_words), _gap_cause(a_words), anchor=_REPRESENTATION_HEADING)
-    return lines
-
-
-_SPEEDUP_ROWS = [("QCON", "no extensions", 200), ("QCON-M (learned model)", "using a learned model", 140),
-                 ("QCON-M (perfect model)", "using a perfect model", 95), ("QCON-R", "experience replay", 80),
-                 ("QCON-T", "experience replay + teaching", 60)]
-
-
-def _speedup(out: Path, doc: Path) -> list[str]:
-    summary, recs = _load_records(out, "survival-speedup")
-    source = "survival-speedup"
-    if summary is None:
-        summary, recs = _load_records(out, "survival-study2")
-        source = "survival-study2"
-    if summary is None:
-        return []
-    byv = _by_variant(recs)
-    lines = ["### Table of 4.5: Study 2 Q-agents, plays to reach 8 food per play", "", _command(summary)
-             + (" (read from Study 2's runs)" if source == "survival-study2" else ""), "",
-             "| agent | thesis plays | thesis speedup | our plays (mean curve) | our speedup | per-run plays | runs |",
-             "|---|---|---|---|---|---|---|"]
-    base = None
-    ours = {}
-    for label, text, t in _SPEEDUP_ROWS:
-        rs = byv.get(label, [])
-        if not rs:
-            continue
-        c8 = crossing(*_mean_curve(rs), 8.0)
-        ours[label] = c8
-        if label == "QCON":
-            base = c8
-        per = ", ".join("—" if r["metrics"]["plays_to_8"] is None else f"{r['metrics']['plays_to_8']:.0f}" for r in rs)
-        sp = f"{base / c8:.1f}" if base and c8 else "—"
-        lines.append(f"| {text} | {t} | {200 / t:.1f} | {'not reached' if c8 is None else f'{c8:.0f}'} | {sp} | "
-                     f"{per} | {len(rs)} |")
-    expected = [lab for lab, _, _ in reversed(_SPEEDUP_ROWS) if lab in byv]  # fastest first, as the table says
-    word, pair_lines = checks.ordering_check(
-        {lab: [r["metrics"]["food_auc"] for r in byv[lab]] for lab in expected}, expected)
-    lines += ["", "A run that never reaches 8 within 300 plays is shown as —.", "",
-              "**Ordering check.** The table orders the agents, fastest first: " + " > ".join(expected) + ". Plays to "
-              "8 cannot order runs that never reach 8 within the 300 plays, so each pair is checked on the mean food "
-              "over all tests (our measure of speed), one-sided Welch t-test at 0.05 per adjacent pair "
-              "(`verdicts.ordering`); the whole ordering is reproduced only when every pair is in order:", "",
-              *[f"- {line}" for line in pair_lines], "", f"Ordering: **{word}**.", ""]
-    heading = "Table of 4.5: Study 2 Q-agents, plays to reach 8 food per play"
-    means = {lab: float(np.mean([r["metrics"]["food_auc"] for r in byv[lab]])) for lab in expected}
-    verdicts.claim("Table 4.5: the ordering of the speedups", "4.5", " > ".join(expected) + " (fastest first)",
-                   "food over all tests " + ", ".join(f"{lab} {m:.2f}" for lab, m in means.items()),
-                   "each adjacent pair in order, one-sided Welch at 0.05 on food over all tests",
-                   checks.ordering_verdict(word), anchor=heading)
-    within = [lab for lab, _, t in _SPEEDUP_ROWS if lab in ours and ours[lab] is not None and ours[lab] <= t]
-    verdicts.claim("Table 4.5: plays to reach 8", "4.5", ", ".join(f"{lab} {t}" for lab, _, t in _SPEEDUP_ROWS),
-                   ", ".join(f"{lab} {'not reached' if ours[lab] is None else f'{ours[lab]:.0f}'}" for lab in ours),
-                   "the mean curve reaches 8 within the thesis's plays, every agent (no test of spread)",
-                   verdicts.REPRODUCED if len(within) == len(ours) else verdicts.PARTLY if within
-                   else verdicts.NOT_REPRODUCED, anchor=heading)
-    if source == "survival-speedup":
-        lines += [figure(out / source / "curve.png", doc, source), ""]
+                   checks.claim_verdict(a_words), _gap_cause(a_words), anchor=_REPRESENTATION_HEADING + tag)
     return lines
 
 
 def _planning(out: Path, doc: Path) -> list[str]:
-    summary, recs = _load_records(out, "survival-planning")
+    summary, recs = load_records(out, "survival-planning")
     if summary is None:
         return []
     heading = "Fig. 4.5: hypothetical actions per step (Study 2 -M agents)"
-    lines = [f"### {heading}", "", _command(summary), "",
+    lines = [f"### {heading}", "", command(summary), "",
              "The thesis: planning drops quickly as the learning curves level off but not to zero (maximum 4).", "",
              "| agent | plays 1-20 | plays 141-160 | last 20 plays | drops (plays 1-20 vs last 20) |",
              "|---|---|---|---|---|"]
     words, ours = [], []
-    for label, rs in _by_variant(recs).items():
+    for label, rs in by_variant(recs).items():
         per = [np.asarray(r["extra"]["hypothetical_per_step"], float) for r in rs]
         h = np.mean(per, axis=0)
         mid = f"{np.mean(h[140:160]):.2f}" if h.size >= 160 else "—"
@@ -332,11 +259,11 @@ def _planning(out: Path, doc: Path) -> list[str]:
 
 
 def _evaluation(out: Path, doc: Path) -> list[str]:
-    summary, recs = _load_records(out, "survival-eval")
+    summary, recs = load_records(out, "survival-eval")
     if summary is None:
         return []
     n_envs = recs[0]["params"]["eval_envs"] if recs else 0
-    lines = ["### 4.3.4: QCON-T after 300 plays on random environments", "", _command(summary)
+    lines = ["### 4.3.4: QCON-T after 300 plays on random environments", "", command(summary)
              + f"; each run evaluated on {n_envs} environments.", "",
              "| | food per play | all food | killed | ran out of energy |", "|---|---|---|---|---|",
              "| thesis (8000 environments) | 12.1 | 39.9% | 31.9% | 28.2% |"]
@@ -418,7 +345,7 @@ def _final_table(summary: dict, first: str, short=lambda label: label) -> tuple[
 
 def _tuning(out: Path) -> list[str]:
     """4.2.7's P_t claims beside ours (``survival-tuning``; empty when it was not run)."""
-    summary, _ = stored(_SPECS["survival-tuning"], out)
+    summary, _ = load_records(out, "survival-tuning")
     if summary is None:
         return []
     final, table = _final_table(summary, "variant")
@@ -491,7 +418,7 @@ def _roughly_best(best_other, chosen) -> tuple[str, str]:
 
 def _food(out: Path) -> list[str]:
     """4.2.1's food-reward claim beside ours (``survival-food``; empty when it was not run)."""
-    summary, _ = stored(_SPECS["survival-food"], out)
+    summary, _ = load_records(out, "survival-food")
     if summary is None:
         return []
     final, table = _final_table(summary, "food reward", lambda label: label.split()[-1])

@@ -1,7 +1,7 @@
 """Where Study 2's Q-agents fall short: food, deaths and starvation by representation, learning rate and input code.
 
     python scripts/ch4/study2_learner.py [--framework QCON] [--arms global:2 local:2 local:1 ...]
-        [--seeds 100 101 102] [--coding pm|01] [--agent KEY=VALUE ...]
+        [--seeds 100 101 102] [--coding pm|01] [--agent KEY=VALUE ...] [--plays 300]
 
 Each arm is ``REPRESENTATION:LR_SCALE`` (Study 1 is global at 1; the thesis doubles every rate for Study 2, 4.3.3),
 run with ``connrl.experiments.survival.run_survival`` (the full 4.3.1 protocol: 300 plays, 50 test environments
@@ -10,7 +10,8 @@ three tests; mean ± standard deviation over the seeds, then each seed's), and h
 ended (all food, killed, starved), with the training plays' mean length and stuck steps over the last 50 plays.
 ``--coding 01`` feeds every input unit as 0/1 instead of the reconstruction's -0.5/+0.5 (Ch. 4 does not say which;
 5.3.2's convention is ±0.5). ``--agent`` sets fields of ``connrl.tasks.survival.SurvivalAgentParams`` (VALUE is JSON:
-``hidden=60``, ``stuck_boost=2.0``) for every arm.
+``hidden=60``, ``stuck_boost=2.0``) for every arm. ``--plays`` trains longer than 4.3.1's 300 plays (tests stay
+every 20), to tell a slow learner from one that stops short; the curve is then printed every 160 plays or so.
 Development seeds only.
 """
 
@@ -70,9 +71,12 @@ def main() -> None:
     ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101, 102])
     ap.add_argument("--coding", choices=["pm", "01"], default="pm")
     ap.add_argument("--agent", nargs="*", default=[], help="SurvivalAgentParams field=JSON value, for every arm")
+    ap.add_argument("--plays", type=int, default=300, help="training plays (4.3.1: 300)")
     args = ap.parse_args()
     if min(args.seeds) < 0:
         ap.error(f"--seeds must be 0 or more, got {min(args.seeds)}")
+    if not 20 <= args.plays <= 100_000:
+        ap.error(f"--plays must be in [20, 100000], got {args.plays}")
     try:
         overrides = agent_overrides(args.agent)
         for rep, scale in args.arms:  # every arm's agent is built once before anything runs
@@ -93,8 +97,8 @@ def main() -> None:
     for rep, scale in args.arms:
         curves, ends, train = [], [], []
         for seed in args.seeds:
-            rows = run_survival(SurvivalParams(framework=args.framework, representation=rep, lr_scale=scale),
-                                np.random.default_rng(seed)).rows
+            rows = run_survival(SurvivalParams(framework=args.framework, representation=rep, lr_scale=scale,
+                                               train_plays=args.plays), np.random.default_rng(seed)).rows
             tests = [r for r in rows if r["kind"] == "test"]
             curves.append([t["food"] for t in tests])
             ends.append([np.mean([t[k] for t in tests[-3:]]) for k in ("all_food", "killed", "starved")])
@@ -102,7 +106,8 @@ def main() -> None:
             train.append([np.mean([r[k] for r in last]) for k in ("steps", "stuck_steps")])
         curve, (all_food, killed, starved), (steps, stuck) = np.mean(curves, 0), np.mean(ends, 0), np.mean(train, 0)
         finals = [np.mean(c[-3:]) for c in curves]
-        print(f"{rep:<6} lr x{scale:<4g} curve {' '.join(f'{v:4.1f}' for v in curve[::2])}  final "
+        stride = 2 * max(1, args.plays // 300)
+        print(f"{rep:<6} lr x{scale:<4g} curve {' '.join(f'{v:4.1f}' for v in curve[::stride])}  final "
               f"{np.mean(finals):5.2f} ± {np.std(finals):4.2f} ({' / '.join(f'{v:.2f}' for v in finals)})  ends "
               f"{all_food:4.1f} / {killed:4.1f} / {starved:4.1f}  training plays {steps:4.0f} steps, "
               f"{stuck:3.1f} stuck", flush=True)

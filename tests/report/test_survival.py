@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 from connrl.experiments.survival import EXPERIMENTS
+from connrl.report import verdicts
 from connrl.report.survival import _roughly_best, crossing, render_play, results_section
+from connrl.report.survival_speedup import plays_verdict
 
 NAMES = [s.name for s in EXPERIMENTS]
 
@@ -20,6 +22,30 @@ def test_results_section_and_play_png(tiny_out, tmp_path):
         assert needle in text
     png = tmp_path / "figures" / "survival-play.png"
     assert png.exists() and png.stat().st_size > 10_000
+
+
+def test_fresh_seed_check_repeats_every_verdict_under_its_own_name(tiny_out, tmp_path):
+    verdicts.BOARD.clear()
+    text = results_section(tiny_out, doc=tmp_path / "RESULTS.md")
+    tag = " (fresh seeds 2000-2006)"
+    assert f"### Table of 4.5: Study 2 Q-agents, plays to reach 8 food per play{tag}" in text
+    items = {c.item: c for c in verdicts.BOARD}
+    for item in ("Table 4.5: plays to reach 8", "Table 4.5: the ordering of the speedups",
+                 "4.4.1: Q-agents' final performance unaffected by the representation",
+                 "Table of 4.4.2 (experience replay)"):
+        assert item in items and item + tag in items
+    assert "1.5× the thesis's plays" in items["Table 4.5: plays to reach 8" + tag].criterion
+    assert "1.5×" not in items["Table 4.5: plays to reach 8"].criterion
+    verdicts.BOARD.clear()
+
+
+def test_plays_to_8_verdict_by_hand():
+    fast = {"QCON": 190.0, "QCON-R": 80.0, "QCON-T": 60.0}  # thesis 200 / 80 / 60
+    assert plays_verdict(fast) == verdicts.REPRODUCED
+    assert plays_verdict({**fast, "QCON-T": 61.0}) == verdicts.PARTLY
+    assert plays_verdict({**fast, "QCON-T": 90.0}, factor=1.5) == verdicts.REPRODUCED  # 60 x 1.5 = 90
+    assert plays_verdict({**fast, "QCON-T": 91.0}, factor=1.5) == verdicts.PARTLY
+    assert plays_verdict({"QCON": None, "QCON-R": 300.0}, factor=1.5) == verdicts.NOT_REPRODUCED
 
 
 def test_render_play_draws_a_readable_png(tmp_path):
