@@ -46,7 +46,8 @@ def run(rep: str, scale: float, shared: bool, seed: int) -> np.ndarray:
     train, _ = environment_sets(int(rng.integers(2**31 - 1)), PLAYS, 50)
     env = SurvivalEnv(rep)
     env.reset(seed=int(rng.integers(2**31 - 1)))
-    agent = make_survival_agent(SurvivalAgentParams("QCON", rep, lr_scale=scale, symmetry=shared, plays=PLAYS),
+    agent = make_survival_agent(SurvivalAgentParams("QCON", rep, lr_scale=scale, symmetry=shared or rep == "local",
+                                                    plays=PLAYS),
                                 env, rng)
     steps: list[tuple[float, float]] = []
     observe = agent.observe
