@@ -10,16 +10,18 @@ from tests.tiny_runs import run_tiny
 NAMES = [s.name for s in EXPERIMENTS]
 
 
-def test_seven_experiments_cover_chapter_4():
-    assert NAMES == ["survival-study1", "survival-study2", "survival-planning", "survival-speedup", "survival-eval",
-                     "survival-tuning", "survival-food"]
+def test_nine_experiments_cover_chapter_4():
+    assert NAMES == ["survival-study1", "survival-study2", "survival-study1-fresh", "survival-study2-fresh",
+                     "survival-planning", "survival-speedup", "survival-eval", "survival-tuning", "survival-food"]
     s1, s2 = EXPERIMENTS[0], EXPERIMENTS[1]
+    for study, fresh in ((s1, EXPERIMENTS[2]), (s2, EXPERIMENTS[3])):  # the check reruns a study, only on new seeds
+        assert (fresh.params, fresh.variants, fresh.seed, study.seed) == (study.params, study.variants, 2000, 0)
     assert len(s1.variants) == len(s2.variants) == 10  # 8 frameworks, -M with both models
     assert s1.params.representation == "global" and s2.params.representation == "local"
     assert s2.params.lr_scale == 2.0 and s1.params.lr_scale == 1.0
     full = s1.resolve("full")[0]
     assert (full.train_plays, full.test_envs, full.test_every, s1.resolve("full")[1]) == (300, 50, 20, 7)
-    assert EXPERIMENTS[4].resolve("full")[0].eval_envs == 8000
+    assert EXPERIMENTS[6].resolve("full")[0].eval_envs == 8000
 
 
 @pytest.fixture
