@@ -211,6 +211,65 @@ def _momentum_step(w, d, g, lr, momentum):
         w[i] += step
 
 
+@numba.njit(cache=True)
+def _replay_q_lesson(w1, w2, d1, d2, g1, g2, xs, actions, rewards, terminated, gamma, lam, temperature,
+                     p_threshold, clip, has_clip, feedback, decay, scale, lr, momentum):
+    """Batch replay of one lesson into a recurrent Q-net, whole (7.5; Fig. 5.1(a) in batch mode): every net's values
+    along the lesson from c_0 = 0, the non-policy test (3.5.1), the lambda-returns from those fixed values (Eq.
+    5.5), then one BPTT + momentum step on the policy steps. The same arithmetic as ``connrl.agents.memory``'s
+    ``replay_recurrent_q`` composes from ``batch_targets`` and ``train_sequence``; returns the steps replayed.
+    ``xs`` (n+1, I) holds the lesson's inputs, the last one the state after the last action."""
+    n = actions.shape[0]
+    n_a = w1.shape[0]
+    acts = np.zeros(n + 1, dtype=np.int64)  # the action at x_n does not affect the outputs at x_n
+    acts[:n] = actions
+    ys = np.empty((n + 1, n_a, 1))
+    cs = np.empty((n + 2, w1.shape[2] - xs.shape[1] - 1))  # the contexts of n + 1 steps and the one after
+    _forward_sequence(w1, w2, xs, acts, feedback, scale, ys, cs)
+    weights = np.ones(n)
+    if p_threshold > 0.0:  # Eq. 3.6's probability of the taken action, greedy ties shared at T = 0
+        for t in range(n):
+            m = ys[t, 0, 0]
+            for b in range(1, n_a):
+                m = max(m, ys[t, b, 0])
+            qa = ys[t, actions[t], 0]
+            if temperature == 0.0:
+                ties = 0
+                for b in range(n_a):
+                    ties += ys[t, b, 0] == m
+                p = 1.0 / ties if qa == m else 0.0
+            else:
+                z = 0.0
+                for b in range(n_a):
+                    z += math.exp((ys[t, b, 0] - m) / temperature)
+                p = math.exp((qa - m) / temperature) / z
+            weights[t] = 1.0 if p >= p_threshold else 0.0
+    targets = np.empty((n, 1))
+    e_next = 0.0
+    for t in range(n - 1, -1, -1):
+        u = 0.0
+        if not (t == n - 1 and terminated):
+            u = ys[t + 1, 0, 0]
+            for b in range(1, n_a):
+                u = max(u, ys[t + 1, b, 0])
+        lam_t = lam if (t < n - 1 and weights[t + 1] > 0.0) else 0.0  # a non-policy next action cuts lambda
+        e = rewards[t] + gamma * ((1.0 - lam_t) * u + lam_t * e_next)
+        if has_clip and e > clip:
+            e = clip
+        targets[t, 0] = e
+        e_next = e
+    used = 0
+    for t in range(n):
+        used += weights[t] > 0.0
+    if used > 0:
+        g1[...] = 0.0
+        g2[...] = 0.0
+        _bptt(w1, w2, xs[:n], actions, targets, weights, feedback, decay, scale, g1, g2)
+        _momentum_step(w1.reshape(-1), d1.reshape(-1), g1.reshape(-1), lr, momentum)
+        _momentum_step(w2.reshape(-1), d2.reshape(-1), g2.reshape(-1), lr, momentum)
+    return used
+
+
 # --------------------------------------------------------------------------------------- pure functions
 
 def _check_sequence(xs, actions, targets, weights, n_inputs, n_actions, n_outputs):
@@ -380,6 +439,25 @@ class RecurrentOAON:
         _momentum_step(self.w2.reshape(-1), self.d2.reshape(-1), self._g2.reshape(-1), self.lr, c.momentum)
         self._fresh = False
         return loss
+
+    def replay_q_lesson(self, xs: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool, *,
+                        gamma: float, lam: float, temperature: float, p_threshold: float,
+                        clip: float | None = None) -> int:
+        """Batch replay of one lesson (inputs ``xs`` (n+1, I), n actions and rewards) in one compiled call: the fast
+        path of ``connrl.agents.memory.replay_recurrent_q`` (tests/agents/test_memory.py holds them equal)."""
+        c = self.config
+        if c.n_outputs != 1:
+            raise ValueError(f"replay_q_lesson is for Q-nets (n_outputs=1); this net has {c.n_outputs}")
+        xs = np.ascontiguousarray(xs, dtype=np.float64)
+        _, actions, _, _ = _check_sequence(xs[:-1], actions, None, None, c.n_inputs, self.n_nets, 1)
+        rewards = np.ascontiguousarray(rewards, dtype=np.float64)
+        if rewards.shape != actions.shape:
+            raise ValueError(f"rewards must have shape {actions.shape}, got {rewards.shape}")
+        self._fresh = False
+        return int(_replay_q_lesson(self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, xs, actions, rewards,
+                                    bool(terminated), float(gamma), float(lam), float(temperature),
+                                    float(p_threshold), 0.0 if clip is None else float(clip), clip is not None,
+                                    c.feedback, c.decay, self.scale, self.lr, c.momentum))
 
     # -- plain-format persistence (NPZ, no pickle)
     def state_dict(self) -> dict[str, np.ndarray]:

@@ -130,6 +130,38 @@ def test_replay_recurrent_q_is_one_bptt_step_toward_the_targets():
     assert np.abs(after[:-1, :, 0][taken] - targets).sum() < np.abs(ys[:-1, :, 0][taken] - targets).sum()
 
 
+@pytest.mark.parametrize("share_output", [False, True])
+@pytest.mark.parametrize("params", [
+    ReplayParams(gamma=0.9, lam=0.8, temperature=0.05, p_threshold=0.01, batch=True),
+    ReplayParams(gamma=0.9, lam=0.0, temperature=0.3, p_threshold=0.3, batch=True),  # many non-policy steps
+    ReplayParams(gamma=0.95, lam=1.0, temperature=0.0, p_threshold=0.6, batch=True),  # greedy; a tie is 0.5 each
+    ReplayParams(gamma=0.9, lam=0.5, batch=True, clip=0.2),  # every step replayed, targets truncated
+])
+def test_compiled_recurrent_replay_equals_the_composed_reference(params, share_output):
+    """The one-call kernel against batch_targets + train_sequence, over lessons in a row (momentum carries)."""
+    rng = np.random.default_rng(5)
+    cfg = RecurrentNetConfig(4, 7, 3, 1, lr=0.3, momentum=0.9, share_output=share_output)
+    fast = RecurrentOAON(cfg, 3, np.random.default_rng(2))
+    ref = RecurrentOAON(cfg, 3, np.random.default_rng(2))
+    if params.temperature == 0:  # nets 0 and 1 alike: exact ties at the max, which the greedy test shares
+        for net in (fast, ref):
+            net.w1[1] = net.w1[0]
+            net.w2[-1] = net.w2[0]
+    used = steps = 0
+    for k in range(6):
+        n = int(rng.integers(1, 12))
+        lesson = Lesson(rng.choice([-0.5, 0.5], (n + 1, 4)), rng.integers(0, 3, n),
+                        rng.choice([0.0, 0.0, 1.0, -1.0], n), bool(k % 2))
+        u_fast = replay_recurrent_q(fast, lesson, params)
+        u_ref = replay_recurrent_q(ref, lesson, params, fast=False)
+        assert u_fast == u_ref
+        used, steps = used + u_ref, steps + n
+        for name in ("w1", "w2", "d1", "d2"):
+            np.testing.assert_allclose(getattr(fast, name), getattr(ref, name), rtol=0, atol=1e-12)
+    assert 0 < used <= steps
+    assert used == steps if params.p_threshold == 0 else params.p_threshold < 0.3 or used < steps
+
+
 def test_recurrent_q_acts_on_the_contexts_replay_reconstructs():
     agent = recurrent_q_agent(seed=3)
     env = CupCollectionEnv()
