@@ -11,7 +11,9 @@ ended (all food, killed, starved), with the training plays' mean length and stuc
 ``--coding 01`` feeds every input unit as 0/1 instead of the reconstruction's -0.5/+0.5 (Ch. 4 does not say which;
 5.3.2's convention is ±0.5). ``--agent`` sets fields of ``connrl.tasks.survival.SurvivalAgentParams`` (VALUE is JSON:
 ``hidden=60``, ``stuck_boost=2.0``) for every arm. ``--plays`` trains longer than 4.3.1's 300 plays (tests stay
-every 20), to tell a slow learner from one that stops short; the curve is then printed every 160 plays or so.
+every 20), to tell a slow learner from one that stops short: the agent is the same, its schedules (temperature,
+replay counts, teaching probability) still move over the first 300 plays and hold their end values after. The curve
+is printed every 40 x (plays // 300) plays.
 Development seeds only.
 """
 
@@ -75,8 +77,8 @@ def main() -> None:
     args = ap.parse_args()
     if min(args.seeds) < 0:
         ap.error(f"--seeds must be 0 or more, got {min(args.seeds)}")
-    if not 20 <= args.plays <= 100_000:
-        ap.error(f"--plays must be in [20, 100000], got {args.plays}")
+    if not 60 <= args.plays <= 100_000 or args.plays % 20:
+        ap.error(f"--plays must be a multiple of 20 (the test interval) in [60, 100000], got {args.plays}")
     try:
         overrides = agent_overrides(args.agent)
         for rep, scale in args.arms:  # every arm's agent is built once before anything runs
@@ -86,14 +88,14 @@ def main() -> None:
             make_survival_agent(params, env, np.random.default_rng(0))
     except (TypeError, ValueError) as exc:
         ap.error(str(exc))
-    if overrides:
-        build = survival._agent_params
-        survival._agent_params = lambda p: dataclasses.replace(build(p), **overrides)
+    build = survival._agent_params  # schedules over 4.3.1's 300 plays, however long the run
+    survival._agent_params = lambda p: dataclasses.replace(build(p), plays=300, **overrides)
     if args.coding == "01":  # every unit of the observation is binary or coarse-coded at +-0.5
         observe = SurvivalEnv._observe
         SurvivalEnv._observe = lambda self: observe(self) + 0.5
     print(f"{args.framework}, inputs {'0/1' if args.coding == '01' else '-0.5/+0.5'}, agent {overrides or 'as is'}, "
-          f"seeds {' '.join(map(str, args.seeds))}; last three tests' 50 plays: all food / killed / starved")
+          f"{args.plays} plays (schedules over 300), seeds {' '.join(map(str, args.seeds))}; last three tests' 50 "
+          "plays: all food / killed / starved")
     for rep, scale in args.arms:
         curves, ends, train = [], [], []
         for seed in args.seeds:
