@@ -228,6 +228,7 @@ class Claim:
     verdict: str  # one of VERDICTS
     cause: str = ""  # the measured cause of a gap, where known
     anchor: str = ""  # the results page heading it links to (its text; the link is made from it)
+    recheck: bool = False  # the same item checked again (e.g. on fresh seeds): tallied apart, not counted twice
 
     def __post_init__(self):
         if self.verdict not in VERDICTS:
@@ -267,6 +268,10 @@ def scoreboard(claims: list[Claim]) -> list[str]:
         verdict = c.verdict if c.verdict == REPRODUCED else f"**{c.verdict}**"
         lines.append(f"| {item} | {c.section} | {c.thesis} | {c.ours} | {c.criterion} | {verdict}"
                      f"{': ' + c.cause if c.cause else ''} |")
-    tally = {v: sum(c.verdict == v for c in claims) for v in VERDICTS}
-    lines += ["", "Tally: " + ", ".join(f"{n} {v}" for v, n in tally.items() if n) + f" (of {len(claims)}).", ""]
-    return lines
+    lines += [""]
+    for kind, group in (("Tally", [c for c in claims if not c.recheck]),
+                        ("Re-checks of items above (counted apart)", [c for c in claims if c.recheck])):
+        tally = {v: sum(c.verdict == v for c in group) for v in VERDICTS}
+        if group:
+            lines.append(f"{kind}: " + ", ".join(f"{n} {v}" for v, n in tally.items() if n) + f" (of {len(group)}).")
+    return lines + [""]

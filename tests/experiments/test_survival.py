@@ -21,7 +21,7 @@ def test_nine_experiments_cover_chapter_4():
     assert s2.params.lr_scale == 2.0 and s1.params.lr_scale == 1.0
     full = s1.resolve("full")[0]
     assert (full.train_plays, full.test_envs, full.test_every, s1.resolve("full")[1]) == (300, 50, 20, 7)
-    assert EXPERIMENTS[6].resolve("full")[0].eval_envs == 8000
+    assert {s.name: s for s in EXPERIMENTS}["survival-eval"].resolve("full")[0].eval_envs == 8000
 
 
 @pytest.fixture

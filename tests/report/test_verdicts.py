@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from connrl.report import verdicts
 from connrl.report.verdicts import DIFFERENT, SAME, UNDETERMINED, compare, ordering, t_cdf, t_quantile
 
 
@@ -75,3 +76,14 @@ def test_the_runs_said_to_decide_do_decide_and_no_fewer_would(shift):
     assert compare(like(a, c.runs_needed), like(b, c.runs_needed)).verdict != UNDETERMINED
     if c.runs_needed - 1 > a.size:
         assert compare(like(a, c.runs_needed - 1), like(b, c.runs_needed - 1)).verdict == UNDETERMINED
+
+
+def test_scoreboard_tallies_rechecks_apart_so_no_item_counts_twice():
+    rows = [verdicts.Claim("Table 4.5", "4.5", "t", "o", "c", verdicts.REPRODUCED),
+            verdicts.Claim("Fig. 4.3", "4.3", "t", "o", "c", verdicts.NOT_REPRODUCED),
+            verdicts.Claim("Table 4.5 (fresh seeds)", "4.5", "t", "o", "c", verdicts.NOT_REPRODUCED, recheck=True)]
+    lines = verdicts.scoreboard(rows)
+    assert f"Tally: 1 {verdicts.REPRODUCED}, 1 {verdicts.NOT_REPRODUCED} (of 2)." in lines
+    assert f"Re-checks of items above (counted apart): 1 {verdicts.NOT_REPRODUCED} (of 1)." in lines
+    assert sum("Table 4.5 (fresh seeds)" in line for line in lines) == 1
+
