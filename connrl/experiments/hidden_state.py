@@ -50,7 +50,7 @@ Choices where the thesis is silent (R; docs/RECONSTRUCTION.md, "Learners and pro
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -352,6 +352,15 @@ def _frozen_spec() -> ExperimentSpec:
         description="7.5.2: the model's changing context units destabilise a trained Q-net; fixed, it should not")
 
 
+FRESH_SEED = 3000  # issue 32's check: Ch. 7 development used seeds 0-4 (the stored runs) and 100-159
+
+
+def _fresh_spec(spec: ExperimentSpec) -> ExperimentSpec:
+    """The same experiment on seeds never used in development, 20 runs: its claims count runs ("always", "most")."""
+    return replace(spec, name=f"{spec.name}-fresh", title=f"{spec.title.split(' (')[0]}, fresh seeds {FRESH_SEED}-"
+                   f"{FRESH_SEED + 19}", profiles={**spec.profiles, "full": {"runs": 20}}, seed=FRESH_SEED)
+
+
 _POLE_THESIS = {"window-Q": 206, "recurrent-Q": 552, "recurrent-model": 247}  # Table 7.1
 
 EXPERIMENTS = [
@@ -359,6 +368,7 @@ EXPERIMENTS = [
     _cup_spec(2),
     _cup_spec(3),
     _frozen_spec(),
+    *(_fresh_spec(spec) for spec in (_cup_spec(1), _cup_spec(2), _cup_spec(3), _frozen_spec())),
     ExperimentSpec(  # 7.5.1: "the optimal policy could be learned (but only occasionally) with N = 2"
         name="cup-window", title="Task 1 window-Q with Table B.1's window N = 5 and with N = 2", section="7.5.1",
         run="connrl.experiments.hidden_state:run_cup",
