@@ -9,8 +9,9 @@ off), as the experiment does. In every test the probe reads the Q-values at the 
 picked up: the agent stands on the emptied cell and senses nothing, whether or not its pick-up worked (a failed
 pick-up, 15 % in training, has no visible effect). Printed per seed: how often the greedy choice there is "walk on"
 (toward the other cup) and "pick up again", the mean of Q(walk on) - Q(pick up) and its share of Q(walk on), how often
-that sign flips from one test to the next, and the tests at 14 steps. ``--task 1`` gives the same probe without
-control errors, for comparison. Development seeds only.
+that sign flips from one test to the next, and the tests at 14 steps; then where the test episodes first leave the
+optimal sequence (before the first cup, right after it, or on the way to the second). ``--task 1`` gives the same
+probe without control errors, for comparison. Development seeds only.
 """
 
 from __future__ import annotations
@@ -28,8 +29,21 @@ PICK = 2
 TOWARD = {"A": 1, "B": 0}  # after the first cup (cell 3 in A, 7 in B) the other cup lies right in A, left in B
 
 
-def probe_test(env, agent, instance: str) -> tuple[int, np.ndarray | None]:
-    """One greedy test episode; returns its steps and the Q-values read right after the first cup (or None)."""
+OPTIMAL = {"A": [1, PICK, 1, 1, 1, 1, PICK], "B": [0, PICK, 0, 0, 0, 0, PICK]}
+WHERE = ("before the first cup", "right after the first cup", "on the way to the second cup")
+
+
+def first_slip(actions: list[int], instance: str) -> str | None:
+    """Where a test episode first leaves the optimal sequence (None if it does not): before the first pick-up, at
+    the decision right after it, or on the way to the second cup."""
+    for t, (a, b) in enumerate(zip(actions, OPTIMAL[instance], strict=False)):
+        if a != b:
+            return WHERE[0] if t < 2 else WHERE[1] if t == 2 else WHERE[2]
+    return None
+
+
+def probe_test(env, agent, instance: str) -> tuple[int, np.ndarray | None, list[int]]:
+    """One greedy test episode: its steps, the Q-values read right after the first cup (or None), its actions."""
     seen: list[np.ndarray] = []
     values = agent.net.values
 
@@ -42,9 +56,10 @@ def probe_test(env, agent, instance: str) -> tuple[int, np.ndarray | None]:
     try:
         obs, info = env.reset(options={"instance": instance})
         agent.begin_trial(obs, info, trial=0, learning=False)
-        after_first, steps, done = None, 0, False
+        after_first, steps, done, actions = None, 0, False, []
         while not done:
-            obs, _, terminated, truncated, info = env.step(agent.act(obs, info, greedy=True))
+            actions.append(agent.act(obs, info, greedy=True))
+            obs, _, terminated, truncated, info = env.step(actions[-1])
             steps += 1
             done = terminated or truncated
             if after_first is None and len(info["cups"]) == 1:
@@ -53,7 +68,7 @@ def probe_test(env, agent, instance: str) -> tuple[int, np.ndarray | None]:
     finally:
         del agent.net.values
     q = seen[after_first] if after_first is not None and after_first < len(seen) else None
-    return steps, q
+    return steps, q, actions
 
 
 def run(seed: int, task: int, trials: int) -> dict:
@@ -63,13 +78,15 @@ def run(seed: int, task: int, trials: int) -> dict:
     train_env.reset(seed=int(rng.integers(2**31)))
     test_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, train_env.observation_space.shape[0], 3, rng)
-    gaps, walks, picks, optimal = [], [], [], 0
+    gaps, walks, picks, optimal, slips = [], [], [], 0, []
     for k in range(trials):
         run_trial(train_env, agent, trial=k, learning=True)
         score = 0
         for inst in INSTANCES:
-            steps, q = probe_test(test_env, agent, inst)
+            steps, q, actions = probe_test(test_env, agent, inst)
             score += steps
+            if k >= trials - 100:
+                slips.append(first_slip(actions, inst))
             if k >= trials - 100 and q is not None:
                 walk, pick = q[TOWARD[inst]], q[PICK]
                 gaps.append((walk - pick) / abs(walk) if walk else np.nan)
@@ -80,7 +97,8 @@ def run(seed: int, task: int, trials: int) -> dict:
     g = np.array(gaps)
     flips = np.mean(np.sign(g[2:]) != np.sign(g[:-2])) if g.size > 2 else np.nan  # same instance, next test
     return {"walk": np.mean(walks), "pick": np.mean(picks), "gap": np.nanmean(g), "gap_sd": np.nanstd(g),
-            "flips": flips, "optimal": optimal / min(100, trials)}
+            "flips": flips, "optimal": optimal / min(100, trials),
+            **{w: float(np.mean([x == w for x in slips])) for w in WHERE}}
 
 
 def main() -> None:
@@ -101,6 +119,9 @@ def main() -> None:
         rows.append(r)
         print(f"{seed:>4}  {r['walk']:14.2f} / {r['pick']:.2f}   {r['gap']:+32.3f} ± {r['gap_sd']:.3f}   "
               f"{r['flips']:10.2f}   {r['optimal']:11.2f}", flush=True)
+    print("Share of the last 100 tests' episodes (both instances) that first leave the optimal sequence " +
+          ", ".join(f"{w}: {np.mean([r[w] for r in rows]):.2f}" for w in WHERE) + " (mean over the seeds); per seed: "
+          + "; ".join(" / ".join(f"{r[w]:.2f}" for w in WHERE) for r in rows))
     print(f"mean  {np.mean([r['walk'] for r in rows]):14.2f} / {np.mean([r['pick'] for r in rows]):.2f}   "
           f"{np.mean([r['gap'] for r in rows]):+32.3f}           {np.mean([r['flips'] for r in rows]):10.2f}   "
           f"{np.mean([r['optimal'] for r in rows]):11.2f}")
