@@ -25,6 +25,7 @@ PARTS = {  # label -> (file suffix, function) whose cumulative time is reported
     "compiled recurrent-net forward kernel": ("nets/recurrent.py", "_forward_sequence"),
     "compiled recurrent-net BPTT kernel": ("nets/recurrent.py", "_bptt"),
     "compiled feed-forward replay kernel": ("nets/kernels.py", "_replay_q_kernel"),
+    "compiled recurrent-Q lesson replay kernel": ("nets/recurrent.py", "_replay_q_lesson"),
     "greedy tests": ("experiments/hidden_state.py", "test"),
 }
 
@@ -37,6 +38,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
+    if args.seed < 0:
+        ap.error(f"--seed must be 0 or more, got {args.seed}")
+    walls, kernels = {}, {}
     for arch in ("recurrent-Q", "recurrent-model"):
         run_cup(CupParams(task=1, arch=arch, lam=0.8, probe=False, trials=3), np.random.default_rng(1))  # compile
         p = CupParams(task=1, arch=arch, lam=0.8, probe=False)
@@ -55,6 +59,12 @@ def main() -> None:
             t = cumulative(stats, suffix, name)
             if t:
                 print(f"  {label:<60} {t:6.2f} s  {100 * t / total:5.1f} %")
+        walls[arch] = wall
+        kernels[arch] = sum(cumulative(stats, suffix, name) for label, (suffix, name) in PARTS.items()
+                            if label.startswith("compiled"))  # what cProfile sees of them: called from Python
+    print(f"recurrent-model / recurrent-Q: whole runs {walls['recurrent-model'] / walls['recurrent-Q']:.1f}x; "
+          f"the compiled kernels alone {kernels['recurrent-model']:.2f} s / {kernels['recurrent-Q']:.2f} s = "
+          f"{kernels['recurrent-model'] / kernels['recurrent-Q']:.1f}x")
 
 
 if __name__ == "__main__":
