@@ -10,8 +10,9 @@ picked up: the agent stands on the emptied cell and senses nothing, whether or n
 pick-up, 15 % in training, has no visible effect). Printed per seed: how often the greedy choice there is "walk on"
 (toward the other cup) and "pick up again", the mean of Q(walk on) - Q(pick up) and its share of Q(walk on), how often
 that sign flips from one test to the next, and the tests at 14 steps; then where the test episodes first leave the
-optimal sequence (before the first cup, right after it, or on the way to the second). ``--task 1`` gives the same
-probe without control errors, for comparison. Development seeds only.
+optimal sequence (at the start, at the first cup, right after it, or on the way to the second), and how often they
+leave it by a pick-up that collects nothing (which, like a failed action, only costs a step). ``--task 1`` gives the
+same probe without control errors, for comparison. Development seeds only.
 """
 
 from __future__ import annotations
@@ -30,15 +31,15 @@ TOWARD = {"A": 1, "B": 0}  # after the first cup (cell 3 in A, 7 in B) the other
 
 
 OPTIMAL = {"A": [1, PICK, 1, 1, 1, 1, PICK], "B": [0, PICK, 0, 0, 0, 0, PICK]}
-WHERE = ("before the first cup", "right after the first cup", "on the way to the second cup")
+WHERE = ("at the start", "at the first cup", "right after the first cup", "on the way to the second cup")
 
 
-def first_slip(actions: list[int], instance: str) -> str | None:
-    """Where a test episode first leaves the optimal sequence (None if it does not): before the first pick-up, at
-    the decision right after it, or on the way to the second cup."""
+def first_slip(actions: list[int], instance: str) -> tuple[str, bool] | None:
+    """Where a test episode first leaves the optimal sequence, and whether it does so by a pick-up that collects
+    nothing (None if it never leaves it)."""
     for t, (a, b) in enumerate(zip(actions, OPTIMAL[instance], strict=False)):
         if a != b:
-            return WHERE[0] if t < 2 else WHERE[1] if t == 2 else WHERE[2]
+            return WHERE[min(t, 3)], a == PICK
     return None
 
 
@@ -98,7 +99,8 @@ def run(seed: int, task: int, trials: int) -> dict:
     flips = np.mean(np.sign(g[2:]) != np.sign(g[:-2])) if g.size > 2 else np.nan  # same instance, next test
     return {"walk": np.mean(walks), "pick": np.mean(picks), "gap": np.nanmean(g), "gap_sd": np.nanstd(g),
             "flips": flips, "optimal": optimal / min(100, trials),
-            **{w: float(np.mean([x == w for x in slips])) for w in WHERE}}
+            **{w: float(np.mean([x is not None and x[0] == w for x in slips])) for w in WHERE},
+            "by_pickup": float(np.mean([x[1] for x in slips if x is not None])) if any(slips) else float("nan")}
 
 
 def main() -> None:
@@ -122,6 +124,8 @@ def main() -> None:
     print("Share of the last 100 tests' episodes (both instances) that first leave the optimal sequence " +
           ", ".join(f"{w}: {np.mean([r[w] for r in rows]):.2f}" for w in WHERE) + " (mean over the seeds); per seed: "
           + "; ".join(" / ".join(f"{r[w]:.2f}" for w in WHERE) for r in rows))
+    print("Of those, the share that leave it by a pick-up that collects nothing: " +
+          " / ".join(f"{r['by_pickup']:.2f}" for r in rows))
     print(f"mean  {np.mean([r['walk'] for r in rows]):14.2f} / {np.mean([r['pick'] for r in rows]):.2f}   "
           f"{np.mean([r['gap'] for r in rows]):+32.3f}           {np.mean([r['flips'] for r in rows]):10.2f}   "
           f"{np.mean([r['optimal'] for r in rows]):11.2f}")
