@@ -89,9 +89,9 @@ def test_every_experiment_runs_on_the_tiny_profile(name, tmp_path, capsys):
     assert cli.main(["show", name, "--out", str(tmp_path)]) == 0
 
 
-def test_fresh_seed_experiments_are_their_studies_at_seed_0():
-    for k in (1, 2):  # the golden values of the fresh checks were not made apart: they must be the study's own
-        assert GOLDEN[f"survival-study{k}-fresh"] == GOLDEN[f"survival-study{k}"]
+def test_fresh_seed_experiments_are_their_experiments_at_seed_0():
+    for name in ("survival-study1", "survival-study2", "cup-task1", "cup-task2", "cup-task3", "cup-task2-frozen"):
+        assert GOLDEN[f"{name}-fresh"] == GOLDEN[name]  # not made apart: a fresh check must be its experiment
 
 
 def test_run_without_seed_starts_at_the_experiments_own(tmp_path):

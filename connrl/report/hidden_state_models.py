@@ -10,11 +10,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from connrl.experiments.hidden_state import EXPERIMENTS
-from connrl.report.page import figure, fixed, run_rows, stored
+from connrl.report.page import figure, fixed, note, run_rows, stored
 from connrl.report.plots import save_figure
 from connrl.report.verdicts import claim
 
 _SPECS = {s.name: s for s in EXPERIMENTS}
+# measured on development seeds (docs/notes/cups-frozen.md); shown where the verdict is short of reproduced
+FROZEN_CAUSE = ("the fixed model's context separates the states that need history (a nearest-neighbour rule reads "
+                "the right action at all of them), but the Q-net has not learned to use it when the model is fixed "
+                "and in 3 of 5 development runs does not within the last 200 trials "
+                "(`scripts/ch7/fixed_model_probe.py`)")
 BLOCK = 10  # trials per point of the error curve
 STABLE = 0.9  # "stuck to" the optimal policy: at least 90 % of the last 100 tests optimal
 
@@ -109,12 +114,23 @@ def _draw_errors(runs: list[list[dict]], file: Path) -> Path:
     return file
 
 
-def frozen_model(out: Path, doc: Path) -> list[str]:
-    """7.5.2: Task 2's recurrent-model with the model fixed part-way, beside the one whose model keeps learning."""
-    summary, recs = stored(_SPECS["cup-task2-frozen"], Path(out))
+def fixed_verdict(stuck: int, runs: int) -> str:
+    """7.5.2's "stuck to it" over the runs whose model was fixed in time: most of them stay optimal (partly: at
+    least a quarter); "—" when no run was fixed in time."""
+    if not runs:
+        return "—"
+    return "reproduced" if stuck > runs / 2 else "partly" if stuck >= runs / 4 else "**not reproduced**"
+
+
+def frozen_model(out: Path, doc: Path, name: str = "cup-task2-frozen", tag=lambda summary: "") -> list[str]:
+    """7.5.2: Task 2's recurrent-model with the model fixed part-way, beside the one whose model keeps learning;
+    ``tag(summary)`` labels a re-check (fresh seeds) of the same claim, tallied apart."""
+    summary, recs = stored(_SPECS[name], Path(out))
     if summary is None or not recs:
         return []
-    lines = [f"### {HEADING_FROZEN}", "", f"Command: {_cmd(summary)}.", "",
+    mark = tag(summary)  # "" for the stored runs, " (fresh seeds ...)" for the re-check
+    heading = HEADING_FROZEN + mark
+    lines = [f"### {heading}", "", f"Command: {_cmd(summary)}.", "",
              "The thesis: without a fix the agent \"could not stabilize on the optimal policy; it oscillated\"; "
              "\"I fixed the model at some point of learning and allowed only changes to the Q-net. In such a "
              "setup, the agent found the optimal policy and indeed stuck to it.\"", "",
@@ -128,21 +144,23 @@ def frozen_model(out: Path, doc: Path) -> list[str]:
         when = ", ".join("never" if x is None else fixed(x, 0) for x in q["frozen_after"]["per_run"])
         lines.append(f"| {label} | {when} | {', '.join(fixed(x, 2) for x in per)} | {fixed(share[label][0], 2)} | "
                      f"{fixed(q['mean_steps_last100']['mean'], 2)} | {share[label][1]}/{share[label][2]} |")
-    trials = _SPECS["cup-task2-frozen"].resolve(summary["profile"])[0].trials
+    trials = _SPECS[name].resolve(summary["profile"])[0].trials
     long = [(opt, at) for v in list(summary["variants"].values())[1:]
             for opt, at in zip(v["quantities"]["optimal_last100"]["per_run"],
                                v["quantities"]["frozen_after"]["per_run"], strict=True)
             if at is not None and at <= trials - 100]
     stuck = sum(opt is not None and opt >= STABLE for opt, _ in long)
-    verdict = ("—" if not long else "reproduced" if stuck == len(long) else "partly" if stuck else
-               "**not reproduced**")
+    verdict = fixed_verdict(stuck, len(long))
     if long:
-        claim("7.5.2: fixing the model keeps the optimal policy", "7.5.2", "fixed model: optimal and stuck to it",
+        claim(f"7.5.2: fixing the model keeps the optimal policy{mark}", "7.5.2",
+              "fixed model: optimal and stuck to it",
               f"{stuck} of {len(long)} runs stay optimal (≥ {STABLE:.0%} of the last 100 tests)",
-              "every run fixed in time", verdict.strip("*"), anchor=HEADING_FROZEN)
-    lines += ["", f"**Verdict:** {verdict}. Of the {len(long)} runs whose model was fixed at least 100 trials "
+              "most runs fixed in time stay optimal (partly: at least a quarter)", verdict.strip("*"),
+              "" if verdict == "reproduced" else FROZEN_CAUSE, anchor=heading, recheck=bool(mark))
+    lines += ["", f"**Verdict:** {verdict} (most runs fixed in time must stay optimal; partly: at least a quarter). "
+              f"Of the {len(long)} runs whose model was fixed at least 100 trials "
               f"before the end (so that the last 100 tests all come after it), {stuck} stay optimal in at least "
               f"{STABLE:.0%} of those tests. Mean share of optimal tests, last 100: "
               + ", ".join(f"{label} {m:.2f}" for label, (m, _, _) in share.items()) + ".",
-              "", figure(Path(out) / "cup-task2-frozen" / "curve.png", doc, "cup-task2-frozen"), ""]
-    return lines
+              "", figure(Path(out) / name / "curve.png", doc, name), ""]
+    return lines + ([] if mark else [note("cups-frozen"), ""])

@@ -51,4 +51,28 @@ def test_model_parts_read_the_stored_runs(tmp_path):
     assert "**Verdict:**" in text and (tmp_path / "docs" / "figures" / "cup-task1-model-error.png").exists()
     text = "\n".join(frozen_model(tmp_path, doc))
     assert "| model fixed after 300 trials | never | 0 | 0 |" in text  # tiny: 3 trials, never optimal
-    assert "**Verdict:** —. Of the 0 runs" in text  # no run's model was fixed
+    assert "Why the fixed model does not keep the optimum" in text  # the stored runs' note (not the re-check's)
+    assert "**Verdict:** — (most runs fixed in time must stay optimal; partly: at least a quarter). Of the 0 " in text
+
+
+def test_fresh_seed_rechecks_are_labelled_by_their_own_runs(tiny_runs, tmp_path):
+    from connrl.report import verdicts
+    verdicts.BOARD.clear()
+    try:
+        md = hs.results_section(tiny_runs("cup-task1-fresh", "cup-task1"), tmp_path / "RESULTS.md")
+        tag = " (seeds 0-0, tiny profile: not the check)"  # a smoke run at seed 0 must not pass for the fresh check
+        assert f"### Task 1: 2-cup collection (Fig. 7.5, 7.5.1){tag}" in md
+        items = {c.item: c for c in verdicts.BOARD}
+        assert not items["Fig. 7.5: 2-cup collection"].recheck and items["Fig. 7.5: 2-cup collection" + tag].recheck
+    finally:
+        verdicts.BOARD.clear()
+    full = {"base_seed": 3000, "runs_per_variant": 20, "profile": "full"}
+    assert hs.fresh_tag(full) == " (fresh seeds 3000-3019)"
+    assert hs.fresh_tag({**full, "runs_per_variant": 5}) == " (seeds 3000-3004, full profile: not the check)"
+
+
+def test_fixed_model_verdict_needs_most_runs_by_hand():
+    from connrl.report.hidden_state_models import fixed_verdict
+    assert fixed_verdict(0, 0) == "—"
+    assert [fixed_verdict(k, 46) for k in (3, 11, 12, 23, 24)] == [
+        "**not reproduced**", "**not reproduced**", "partly", "partly", "reproduced"]
