@@ -10,8 +10,9 @@ picked up: the agent stands on the emptied cell and senses nothing, whether or n
 pick-up, 15 % in training, has no visible effect). Printed per seed: how often the greedy choice there is "walk on"
 (toward the other cup) and "pick up again", the mean of Q(walk on) - Q(pick up) and its share of Q(walk on), how often
 that sign flips from one test to the next, and the tests at 14 steps; then where the test episodes first leave the
-optimal sequence (at the start, at the first cup, right after it, or on the way to the second), and how often they
-leave it by a pick-up that collects nothing (which, like a failed action, only costs a step). ``--task 1`` gives the
+optimal sequence (at the start, at the first cup, right after it, or on the way to the second, the last pick-up
+included), how often they leave it by a pick-up that collects nothing, and, over whole episodes, the extra moves and
+pick-ups beyond the optimal 5 and 2 and the share that time out. ``--task 1`` gives the
 same probe without control errors, for comparison. Development seeds only.
 """
 
@@ -79,7 +80,7 @@ def run(seed: int, task: int, trials: int) -> dict:
     train_env.reset(seed=int(rng.integers(2**31)))
     test_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, train_env.observation_space.shape[0], 3, rng)
-    gaps, walks, picks, optimal, slips = [], [], [], 0, []
+    gaps, walks, picks, optimal, slips, extra = {i: [] for i in INSTANCES}, [], [], 0, [], []
     for k in range(trials):
         run_trial(train_env, agent, trial=k, learning=True)
         score = 0
@@ -88,17 +89,22 @@ def run(seed: int, task: int, trials: int) -> dict:
             score += steps
             if k >= trials - 100:
                 slips.append(first_slip(actions, inst))
+                n_pick = sum(a == PICK for a in actions)  # the optimal episode: 5 moves, 2 pick-ups
+                extra.append((len(actions) - n_pick - 5, n_pick - 2, steps >= test_env.unwrapped.max_steps))
             if k >= trials - 100 and q is not None:
                 walk, pick = q[TOWARD[inst]], q[PICK]
-                gaps.append((walk - pick) / abs(walk) if walk else np.nan)
+                gaps[inst].append((walk - pick) / abs(walk) if walk else np.nan)
                 best = int(np.argmax(q))
                 walks.append(best == TOWARD[inst])
                 picks.append(best == PICK)
         optimal += k >= trials - 100 and score == OPTIMAL_SCORE
-    g = np.array(gaps)
-    flips = np.mean(np.sign(g[2:]) != np.sign(g[:-2])) if g.size > 2 else np.nan  # same instance, next test
+    g = np.concatenate([np.array(v) for v in gaps.values()])
+    changes = [np.sign(v[1:]) != np.sign(v[:-1]) for v in map(np.array, gaps.values()) if len(v) > 1]
+    flips = np.mean(np.concatenate(changes)) if changes else np.nan  # the same instance, from one test to the next
+    moves, pickups, timeouts = np.array(extra, dtype=float).mean(axis=0)
     return {"walk": np.mean(walks), "pick": np.mean(picks), "gap": np.nanmean(g), "gap_sd": np.nanstd(g),
-            "flips": flips, "optimal": optimal / min(100, trials),
+            "flips": flips, "optimal": optimal / min(100, trials), "moves": moves, "pickups": pickups,
+            "timeouts": timeouts,
             **{w: float(np.mean([x is not None and x[0] == w for x in slips])) for w in WHERE},
             "by_pickup": float(np.mean([x[1] for x in slips if x is not None])) if any(slips) else float("nan")}
 
@@ -126,6 +132,8 @@ def main() -> None:
           + "; ".join(" / ".join(f"{r[w]:.2f}" for w in WHERE) for r in rows))
     print("Of those, the share that leave it by a pick-up that collects nothing: " +
           " / ".join(f"{r['by_pickup']:.2f}" for r in rows))
+    print("Per episode over the whole episode, extra moves / extra pick-ups / share timed out (30 steps): " +
+          "; ".join(f"{r['moves']:.2f} / {r['pickups']:.2f} / {r['timeouts']:.2f}" for r in rows))
     print(f"mean  {np.mean([r['walk'] for r in rows]):14.2f} / {np.mean([r['pick'] for r in rows]):.2f}   "
           f"{np.mean([r['gap'] for r in rows]):+32.3f}           {np.mean([r['flips'] for r in rows]):10.2f}   "
           f"{np.mean([r['optimal'] for r in rows]):11.2f}")
