@@ -448,6 +448,8 @@ class RecurrentOAON:
         c = self.config
         if c.n_outputs != 1:
             raise ValueError(f"replay_q_lesson is for Q-nets (n_outputs=1); this net has {c.n_outputs}")
+        if temperature < 0:
+            raise ValueError(f"temperature must be >= 0, got {temperature}")
         xs = np.ascontiguousarray(xs, dtype=np.float64)
         _, actions, _, _ = _check_sequence(xs[:-1], actions, None, None, c.n_inputs, self.n_nets, 1)
         rewards = np.ascontiguousarray(rewards, dtype=np.float64)

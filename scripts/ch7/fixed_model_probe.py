@@ -11,7 +11,8 @@ other cup: right in A, left in B). There only the context units can tell the rig
 again at the end (the model is the same; the Q-net has learned on), the probe reports over those 320 states:
 
 - how well the Q-net's inputs (sensation and context) separate the three right actions: the leave-one-out accuracy
-  of a nearest-neighbour rule, and how far apart the classes' centres are against their spread;
+  of a nearest-neighbour rule, the held-out accuracy of a least-squares linear rule, and how far apart the classes'
+  centres are against their spread;
 - how often the Q-net's greedy action there is the right one, at freezing and over the last 100 trials' tests;
 - the share of the last 100 greedy tests at 14 steps (the experiment's measure).
 
@@ -66,6 +67,20 @@ def separation(xs: np.ndarray, ys: np.ndarray) -> tuple[float, float]:
     return nn, gap / spread if spread else float("inf")
 
 
+def linear_accuracy(xs: np.ndarray, ys: np.ndarray) -> float:
+    """Held-out accuracy of a least-squares linear rule (one score per action, bias included) fitted on the even
+    states and tested on the odd ones, then the other way round: can a rule as simple as a single-layer net read the
+    right action from these inputs?"""
+    classes = np.unique(ys)
+    xb = np.hstack([xs, np.ones((len(xs), 1))])
+    hits = []
+    for fit, test in ((slice(0, None, 2), slice(1, None, 2)), (slice(1, None, 2), slice(0, None, 2))):
+        targets = (ys[fit, None] == classes[None, :]).astype(float)
+        w, *_ = np.linalg.lstsq(xb[fit], targets, rcond=None)
+        hits += list(classes[(xb[test] @ w).argmax(axis=1)] == ys[test])
+    return float(np.mean(hits))
+
+
 def greedy_right(agent, xs: np.ndarray, ys: np.ndarray) -> float:
     return float(np.mean([int(np.argmax(agent.q.values(x))) == y for x, y in zip(xs, ys, strict=True)]))
 
@@ -85,6 +100,7 @@ def run(seed: int, freeze_at: int, trials: int = 500) -> dict:
             agent.freeze_model = True
             xs, ys = blind_states(agent, probe_rng)
             out["nn"], out["ratio"] = separation(xs, ys)
+            out["linear"] = linear_accuracy(xs, ys)
             out["right_at_freeze"] = greedy_right(agent, xs, ys)
         run_trial(train_env, agent, trial=k, learning=True)
         scores.append(test_score(test_env, agent))
@@ -104,11 +120,11 @@ def main() -> None:
         ap.error(f"--seeds must be 0 or more and --freeze-at in [1, 400], got {args.seeds} and {args.freeze_at}")
     print(f"Task 2 recurrent-model, model fixed after {args.freeze_at} of 500 trials; 320 blind states of the optimal "
           "sequences (pick up / walk right / walk left)")
-    print("seed  nearest-neighbour accuracy   centre gap / spread   greedy right: at fixing / last 100   "
-          "tests at 14, last 100")
+    print("seed  nearest-neighbour accuracy   linear rule, held out   centre gap / spread   greedy right: at fixing "
+          "/ last 100   tests at 14, last 100")
     for seed in args.seeds:
         r = run(seed, args.freeze_at)
-        print(f"{seed:>4}  {r['nn']:26.2f}   {r['ratio']:19.2f}   {r['right_at_freeze']:21.2f} / "
+        print(f"{seed:>4}  {r['nn']:26.3f}   {r['linear']:21.3f}   {r['ratio']:19.2f}   {r['right_at_freeze']:21.2f} / "
               f"{r['right_late']:.2f}   {r['optimal']:21.2f}", flush=True)
 
 

@@ -136,6 +136,7 @@ def test_replay_recurrent_q_is_one_bptt_step_toward_the_targets():
     ReplayParams(gamma=0.9, lam=0.0, temperature=0.3, p_threshold=0.3, batch=True),  # many non-policy steps
     ReplayParams(gamma=0.95, lam=1.0, temperature=0.0, p_threshold=0.6, batch=True),  # greedy; a tie is 0.5 each
     ReplayParams(gamma=0.9, lam=0.5, batch=True, clip=0.2),  # every step replayed, targets truncated
+    ReplayParams(gamma=0.9, lam=0.6, temperature=0.1, p_threshold=0.3, batch=True, clip=0.5),  # cuts and clips
 ])
 def test_compiled_recurrent_replay_equals_the_composed_reference(params, share_output):
     """The one-call kernel against batch_targets + train_sequence, over lessons in a row (momentum carries)."""
@@ -146,7 +147,9 @@ def test_compiled_recurrent_replay_equals_the_composed_reference(params, share_o
     if params.temperature == 0:  # nets 0 and 1 alike: exact ties at the max, which the greedy test shares
         for net in (fast, ref):
             net.w1[1] = net.w1[0]
-            net.w2[-1] = net.w2[0]
+            net.w2[min(1, len(net.w2) - 1)] = net.w2[0]
+        first, _ = ref.forward_sequence(np.zeros((3, 4)), np.zeros(3, dtype=int))
+        assert first[0, 0, 0] == first[0, 1, 0]  # the tie the test is about
     used = steps = 0
     for k in range(6):
         n = int(rng.integers(1, 12))
@@ -160,6 +163,9 @@ def test_compiled_recurrent_replay_equals_the_composed_reference(params, share_o
             np.testing.assert_allclose(getattr(fast, name), getattr(ref, name), rtol=0, atol=1e-12)
     assert 0 < used <= steps
     assert used == steps if params.p_threshold == 0 else params.p_threshold < 0.3 or used < steps
+    with pytest.raises(ValueError, match="temperature must be >= 0"):
+        fast.replay_q_lesson(np.zeros((2, 4)), [0], [0.0], True, gamma=0.9, lam=0.8, temperature=-1.0,
+                             p_threshold=0.1)
 
 
 def test_recurrent_q_acts_on_the_contexts_replay_reconstructs():
