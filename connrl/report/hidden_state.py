@@ -48,9 +48,9 @@ _CUP_EXPECT = {1: {"window-Q": "most", "recurrent-Q": "most", "recurrent-model":
                2: {"window-Q": "most", "recurrent-Q": "most", "recurrent-model": "not"},
                3: {"window-Q": "some", "recurrent-Q": "all", "recurrent-model": "not"}}
 # measured on development seeds (docs/notes/cups-task3.md); shown where the verdict is short of reproduced
-_CUP_CAUSE = {3: "recurrent-Q's extra steps are pick-ups that collect nothing (at the start or right after the first "
-                 "cup), never wrong turns; without control errors it makes almost none (`scripts/ch7/task3_probe.py`, "
-                 "development seeds)"}
+_CUP_CAUSE = {3: "located, not explained (development seeds, `scripts/ch7/task3_probe.py`): recurrent-Q's greedy "
+                 "episodes first leave the optimal path by a pick-up that collects nothing, at the start or right "
+                 "after the first cup, and in some runs wander after it; without control errors almost none do"}
 _CUP_THESIS = {1: "all three optimal (λ = 0.8)", 2: "window-Q and recurrent-Q little affected; recurrent-model "
                "oscillates", 3: "window-Q optimal in 3 of 5 runs; recurrent-Q always; recurrent-model oscillates"}
 
@@ -100,9 +100,10 @@ def _cup_claims(s: dict, task: int, fig: str, section: str, title: str, tag: str
               f"optimal at the end in {kept[b1]} of {n[b1]} runs (ours, 5 → 30: "
               f"{kept.get('window-Q lambda=0.8', 0)} of {n.get('window-Q lambda=0.8', 0)})",
               "optimal in most runs", REPRODUCED if kept[b1] > n[b1] / 2 else NOT_REPRODUCED,
-              cause="with 10 → 30 the first policy is nearly deterministic and a failed run settles into a habit "
-                    "whose untried actions keep negative values; 5 → 30 is ours, chosen on development seeds "
-                    "(docs/RECONSTRUCTION.md, window-Q temperature)", anchor=anchor,
+              cause="5 → 30 is ours, chosen on development seeds (docs/RECONSTRUCTION.md, window-Q temperature); our "
+                    "reading, from one inspected run: with 10 → 30 the first policy is nearly deterministic and a "
+                    "failed run keeps a habit whose untried actions hold negative values (connrl/experiments/"
+                    "hidden_state.py)", anchor=anchor,
               recheck=bool(tag))
 
 
@@ -122,10 +123,10 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     if load_summary(out_dir, "cup-task1") is not None:
         parts += [note("cups-compute"), ""]
         claim("7.5.1: recurrent-model costs 4x recurrent-Q's time", "7.5.1", "80 vs 20 min a run (4x)",
-              "3.9x the whole run, 3.5x the compiled arithmetic (`python scripts/ch7/compute_time.py`, fastest of "
-              "3 runs each; 1.2x before recurrent-Q's lesson replay was compiled)",
-              "the order, and the whole-run ratio within the page's ±10 % of 4 (one measurement: the fastest of 3 "
-              "runs each; single runs varied 2.5-3.8x)", REPRODUCED, anchor="Computation time (7.5.1)")
+              "median 3.3x (2.7-4.0x over 5 rounds; 1.2x with recurrent-Q's Python lesson replay of before issue "
+              "32); the compiled arithmetic alone 3.5x (`python scripts/ch7/compute_time.py`)",
+              "the order, and the median whole-run ratio within the page's ±10 % of 4", PARTLY,
+              anchor="Computation time (7.5.1)")
     s = load_summary(out_dir, "cup-robustness") or load_summary(out_dir, "cup-task1")  # Task 1 probes too (lambda=0.8)
     if s is not None:
         parts += _robustness_table(s)

@@ -51,7 +51,7 @@ def test_model_parts_read_the_stored_runs(tmp_path):
     assert "**Verdict:**" in text and (tmp_path / "docs" / "figures" / "cup-task1-model-error.png").exists()
     text = "\n".join(frozen_model(tmp_path, doc))
     assert "| model fixed after 300 trials | never | 0 | 0 |" in text  # tiny: 3 trials, never optimal
-    assert "Why the fixed model does not keep the optimum" in text  # the stored runs' note (not the re-check's)
+    assert "Where the fixed model fails here" in text  # the stored runs' note (not the re-check's)
     assert "**Verdict:** — (most runs fixed in time must stay optimal; partly: at least a quarter). Of the 0 " in text
 
 
