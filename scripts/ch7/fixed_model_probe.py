@@ -11,8 +11,8 @@ other cup: right in A, left in B). There only the context units can tell the rig
 again at the end (the model is the same; the Q-net has learned on), the probe reports over those 320 states:
 
 - how well the Q-net's inputs (sensation and context) separate the three right actions: the leave-one-out accuracy
-  of a nearest-neighbour rule, the held-out accuracy of a least-squares linear rule, and how far apart the classes'
-  centres are against their spread;
+  of a nearest-neighbour rule; a least-squares linear rule's accuracy on held-out episodes and in sample, beside
+  always guessing the commonest action; and how far apart the classes' centres are against their spread;
 - how often the Q-net's greedy action there is the right one, at freezing and over the last 100 trials' tests;
 - the share of the last 100 greedy tests at 14 steps (the experiment's measure).
 
@@ -67,18 +67,26 @@ def separation(xs: np.ndarray, ys: np.ndarray) -> tuple[float, float]:
     return nn, gap / spread if spread else float("inf")
 
 
-def linear_accuracy(xs: np.ndarray, ys: np.ndarray) -> float:
-    """Held-out accuracy of a least-squares linear rule (one score per action, bias included) fitted on the even
-    states and tested on the odd ones, then the other way round: can a rule as simple as a single-layer net read the
-    right action from these inputs?"""
+def linear_accuracy(xs: np.ndarray, ys: np.ndarray, per_episode: int = 8) -> tuple[float, float, float]:
+    """A least-squares linear rule (one score per action, bias included): its accuracy fitted on every other episode
+    and tested on the rest, then the other way round; in sample; and always guessing the fitted half's commonest
+    action on the tested half. Can a rule as simple as a single-layer net read the right action from these inputs?"""
     classes = np.unique(ys)
     xb = np.hstack([xs, np.ones((len(xs), 1))])
-    hits = []
-    for fit, test in ((slice(0, None, 2), slice(1, None, 2)), (slice(1, None, 2), slice(0, None, 2))):
-        targets = (ys[fit, None] == classes[None, :]).astype(float)
-        w, *_ = np.linalg.lstsq(xb[fit], targets, rcond=None)
-        hits += list(classes[(xb[test] @ w).argmax(axis=1)] == ys[test])
-    return float(np.mean(hits))
+    episode = np.arange(len(xs)) // per_episode  # whole episodes to a half, so both halves hold every action
+    halves = [episode % 2 == 0, episode % 2 == 1]
+
+    def fit(rows):
+        w, *_ = np.linalg.lstsq(xb[rows], (ys[rows, None] == classes[None, :]).astype(float), rcond=None)
+        return w
+
+    held, guess = [], []
+    for a, b in (halves, halves[::-1]):
+        held += list(classes[(xb[b] @ fit(a)).argmax(axis=1)] == ys[b])
+        values, counts = np.unique(ys[a], return_counts=True)
+        guess += list(ys[b] == values[counts.argmax()])
+    inside = float(np.mean(classes[(xb @ fit(slice(None))).argmax(axis=1)] == ys))
+    return float(np.mean(held)), inside, float(np.mean(guess))
 
 
 def greedy_right(agent, xs: np.ndarray, ys: np.ndarray) -> float:
@@ -100,7 +108,7 @@ def run(seed: int, freeze_at: int, trials: int = 500) -> dict:
             agent.freeze_model = True
             xs, ys = blind_states(agent, probe_rng)
             out["nn"], out["ratio"] = separation(xs, ys)
-            out["linear"] = linear_accuracy(xs, ys)
+            out["linear"], out["linear_in"], out["guess"] = linear_accuracy(xs, ys)
             out["right_at_freeze"] = greedy_right(agent, xs, ys)
         run_trial(train_env, agent, trial=k, learning=True)
         scores.append(test_score(test_env, agent))
@@ -120,12 +128,13 @@ def main() -> None:
         ap.error(f"--seeds must be 0 or more and --freeze-at in [1, 400], got {args.seeds} and {args.freeze_at}")
     print(f"Task 2 recurrent-model, model fixed after {args.freeze_at} of 500 trials; 320 blind states of the optimal "
           "sequences (pick up / walk right / walk left)")
-    print("seed  nearest-neighbour accuracy   linear rule, held out   centre gap / spread   greedy right: at fixing "
-          "/ last 100   tests at 14, last 100")
+    print("seed  nearest-neighbour   linear rule: held out / in sample / commonest action   centre gap / spread   "
+          "greedy right: at fixing / last 100   tests at 14, last 100")
     for seed in args.seeds:
         r = run(seed, args.freeze_at)
-        print(f"{seed:>4}  {r['nn']:26.3f}   {r['linear']:21.3f}   {r['ratio']:19.2f}   {r['right_at_freeze']:21.2f} / "
-              f"{r['right_late']:.2f}   {r['optimal']:21.2f}", flush=True)
+        print(f"{seed:>4}  {r['nn']:17.3f}   {r['linear']:24.3f} / {r['linear_in']:.3f} / {r['guess']:.3f}   "
+              f"{r['ratio']:19.2f}   {r['right_at_freeze']:21.2f} / {r['right_late']:.2f}   {r['optimal']:21.2f}",
+              flush=True)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Why recurrent-Q's greedy policy on Task 3 (15 % control errors) is not stable at 14 steps: its values at the
 decision after the first cup.
 
-    python scripts/ch7/task3_probe.py [--seeds 100 101 102 103 104] [--task 3] [--trials 500]
+    python scripts/ch7/task3_probe.py [--seeds 100 101 102 103 104] [--task 3] [--no-errors] [--trials 500]
 
 Each seed trains recurrent-Q (lambda 0.8, Table B.1) with ``connrl.experiments.hidden_state``'s protocol on the
 task; after each of the last 100 training trials the greedy policy is tested from both instances (control errors
@@ -12,8 +12,8 @@ pick-up, 15 % in training, has no visible effect). Printed per seed: how often t
 that sign flips from one test to the next, and the tests at 14 steps; then where the test episodes first leave the
 optimal sequence (at the start, at the first cup, right after it, or on the way to the second, the last pick-up
 included), how often they leave it by a pick-up that collects nothing, and, over whole episodes, the extra moves and
-pick-ups beyond the optimal 5 and 2 and the share that time out. ``--task 1`` gives the
-same probe without control errors, for comparison. Development seeds only.
+pick-ups beyond the optimal 5 and 2 and the share that time out. ``--no-errors`` trains Task 3's learner in a world
+without control errors; ``--task 1`` probes Task 1 with its own Table B.1 learner. Development seeds only.
 """
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ import argparse
 import numpy as np
 
 from connrl.core.rollout import run_trial
-from connrl.envs.cup import INSTANCES
+from connrl.envs.cup import INSTANCES, CupCollectionEnv
 from connrl.experiments.hidden_state import CupParams
-from connrl.tasks.hidden_state import OPTIMAL_SCORE, make_agent, make_cup_envs
+from connrl.tasks.hidden_state import CUP_TASKS, OPTIMAL_SCORE, make_agent, make_cup_envs
 
 PICK = 2
 TOWARD = {"A": 1, "B": 0}  # after the first cup (cell 3 in A, 7 in B) the other cup lies right in A, left in B
@@ -73,10 +73,12 @@ def probe_test(env, agent, instance: str) -> tuple[int, np.ndarray | None, list[
     return steps, q, actions
 
 
-def run(seed: int, task: int, trials: int) -> dict:
+def run(seed: int, task: int, trials: int, errors: bool = True) -> dict:
     p = CupParams(task=task, arch="recurrent-Q", lam=0.8, trials=trials, probe=False)
     rng = np.random.default_rng(seed)
     train_env, test_env = make_cup_envs(task)  # the same draws as run_cup, so a seed trains the same agent
+    if not errors:  # the same learner (Table B.1's Task 3 entry) in a training world without control errors
+        train_env = CupCollectionEnv(**{**CUP_TASKS[task], "control_error": 0.0})
     train_env.reset(seed=int(rng.integers(2**31)))
     test_env.reset(seed=int(rng.integers(2**31)))
     agent = make_agent(p, train_env.observation_space.shape[0], 3, rng)
@@ -113,17 +115,19 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101, 102, 103, 104])
     ap.add_argument("--task", type=int, choices=[1, 3], default=3)
+    ap.add_argument("--no-errors", action="store_true", help="train without control errors, the learner unchanged")
     ap.add_argument("--trials", type=int, default=500)
     args = ap.parse_args()
     if min(args.seeds) < 0 or not 100 <= args.trials <= 100_000:
         ap.error(f"--seeds must be 0 or more and --trials in [100, 100000], got {args.seeds} and {args.trials}")
-    print(f"Task {args.task}, recurrent-Q lambda 0.8, {args.trials} trials; over the last 100 greedy tests, at the "
+    print(f"Task {args.task}{' trained without control errors' if args.no_errors else ''}, recurrent-Q lambda 0.8, "
+          f"{args.trials} trials; over the last 100 greedy tests, at the "
           "decision after the first cup (both instances):")
     print("seed  greedy: walk on / pick up again   (Q(walk) - Q(pick)) / Q(walk): mean ± SD   sign flips   "
           "tests at 14")
     rows = []
     for seed in args.seeds:
-        r = run(seed, args.task, args.trials)
+        r = run(seed, args.task, args.trials, errors=not args.no_errors)
         rows.append(r)
         print(f"{seed:>4}  {r['walk']:14.2f} / {r['pick']:.2f}   {r['gap']:+32.3f} ± {r['gap_sd']:.3f}   "
               f"{r['flips']:10.2f}   {r['optimal']:11.2f}", flush=True)
