@@ -50,7 +50,8 @@ _CUP_EXPECT = {1: {"window-Q": "most", "recurrent-Q": "most", "recurrent-model":
 # measured on development seeds (docs/notes/cups-task3.md); shown where the verdict is short of reproduced
 _CUP_CAUSE = {3: "located, not explained (development seeds, `scripts/ch7/task3_probe.py`): recurrent-Q's greedy "
                  "episodes first leave the optimal path by a pick-up that collects nothing, at the start or right "
-                 "after the first cup, and in some runs wander after it; without control errors almost none do"}
+                 "after the first cup, and in some runs wander after it; the same learner without control errors "
+                 "makes none there"}
 _CUP_THESIS = {1: "all three optimal (λ = 0.8)", 2: "window-Q and recurrent-Q little affected; recurrent-model "
                "oscillates", 3: "window-Q optimal in 3 of 5 runs; recurrent-Q always; recurrent-model oscillates"}
 
@@ -101,9 +102,9 @@ def _cup_claims(s: dict, task: int, fig: str, section: str, title: str, tag: str
               f"{kept.get('window-Q lambda=0.8', 0)} of {n.get('window-Q lambda=0.8', 0)})",
               "optimal in most runs", REPRODUCED if kept[b1] > n[b1] / 2 else NOT_REPRODUCED,
               cause="5 → 30 is ours, chosen on development seeds (docs/RECONSTRUCTION.md, window-Q temperature); our "
-                    "reading, from one inspected run: with 10 → 30 the first policy is nearly deterministic and a "
-                    "failed run keeps a habit whose untried actions hold negative values (connrl/experiments/"
-                    "hidden_state.py)", anchor=anchor,
+                    "reading (connrl/experiments/hidden_state.py): with 10 → 30 the first policy is nearly "
+                    "deterministic and failed runs settle into a 19-28-step habit whose untried actions keep "
+                    "negative values", anchor=anchor,
               recheck=bool(tag))
 
 
@@ -123,8 +124,9 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     if load_summary(out_dir, "cup-task1") is not None:
         parts += [note("cups-compute"), ""]
         claim("7.5.1: recurrent-model costs 4x recurrent-Q's time", "7.5.1", "80 vs 20 min a run (4x)",
-              "median 3.3x (2.7-4.0x over 5 rounds; 1.2x with recurrent-Q's Python lesson replay of before issue "
-              "32); the compiled arithmetic alone 3.5x (`python scripts/ch7/compute_time.py`)",
+              "median of the per-round ratios 3.3x (2.7-4.0x over 5 rounds; 3.6x from the median times; 1.2x with "
+              "recurrent-Q's Python lesson replay of before issue 32); the compiled arithmetic alone 3.5x "
+              "(`python scripts/ch7/compute_time.py`)",
               "the order, and the median whole-run ratio within the page's ±10 % of 4", PARTLY,
               anchor="Computation time (7.5.1)")
     s = load_summary(out_dir, "cup-robustness") or load_summary(out_dir, "cup-task1")  # Task 1 probes too (lambda=0.8)

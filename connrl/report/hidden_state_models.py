@@ -16,9 +16,9 @@ from connrl.report.verdicts import claim
 
 _SPECS = {s.name: s for s in EXPERIMENTS}
 # measured on development seeds (docs/notes/cups-frozen.md); shown where the verdict is short of reproduced
-FROZEN_CAUSE = ("located, not explained (development seeds, `scripts/ch7/fixed_model_probe.py`): the fixed model's "
-                "context tells the states that need history apart, though not linearly; when it is fixed the Q-net "
-                "does not yet choose right there, and in 3 of 5 runs it still does not 200 trials later")
+FROZEN_CAUSE = ("located, not explained (development seeds, `scripts/ch7/fixed_model_probe.py`): a linear rule reads "
+                "the right action from the fixed model's context at the states that need history, but the Q-net does "
+                "not yet when the model is fixed, and in 3 of 5 runs still does not in the last 100 trials")
 BLOCK = 10  # trials per point of the error curve
 STABLE = 0.9  # "stuck to" the optimal policy: at least 90 % of the last 100 tests optimal
 
@@ -155,7 +155,8 @@ def frozen_model(out: Path, doc: Path, name: str = "cup-task2-frozen", tag=lambd
               "fixed model: optimal and stuck to it",
               f"{stuck} of {len(long)} runs stay optimal (≥ {STABLE:.0%} of the last 100 tests)",
               "most runs fixed at least 100 trials before the end stay optimal, all three fixing rules pooled "
-              "(partly: at least a quarter; both thresholds set when issue 32 reran it)", verdict.strip("*"),
+              "(partly: at least a quarter; set after the fresh runs, which the earlier rule, any run = partly, "
+              "would have called partly)", verdict.strip("*"),
               "" if verdict == "reproduced" else FROZEN_CAUSE, anchor=heading, recheck=bool(mark))
     lines += ["", f"**Verdict:** {verdict} (most runs fixed in time must stay optimal; partly: at least a quarter). "
               f"Of the {len(long)} runs whose model was fixed at least 100 trials "
