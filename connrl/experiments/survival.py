@@ -230,7 +230,7 @@ _STUDY2 = replace(SurvivalParams(), representation="local", lr_scale=2.0)
 
 _TUNING = [("AHCON-R", pt) for pt in (0.05, 0.1, 0.2, 0.4)] + [("QCON-R", pt) for pt in (0.0, 0.001, 0.01, 0.1)]
 
-EXPERIMENTS = [
+_STUDIES = (
     ExperimentSpec(
         name="survival-study1", title="Survival, Study 1: global action representation (Fig. 4.3)",
         section="4.3.2", run="connrl.experiments.survival:run_survival", params=SurvivalParams(),
@@ -241,12 +241,13 @@ EXPERIMENTS = [
         section="4.3.3", run="connrl.experiments.survival:run_survival", params=_STUDY2,
         profiles=_PROFILES, variants=_variants(2), quantities=_CURVE_QUANTITIES,
         x_label="plays", y_label="food per test play", y_reference={"8 food (4.5 table)": 8.0}),
-    *(ExperimentSpec(  # issue 31's check: the same runs on seeds no development choice saw
-        name=f"survival-study{k}-fresh", title=f"Survival, Study {k} on fresh seeds {FRESH_SEED}-{FRESH_SEED + 6}",
-        section=sec, run="connrl.experiments.survival:run_survival", params=params, profiles=_PROFILES,
-        variants=_variants(k), quantities=_CURVE_QUANTITIES, x_label="plays", y_label="food per test play",
-        y_reference={"8 food (4.5 table)": 8.0} if k == 2 else {}, seed=FRESH_SEED)
-      for k, sec, params in ((1, "4.3.2, 4.4", SurvivalParams()), (2, "4.3.3, 4.4, 4.5", _STUDY2))),
+)
+
+EXPERIMENTS = [
+    *_STUDIES,
+    *(replace(study, name=f"{study.name}-fresh", title=f"Survival, Study {k} on fresh seeds {FRESH_SEED}-"
+              f"{FRESH_SEED + 6}", section=section, seed=FRESH_SEED)  # issue 31's check: the same runs, new seeds
+      for k, study, section in ((1, _STUDIES[0], "4.3.2, 4.4"), (2, _STUDIES[1], "4.3.3, 4.4, 4.5"))),
     ExperimentSpec(
         name="survival-planning", title="Hypothetical actions per step, Study 2 -M agents (Fig. 4.5)",
         section="4.4.3", run="connrl.experiments.survival:run_survival",

@@ -11,7 +11,7 @@ import numpy as np
 from connrl.experiments.hidden_state import CUP_FIGURES, EXPERIMENTS, FRESH_SEED
 from connrl.report.checks import better_runs
 from connrl.report.hidden_state_models import frozen_model, imperfect_model
-from connrl.report.page import fixed, load_summary, note
+from connrl.report.page import fixed, load_summary, note, recheck_tag
 from connrl.report.verdicts import NOT_REPRODUCED, OPEN, PARTLY, REPRODUCED, claim, ordering, p_text
 
 
@@ -144,10 +144,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
 def fresh_tag(s: dict) -> str:
     """How a fresh-seed re-check is labelled: by the seeds, runs and profile its summary records, so that a smoke run
     (seed 0, tiny) never passes for the check."""
-    first, n = s["base_seed"], s["runs_per_variant"]
-    if (first, n, s["profile"]) == (FRESH_SEED, 20, "full"):
-        return f" (fresh seeds {first}-{first + n - 1})"
-    return f" (seeds {first}-{first + n - 1}, {s['profile']} profile: not the check)"
+    return recheck_tag([s], FRESH_SEED, 20)
 
 
 def _fresh(out_dir: Path, doc: Path) -> list[str]:

@@ -105,6 +105,16 @@ def note(name: str) -> str:
     return path.read_text().strip()
 
 
+def recheck_tag(summaries: list[dict], first: int, runs: int) -> str:
+    """The label of a re-check on fresh seeds: those seeds when every summary is the full-profile check its note
+    describes (``runs`` runs from seed ``first``), else what ran, marked as not the check, so that a smoke run at
+    seed 0 never passes for it."""
+    ran = sorted({(s["base_seed"], s["runs_per_variant"], s["profile"]) for s in summaries})
+    if ran == [(first, runs, "full")]:
+        return f" (fresh seeds {first}-{first + runs - 1})"
+    return " (" + "; ".join(f"seeds {b}-{b + n - 1}, {p} profile" for b, n, p in ran) + ": not the check)"
+
+
 def warn(message: str) -> None:
     print(f"connrl: warning: {message}", file=sys.stderr)
 

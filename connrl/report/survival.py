@@ -14,7 +14,7 @@ import numpy as np
 from connrl.envs.survival import GRID_SIZE, render_rgb
 from connrl.experiments.survival import EXPERIMENTS, FRESH_SEED  # noqa: F401 (the page lists the sections' experiments)
 from connrl.report import checks, verdicts
-from connrl.report.page import figure, note
+from connrl.report.page import figure, load_summary, note, recheck_tag
 from connrl.report.plots import save_figure
 from connrl.report.survival_accuracy import model_accuracy
 from connrl.report.survival_speedup import by_variant, command, crossing, load_records, mean_curve, speedup
@@ -107,23 +107,17 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
 def _fresh(out: Path, doc: Path) -> list[str]:
     """Issue 31's check: Study 1 and 2 again on seeds no development choice saw; the comparison, representation and
     4.5 verdicts re-applied, as re-checks (tallied apart). Runs on other seeds or profiles are labelled as such."""
-    parts, studies, seeds = [], {}, set()
+    parts, studies, summaries = [], {}, []
     for name, fig, rep in (("survival-study1-fresh", "Study 1 (global) on fresh seeds", "global"),
                            ("survival-study2-fresh", "Study 2 (local) on fresh seeds", "local")):
-        summary, _ = load_records(out, name)
-        if summary is not None:
-            s, n = summary["base_seed"], summary["runs_per_variant"]
-            seeds.add((s, n, summary["profile"]))
+        summaries += [s for s in [load_summary(out, name)] if s is not None]
         lines, byv = _study_section(out, name, fig, doc, lost_note=False)
         parts += lines
         if byv:
             studies[rep] = byv
     if not studies:
         return []
-    if len(seeds) == 1 and seeds == {(FRESH_SEED, 7, "full")}:
-        tag = f" (fresh seeds {FRESH_SEED}-{FRESH_SEED + 6})"
-    else:  # e.g. a tiny smoke run: the same tables, but not the check the note describes
-        tag = " (" + "; ".join(f"seeds {s}-{s + n - 1}, {p} profile" for s, n, p in sorted(seeds)) + ": not the check)"
+    tag = recheck_tag(summaries, FRESH_SEED, 7)
     parts += _comparisons(studies, tag) + _representation(studies, tag)
     parts += speedup(out, doc, "survival-study2-fresh", tag, factor=1.5, cause=_GAP_CAUSE)
     return [note("survival-fresh"), "", *parts]
