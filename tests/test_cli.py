@@ -92,6 +92,10 @@ def test_every_experiment_runs_on_the_tiny_profile(name, tmp_path, capsys):
 def test_fresh_seed_experiments_are_their_experiments_at_seed_0():
     for name in ("survival-study1", "survival-study2", "cup-task1", "cup-task2", "cup-task3", "cup-task2-frozen"):
         assert GOLDEN[f"{name}-fresh"] == GOLDEN[name]  # not made apart: a fresh check must be its experiment
+    for fresh, name in (("integration-fresh", "integration"), ("robot-teaching-dk-fresh", "robot-teaching-dk"),
+                        ("recharge-behaviours-fresh", "recharge-behaviours")):  # issue 42's: some variants of theirs
+        assert GOLDEN[fresh]["run_folder"] == GOLDEN[name]["run_folder"]
+        assert all(GOLDEN[name]["per_run"][v] == vals for v, vals in GOLDEN[fresh]["per_run"].items())
 
 
 def test_run_without_seed_starts_at_the_experiments_own(tmp_path):

@@ -20,7 +20,7 @@ hidden-state probe: every step taken in room C within
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -171,6 +171,7 @@ CH8 = {"xy": False, "paths": 1}
 RECURRENT = {"memory": "recurrent", "lr": 0.03, "hidden": 12, "context": 8, "lessons_per_trial": 1000,
              "online": False}
 THESIS_RECURRENT = {**RECURRENT, "lr": 0.08, "lessons_per_trial": 100}  # as 8.3 states them
+SIXTY = "recurrent-Q, no X-Y, 60 lessons per trial (diagnostic)"
 EXPERIMENTS = [
     ExperimentSpec(
         name="integration", title="Exps 1-3: recharging without X-Y, memoryless and with recurrent Q-nets; the "
@@ -188,7 +189,9 @@ EXPERIMENTS = [
                           THESIS_RECURRENT),
                   Variant("memoryless, no X-Y, 1000 lessons per trial (diagnostic)", {"lessons_per_trial": 1000}),
                   Variant("no context units, no X-Y, 1000 lessons per trial (diagnostic)",
-                          {**RECURRENT, "context": 0})),
+                          {**RECURRENT, "context": 0}),
+                  # like for like the other way round: the recurrent robot at the memoryless robot's 60 replays
+                  Variant(SIXTY, {**RECURRENT, "lessons_per_trial": 60})),
         quantities=(*QUANTITIES, *FINAL, *LEGS), x_label="trials",
         y_label="reinforcement per primitive step (greedy tests)",
         description="Ch. 6 Exp. 3's protocol and parameters on the 14 inputs without X-Y; Exp. 2: recurrent Q-nets, lr "
@@ -199,3 +202,16 @@ EXPERIMENTS = [
                     "in the changed layout without further training"),
 ]
 
+
+# Issue 42's like-for-like check, fixed before it ran (docs/notes/prereg-fresh-checks.md): Fig. 8.1's room-B comparison
+# with both robots at 1000 replays per trial, on seeds never used before (Ch. 8 development: 100-105; stored: 0-6)
+FRESH_SEED, FRESH_RUNS = 4000, 14
+_MAIN = EXPERIMENTS[0]
+EXPERIMENTS.append(replace(
+    _MAIN, name="integration-fresh", seed=FRESH_SEED,
+    title=f"Fig. 8.1's room-B comparison at equal replays, fresh seeds {FRESH_SEED}-{FRESH_SEED + FRESH_RUNS - 1}",
+    profiles={**_MAIN.profiles, "full": {"runs": FRESH_RUNS}},
+    variants=tuple(v for v in _MAIN.variants if v.label in (
+        "Exp. 2: recurrent-Q, no X-Y", "memoryless, no X-Y, 1000 lessons per trial (diagnostic)")),
+    description="the recurrent robot (lr 0.03, 1000 lessons per trial) against the memoryless one given the same "
+                "replays; one-sided Welch on room B docked (last 3 tests), fixed in advance"))

@@ -15,7 +15,7 @@ test tasks.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -303,3 +303,11 @@ EXPERIMENTS = [
                     "was but within 8.5's steps (DK 2,000, DP 2,000, WFL 1,500, WFR 1,500), then frozen; 6.7's "
                     "equal-cost comparison with Exp. 1 (about 40,000 steps each, behaviours included)"),
 ]
+
+# Issue 42's re-check of Ch. 6's high-level choices (picked on development seeds 100-119 by room B docked at trial 60,
+# the claim itself): Exp. 3 again on seeds never used before (docs/notes/prereg-fresh-checks.md)
+FRESH_SEED = 4000
+EXPERIMENTS.append(replace(
+    EXPERIMENTS[0], name="recharge-behaviours-fresh", seed=FRESH_SEED,
+    title=f"Exp. 3: recharging over learned behaviours, fresh seeds {FRESH_SEED}-{FRESH_SEED + 6}",
+    variants=tuple(v for v in EXPERIMENTS[0].variants if v.label == "Exp. 3: persistence rule")))
