@@ -172,6 +172,7 @@ RECURRENT = {"memory": "recurrent", "lr": 0.03, "hidden": 12, "context": 8, "les
              "online": False}
 THESIS_RECURRENT = {**RECURRENT, "lr": 0.08, "lessons_per_trial": 100}  # as 8.3 states them
 SIXTY = "recurrent-Q, no X-Y, 60 lessons per trial (diagnostic)"
+MEMORYLESS_100 = "memoryless, no X-Y, 100 lessons per trial (8.1)"
 EXPERIMENTS = [
     ExperimentSpec(
         name="integration", title="Exps 1-3: recharging without X-Y, memoryless and with recurrent Q-nets; the "
@@ -191,7 +192,9 @@ EXPERIMENTS = [
                   Variant("no context units, no X-Y, 1000 lessons per trial (diagnostic)",
                           {**RECURRENT, "context": 0}),
                   # like for like the other way round: the recurrent robot at the memoryless robot's 60 replays
-                  Variant(SIXTY, {**RECURRENT, "lessons_per_trial": 60})),
+                  Variant(SIXTY, {**RECURRENT, "lessons_per_trial": 60}),
+                  # 8.1's "approximately 100 lessons" for the memoryless robot too (8.2 says Ch. 6's, i.e. 60)
+                  Variant(MEMORYLESS_100, {"lessons_per_trial": 100})),
         quantities=(*QUANTITIES, *FINAL, *LEGS), x_label="trials",
         y_label="reinforcement per primitive step (greedy tests)",
         description="Ch. 6 Exp. 3's protocol and parameters on the 14 inputs without X-Y; Exp. 2: recurrent Q-nets, lr "
