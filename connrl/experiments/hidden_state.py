@@ -303,7 +303,9 @@ def _cup_variants(task: int, lams: tuple[float, ...]) -> tuple[Variant, ...]:
                 thesis = {"final_steps": OPTIMAL_SCORE}  # 7.5.1: all three learned the optimal policy
             out.append(Variant(f"{arch} lambda={lam:g}", {"arch": arch, "lam": lam}, thesis))
     # Table B.1's own window-Q schedule (Tasks 2 and 3: "same as Task 1"), beside our deviation (module docstring)
-    out.insert(1, Variant(STATED_WINDOW_Q, {"arch": "window-Q", "lam": 0.8, "window_q_inv_t": None}))
+    out.insert(1, Variant(STATED_WINDOW_Q, {"arch": "window-Q", "lam": 0.8, **STATED_SCHEDULE}))
+    if 0.0 in lams:  # and lambda = 0's window-Q on it, so that Fig. 7.5's lambda claim has a stated-value row
+        out.append(Variant("window-Q lambda=0 1/T 10->30", {"arch": "window-Q", "lam": 0.0, **STATED_SCHEDULE}))
     return tuple(out)
 
 
