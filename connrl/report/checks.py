@@ -146,9 +146,12 @@ def matched_passes(copy_curves, rl_xs, rl_runs, margin: float | None = None
     return out
 
 
-def meets_claims(summary: dict, item: str, section: str, anchor: str, labels=None) -> list[verdicts.Claim]:
+def meets_claims(summary: dict, item: str, section: str, anchor: str, labels=None, tag: str = "",
+                 item_for=None, calibrated=None) -> list[verdicts.Claim]:
     """A scoreboard claim per quantity of ``summary`` with a thesis number (``meets_thesis``): our mean over runs
-    against it (a run that never reaches a level fails the claim). ``labels`` limits the variants."""
+    against it (a run that never reaches a level fails the claim). ``labels`` limits the variants; ``tag`` marks a
+    re-check (its seeds), ``item_for(label, quantity)`` names the check it repeats (default "ITEM: label,
+    quantity"); ``calibrated``: (label, quantity) -> what was chosen on that very claim."""
     out = []
     runs = summary["runs_per_variant"]
     for label, v in summary["variants"].items():
@@ -164,8 +167,9 @@ def meets_claims(summary: dict, item: str, section: str, anchor: str, labels=Non
             reached = q.get("runs_reaching", len(q["per_run"]))
             ours = f"{mean} (mean of {reached}/{len(q['per_run'])} runs reaching; {summary['profile']} profile)"
             cause = "" if summary["profile"] == "full" else f"{summary['profile']} profile, not the protocol"
+            name_of = item_for(label, name) if item_for else f"{item}: {label}, {name}"
             out.append(verdicts.claim(
-                f"{item}: {label}, {name}", section, f"{q['thesis']:g}", ours,
+                name_of + tag, section, f"{q['thesis']:g}", ours,
                 f"mean over {runs} run(s) {word} the thesis's number, every run reaching (no test of spread)",
-                verdict, cause, anchor))
+                verdict, cause, anchor, recheck=bool(tag), calibrated=(calibrated or {}).get((label, name), "")))
     return out

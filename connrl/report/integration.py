@@ -13,13 +13,14 @@ from connrl.envs.robot.recharge import ROOMS
 from connrl.experiments import integration, steps
 from connrl.experiments.steps import GOOD_SHARE, THESIS_CHG_WITH_XY, THESIS_STEPS, run_steps_to_level, steps_to_level
 from connrl.report.integration_probe import draw_probe, probe_table
-from connrl.report.page import figure, load_summary, note, run_rows, stored, summary_table
+from connrl.report.page import figure, load_summary, note, recheck_tag, run_rows, stored, summary_table
 from connrl.report.recharge import draw_room_curves
 from connrl.report.recharge_claims import (
     MOST,
     Check,
     _done,
     at_end,
+    board,
     draw_paths,
     gain_test,
     level_test,
@@ -32,7 +33,13 @@ from connrl.report.verdicts import NOT_REPRODUCED, OPEN, REPRODUCED, claim
 EXPERIMENTS = [*integration.EXPERIMENTS, *steps.EXPERIMENTS]
 _LABELS = [v.label for v in integration.EXPERIMENTS[0].variants]
 CH6, MEMORYLESS, RECURRENT = _LABELS[:3]  # the thesis's three curves; the rest are diagnostics, of which
+STATED = _LABELS[4]  # the recurrent robot at 8.3's stated lr 0.08 and about 100 lessons per trial
 SAME_REPLAYS, NO_CONTEXT = _LABELS[5:7]  # the two that isolate the memory (integration.py's variant list)
+SIXTY = integration.SIXTY  # the recurrent robot at the memoryless robot's 60 replays
+OURS = "ours: recurrent lr 0.03, 1000 lessons per trial (8.3 states 0.08, about 100)"
+STATED_CHG, OURS_CHG = "CHG (no X-Y, recurrent-Q at 8.3's lr 0.08, 100 lessons)", "CHG (no X-Y, recurrent-Q, ours)"
+LIKE_1000 = "ours, like for like: both robots at 1000 lessons per trial (recurrent lr 0.03)"
+LIKE_60 = "ours, like for like: both robots at 60 lessons per trial (recurrent lr 0.03, 8.3 states 0.08)"
 ACCEPTABLE = 0.8  # "acceptably good" read as: at least 80 % of Ch. 6 Exp. 3's final performance (with X-Y) (R)
 
 
@@ -58,48 +65,78 @@ def _mean(vals) -> float | None:
     return float(np.mean(vals)) if vals else None
 
 
-def _same_replays_note(summary: dict) -> str:
-    """The caveat of the room-B claim: Exp. 1 replays Ch. 6's 60 lessons; at the recurrent robot's replays the
-    memoryless learner's share (the table "What the memory adds")."""
-    same = per_run(summary, SAME_REPLAYS, "final_docked_B")
-    return (f" (the memoryless learner at the recurrent robot's replays: {_f(_mean(same))}; the table \"What the "
-            "memory adds\")") if same else ""
+def _room_b(summary: dict, rec: str, mem: str, setting: str) -> Check:
+    rec_b, mem_b = per_run(summary, rec, "final_docked_B"), per_run(summary, mem, "final_docked_B")
+    return _done("Fig. 8.1", "8.3", "from room B, recurrent-Q does significantly better than the memoryless robot",
+                 "the memoryless robot's room-B share", f"room B docked, last 3 tests: recurrent {_f(_mean(rec_b))}, "
+                 f"memoryless {_f(_mean(mem_b))}", [gain_test(mem_b, rec_b, "recurrent above memoryless, room B")],
+                 setting=setting, thesis_item="Fig. 8.1: room B")
 
 
 def checks(summary: dict) -> list[Check]:
-    """The claims of 8.2-8.4, each against the baseline it implies, by ``connrl.report.verdicts``."""
-    rec_b, mem_b = per_run(summary, RECURRENT, "final_docked_B"), per_run(summary, MEMORYLESS, "final_docked_B")
-    rec, ch6 = per_run(summary, RECURRENT, "final_performance"), per_run(summary, CH6, "final_performance")
+    """The claims of 8.2-8.4, each against the baseline it implies, by ``connrl.report.verdicts``: first at 8.3's
+    stated values, then at ours (lr 0.03, 1000 replays), then like for like (both robots given the same replays)."""
+    has = {label: bool(per_run(summary, label, "final_docked_B")) for label in summary["variants"]}
     out = []
-    if rec_b and mem_b:
-        out.append(_done("Fig. 8.1", "8.3", "from room B, recurrent-Q does significantly better than the memoryless "
-                         "robot", "the memoryless robot's room-B share", f"room B docked, last 3 tests: recurrent "
-                         f"{_f(_mean(rec_b))}, memoryless {_f(_mean(mem_b))}" + _same_replays_note(summary),
-                         [gain_test(mem_b, rec_b, "recurrent above memoryless, room B")]))
+    pairs = ((STATED, MEMORYLESS, ""), (RECURRENT, MEMORYLESS, OURS + ", against the memoryless robot's 60"),
+             (RECURRENT, SAME_REPLAYS, LIKE_1000), (SIXTY, MEMORYLESS, LIKE_60))
+    out += [_room_b(summary, rec, mem, setting) for rec, mem, setting in pairs if has.get(rec) and has.get(mem)]
+    mem_b = per_run(summary, MEMORYLESS, "final_docked_B")
+    if mem_b:
         out.append(_done("Fig. 8.1", "8.2", "without X-Y the memoryless robot generally fails from room B",
                          f"a fixed level: fewer than {MOST:.0%} of B's tasks", f"{_f(_mean(mem_b))}",
-                         [level_test(mem_b, MOST, above=False)]))
-    if rec and ch6:
-        out.append(_done("Fig. 8.1", "8.3", "recurrent-Q acceptably good after 150 trials",
-                         f"Ch. 6 Exp. 3's final performance (with X-Y, same seeds): within ±{1 - ACCEPTABLE:.0%} "
-                         "of it", f"final perf. {_f(_mean(rec))} vs {_f(_mean(ch6))}",
-                         [same_test(ch6, rec, "recurrent vs Ch. 6 Exp. 3", rel_margin=1 - ACCEPTABLE)],
-                         CH8_SPREAD_CAUSE))
-    changed = {r: per_run(summary, RECURRENT, f"changed_docked_{r}") for r in ROOMS}
-    if all(changed.values()):
-        out.append(_done("Fig. 8.2", "8.4", "in the changed layout the recurrent policy still docks, learning off",
-                         f"a fixed level: more than {MOST:.0%} of each room's fresh tasks",
-                         " / ".join(f"{r} {_f(_mean(v))}" for r, v in changed.items()),
-                         [level_test(v, MOST) for v in changed.values()], every=True))
+                         [level_test(mem_b, MOST, above=False)], thesis_item="Fig. 8.1: memoryless"))
+    ch6 = per_run(summary, CH6, "final_performance")
+    for label, setting in ((STATED, ""), (RECURRENT, OURS)):
+        rec = per_run(summary, label, "final_performance")
+        if rec and ch6:
+            out.append(_done("Fig. 8.1", "8.3", "recurrent-Q acceptably good after 150 trials",
+                             f"Ch. 6 Exp. 3's final performance (with X-Y, same seeds): within ±{1 - ACCEPTABLE:.0%} "
+                             "of it", f"final perf. {_f(_mean(rec))} vs {_f(_mean(ch6))}",
+                             [same_test(ch6, rec, "recurrent vs Ch. 6 Exp. 3", rel_margin=1 - ACCEPTABLE)],
+                             CH8_SPREAD_CAUSE if setting else "", setting=setting,
+                             thesis_item="Fig. 8.1: acceptably good"))
+    for label, setting in ((STATED, ""), (RECURRENT, OURS)):
+        changed = {r: per_run(summary, label, f"changed_docked_{r}") for r in ROOMS}
+        if all(changed.values()):
+            out.append(_done("Fig. 8.2", "8.4", "in the changed layout the recurrent policy still docks, learning off",
+                             f"a fixed level: more than {MOST:.0%} of each room's fresh tasks",
+                             " / ".join(f"{r} {_f(_mean(v))}" for r, v in changed.items()),
+                             [level_test(v, MOST) for v in changed.values()], every=True, setting=setting))
     return out
+
+
+def fresh_checks(summary: dict) -> list[Check]:
+    """``integration-fresh``: the like-for-like room-B comparison fixed in advance
+    (docs/notes/prereg-fresh-checks.md)."""
+    if per_run(summary, RECURRENT, "final_docked_B") and per_run(summary, SAME_REPLAYS, "final_docked_B"):
+        return [_room_b(summary, RECURRENT, SAME_REPLAYS, LIKE_1000)]
+    return []
+
+
+FRESH = integration.EXPERIMENTS[1]
+
+
+def fresh_lines(out_dir: Path) -> list[str]:
+    """The pre-registered like-for-like test on ``integration-fresh``, put on the scoreboard as a re-check."""
+    summary = load_summary(out_dir, FRESH.name)
+    if summary is None:
+        return []
+    tag = recheck_tag([summary], integration.FRESH_SEED, integration.FRESH_RUNS)
+    found = fresh_checks(summary)
+    board(found, CLAIMS_HEADING, tag)
+    return [f"The like-for-like comparison again, as fixed before it ran (docs/notes/prereg-fresh-checks.md): "
+            f"`{FRESH.name}`{tag}, {summary['runs_per_variant']} runs each:", "", *claims(summary, found), ""]
 
 
 def claims(summary: dict, found: list[Check] | None = None) -> list[str]:
     found = checks(summary) if found is None else found
-    lines = ["| claim (thesis) | baseline it implies | ours | tests (connrl.report.verdicts) | verdict |",
-             "|---|---|---|---|---|"]
+    lines = ["| claim (thesis) | setting | baseline it implies | ours | tests (connrl.report.verdicts) | verdict |",
+             "|---|---|---|---|---|---|"]
     for c in found:
-        lines.append(f"| {c.claim} ({c.section}) | {c.baseline} | {c.ours} | {c.tests} | {c.verdict} |")
+        setting = c.setting or "the thesis's stated values"
+        lines.append(f"| {c.claim} ({c.section}) | {setting} | {c.baseline} | "
+                     f"{c.ours} | {c.tests} | {c.verdict} |")
     return lines
 
 
@@ -187,7 +224,8 @@ def steps_rows(chg: tuple | None, beh: tuple | None) -> list[StepsRow]:
                 run_rows(spec, summary, out, v.label), quantity(summary, v.label, "teacher_performance"))
     if chg is not None:
         spec, summary, out = chg
-        for label, task, thesis in ((RECURRENT, "CHG (no X-Y, recurrent-Q)", THESIS_STEPS["CHG"][1]),
+        for label, task, thesis in ((STATED, STATED_CHG, THESIS_STEPS["CHG"][1]),
+                                    (RECURRENT, OURS_CHG, THESIS_STEPS["CHG"][1]),
                                     (CH6, "CHG with X-Y (Ch. 6 Exp. 3; 8.5 fn. 1)", THESIS_CHG_WITH_XY)):
             row(task, 0, 0.0, thesis, run_rows(spec, summary, out, label), quantity(summary, label,
                                                                                   "teacher_performance"))
@@ -217,13 +255,15 @@ def steps_table(rows: list[StepsRow]) -> list[str]:
                else f"not reached in {_f(r.last_trial, 0)} trials")
         lines.append(f"| {r.task} | {r.thesis_teach:,} | {_f(r.teach, 0)} | {r.thesis_steps:,} | {_f(r.level)} | {got} "
                      f"| {_f(r.final_share)} | {step_verdict(r)[0]} |")
-    main = [r for r in rows if "with X-Y" not in r.task]  # the thesis's total: the four behaviours and CHG without X-Y
+    # the thesis's total: the four behaviours and CHG without X-Y, at its stated values
+    main = [r for r in rows if "with X-Y" not in r.task and r.task != OURS_CHG]
     if main:
         teach = sum(r.teach or 0 for r in main)
         reached = all(r.steps is not None for r in main)
         total = f"{sum(r.steps for r in main):,.0f}" if reached else "— (a row not reached)"
-        lines.append(f"| **total** ({len(main)} rows, without X-Y) | {sum(r.thesis_teach for r in main):,} | "
-                     f"{teach:,.0f} | {sum(r.thesis_steps for r in main):,} | | {total} | | |")
+        lines.append(f"| **total** ({len(main)} rows, without X-Y, stated values) | "
+                     f"{sum(r.thesis_teach for r in main):,} | {teach:,.0f} | "
+                     f"{sum(r.thesis_steps for r in main):,} | | {total} | | |")
     return lines
 
 
@@ -233,7 +273,9 @@ def board_steps(rows: list[StepsRow]) -> None:
         ours = f"{_f(r.steps, 0)} steps" if r.steps is not None else f"not reached in {_f(r.last_trial, 0)} trials"
         claim(f"8.5 table: {r.task}", "8.5", f"{r.thesis_steps:,} experimental steps to a good policy", ours,
               f"good = {GOOD_SHARE:.0%} of the scripted teacher's reinforcement per step; {text}", verdict,
-              CH8_STEPS_CAUSE if verdict != REPRODUCED and "no X-Y" in r.task else "", TABLE_HEADING)
+              CH8_STEPS_CAUSE if verdict != REPRODUCED and r.task == OURS_CHG else "", TABLE_HEADING,
+              setting=OURS if r.task == OURS_CHG else "",
+              thesis_item="8.5 table: CHG" if r.task in (STATED_CHG, OURS_CHG) else "")
 
 
 def solution_paths(records: list[dict], label: str) -> list[dict]:
@@ -295,9 +337,12 @@ def results_section(out_dir, doc=Path("docs/RESULTS.md")) -> str:
     lines = ["## Chapter 8: integration -- recharging without X-Y (Figs. 8.1, 8.2, the 8.5 table)", ""]
     if summary is not None:
         found = checks(summary)
-        for c in found:
-            claim(c.item, c.section, c.claim, c.ours, f"against {c.baseline}", c.verdict, c.cause, CLAIMS_HEADING)
-        lines += [f"### {CLAIMS_HEADING}", "", *claims(summary, found), "",
+        board(found, CLAIMS_HEADING)
+        lines += [f"### {CLAIMS_HEADING}", "", "Each claim at 8.3's stated values (the recurrent robot at lr 0.08 and "
+                  "100 lessons per trial), at ours (lr 0.03 and 1000, chosen on development seeds 100-105: "
+                  "docs/RECONSTRUCTION.md, \"Integration\"), and like for like, both robots given the same replays "
+                  "(only the stated-value rows decide the thesis item's verdict):", "", *claims(summary, found), "",
+                  *fresh_lines(out_dir),
                   f"### {spec.name}: {spec.title} (thesis {spec.section})", "", summary_table(_core(summary)), "",
                   "The final tests' quantities (per room, both layouts) are in the tables below and in "
                   f"`runs/{spec.name}/summary.json` (`connrl show {spec.name}`).", "",

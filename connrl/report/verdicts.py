@@ -228,7 +228,10 @@ class Claim:
     verdict: str  # one of VERDICTS
     cause: str = ""  # the measured cause of a gap, where known
     anchor: str = ""  # the results page heading it links to (its text; the link is made from it)
-    recheck: bool = False  # the same item checked again (e.g. on fresh seeds): tallied apart, not counted twice
+    recheck: bool = False  # the same check again (e.g. on fresh seeds): tallied apart, not counted twice
+    setting: str = ""  # "" = the thesis's stated values; else the departure from them this check runs at
+    calibrated: str = ""  # what was chosen by measuring this very claim (on development seeds), if anything
+    thesis_item: str = ""  # the thesis result item (connrl.report.items) where the item text alone is ambiguous
 
     def __post_init__(self):
         if self.verdict not in VERDICTS:
@@ -253,25 +256,56 @@ def _slug(heading: str) -> str:
     return text.replace(" ", "-")
 
 
+def _tally(group: list, verdicts=VERDICTS) -> str:
+    counts = {v: sum(c.verdict == v for c in group) for v in verdicts}
+    return ", ".join(f"{n} {v}" for v, n in counts.items() if n) + f" (of {len(group)})"
+
+
 def scoreboard(claims: list[Claim]) -> list[str]:
-    """The page's opening table: every claim, its verdict, linked to its section; then the tally."""
+    """The page's opening tables: the thesis's result items, each with one verdict derived from its checks
+    (``connrl.report.items.RULE``), then every check, its setting, its verdict, linked to its section; tallies."""
+    from connrl.report import items  # the item registry reads claims only; imported here to keep this module's core
+
     if not claims:
         return []
+    rows = items.item_rows(claims)
+    first = {}
+    for c in claims:
+        first.setdefault(items.item_of(c.item, c.section, c.thesis_item, strict=False), c)
     lines = ["## Scoreboard", "",
-             "Every thesis result item the page checks, with our number, the rule applied and the verdict "
-             f"(rules: `connrl/report/verdicts.py`; \"same\" is an equivalence test, TOST at {ALPHA:g} within the "
-             "stated margin, never the absence of a significant difference). Result items the page shows without a "
-             f"verdict yet: {', '.join(UNSCORED)}. The quantities we tuned follow the table.", "",
-             "| item | section | thesis | ours | criterion | verdict |", "|---|---|---|---|---|---|"]
+             f"**The thesis's result items**: one row per figure, table or reported sentence of Chs. 4-8 "
+             f"({len(rows)}; `connrl/report/items.py`). {items.RULE}", "",
+             "| thesis item | section | the thesis reports | checks: stated values / our departures / re-checks | "
+             "verdict | notes |", "|---|---|---|---|---|---|"]
+    for r in rows:
+        c = first.get(r.key)
+        key = f"[{r.key}](#{_slug(c.anchor)})" if c is not None and c.anchor else r.key
+        verdict = r.verdict if r.verdict == REPRODUCED else f"**{r.verdict}**"
+        lines.append(f"| {key} | {r.section} | {r.statement} | {r.checks} / {r.departures} / {r.rechecks} | "
+                     f"{verdict} | {r.note} |")
+    lines += ["", f"Thesis items: {_tally(rows, items.ITEM_VERDICTS)}.", "",
+              "### Checks", "",
+              "Every check the page makes, with our number, the rule applied and the verdict (rules: "
+              f"`connrl/report/verdicts.py`; \"same\" is an equivalence test, TOST at {ALPHA:g} within the stated "
+              "margin, never the absence of a significant difference). The setting column says whether a check runs "
+              "the thesis's stated values or departs from them (only the former decide an item); a check whose "
+              "setting was chosen by measuring that very claim says so. Result items the page shows without a "
+              f"verdict: {', '.join(UNSCORED)}. The quantities we tuned follow the table.", "",
+              "| check | section | thesis | ours | setting | criterion | verdict |", "|---|---|---|---|---|---|---|"]
     for c in claims:
         item = f"[{c.item}](#{_slug(c.anchor)})" if c.anchor else c.item
         verdict = c.verdict if c.verdict == REPRODUCED else f"**{c.verdict}**"
-        lines.append(f"| {item} | {c.section} | {c.thesis} | {c.ours} | {c.criterion} | {verdict}"
+        setting = c.setting or "stated values"
+        criterion = (f"**calibrated on this claim**: {c.calibrated}; " if c.calibrated else "") + c.criterion
+        lines.append(f"| {item} | {c.section} | {c.thesis} | {c.ours} | {setting} | {criterion} | {verdict}"
                      f"{': ' + c.cause if c.cause else ''} |")
     lines += [""]
-    for kind, group in (("Tally", [c for c in claims if not c.recheck]),
-                        ("Re-checks of items above (counted apart)", [c for c in claims if c.recheck])):
-        tally = {v: sum(c.verdict == v for c in group) for v in VERDICTS}
+    for kind, group in (("Checks at the thesis's stated values", [c for c in claims if not c.recheck and not
+                                                                   c.setting]),
+                        ("Checks at our departures from them (shown, not counted for an item)",
+                         [c for c in claims if not c.recheck and c.setting]),
+                        ("Re-checks on seeds never used in development (an item counts one in place of the "
+                         "stated-value check it repeats)", [c for c in claims if c.recheck])):
         if group:
-            lines.append(f"{kind}: " + ", ".join(f"{n} {v}" for v, n in tally.items() if n) + f" (of {len(group)}).")
+            lines.append(f"{kind}: {_tally(group)}.")
     return lines + [""]

@@ -92,7 +92,9 @@ def test_chapter_8_section_from_tiny_runs(tmp_path):
     for heading in ("### The claims of 8.2-8.4 beside ours", "### integration:", "### The hidden state made visible",
                     "### The 8.5 table: steps to learn each task", "### steps-to-learn:"):
         assert heading in md
-    for row in ("| DK | 100 |", "| DP | 100 |", "| WFL | 150 |", "| WFR | 150 |", "| CHG (no X-Y, recurrent-Q) | 0 |"):
+    for row in ("| DK | 100 |", "| DP | 100 |", "| WFL | 150 |", "| WFR | 150 |",
+                "| CHG (no X-Y, recurrent-Q, ours) | 0 |",
+                "| CHG (no X-Y, recurrent-Q at 8.3's lr 0.08, 100 lessons) | 0 |"):
         assert row in md
     for fig in ("integration-changed-paths", "integration-hidden-state", "robot-story"):
         assert (doc.parent / "figures" / f"{fig}.png").exists()

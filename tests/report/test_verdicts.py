@@ -78,12 +78,23 @@ def test_the_runs_said_to_decide_do_decide_and_no_fewer_would(shift):
         assert compare(like(a, c.runs_needed - 1), like(b, c.runs_needed - 1)).verdict == UNDETERMINED
 
 
-def test_scoreboard_tallies_rechecks_apart_so_no_item_counts_twice():
-    rows = [verdicts.Claim("Table 4.5", "4.5", "t", "o", "c", verdicts.REPRODUCED),
-            verdicts.Claim("Fig. 4.3", "4.3", "t", "o", "c", verdicts.NOT_REPRODUCED),
-            verdicts.Claim("Table 4.5 (fresh seeds)", "4.5", "t", "o", "c", verdicts.NOT_REPRODUCED, recheck=True)]
+def test_scoreboard_tallies_checks_by_setting_and_rechecks_apart():
+    t45, t43 = "Table 4.5: plays to reach 8", "4.4.3: the learned model never nearly perfect"
+    rows = [verdicts.Claim(t45, "4.5", "t", "o", "c", verdicts.REPRODUCED),
+            verdicts.Claim(t45, "4.5", "t", "o", "c", verdicts.NOT_REPRODUCED, setting="ours: a departure"),
+            verdicts.Claim(t43, "4.4.3", "t", "o", "c", verdicts.NOT_REPRODUCED),
+            verdicts.Claim(t45 + " (fresh seeds 2000-2006)", "4.5", "t", "o", "c", verdicts.NOT_REPRODUCED,
+                           recheck=True)]
     lines = verdicts.scoreboard(rows)
-    assert f"Tally: 1 {verdicts.REPRODUCED}, 1 {verdicts.NOT_REPRODUCED} (of 2)." in lines
-    assert f"Re-checks of items above (counted apart): 1 {verdicts.NOT_REPRODUCED} (of 1)." in lines
-    assert sum("Table 4.5 (fresh seeds)" in line for line in lines) == 1
+    stated = f"Checks at the thesis's stated values: 1 {verdicts.REPRODUCED}, 1 {verdicts.NOT_REPRODUCED} (of 2)."
+    assert stated in lines
+    assert any(line.startswith("Checks at our departures") and line.endswith(f"1 {verdicts.NOT_REPRODUCED} (of 1).")
+               for line in lines)
+    assert any(line.startswith("Re-checks on seeds") and line.endswith(f"1 {verdicts.NOT_REPRODUCED} (of 1).")
+               for line in lines)
+    assert sum("Table 4.5: plays to reach 8 (fresh seeds 2000-2006)" in line for line in lines) == 1
+    # Table 4.5's item is decided by its re-check, 4.4.3's by its one check: both not reproduced
+    tally = next(line for line in lines if line.startswith("Thesis items:"))
+    assert tally.startswith(f"Thesis items: 2 {verdicts.NOT_REPRODUCED}, ")
+
 
