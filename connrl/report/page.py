@@ -215,6 +215,7 @@ def write_results(out: Path, doc: Path) -> Path:
     if missing:
         parts += ["## Not yet run", "", "No stored results for: " + ", ".join(f"`{m}`" for m in missing) + ".", ""]
     board = verdicts.scoreboard(list(verdicts.BOARD))
-    parts[4:4] = board + (["## Quantities we tuned", "", note("tuned-quantities"), ""] if board else [])
+    parts[4:4] = board + (["## Quantities we tuned, and where we depart from the thesis", "", note("tuned-quantities"),
+                           "", note("prereg-fresh-checks"), ""] if board else [])
     atomic_write_text(doc, "\n".join(parts))
     return doc

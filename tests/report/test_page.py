@@ -49,4 +49,5 @@ def test_write_results_has_every_chapter_and_names_its_source(tmp_path):
     assert "## Not yet run" in text and "`survival-study1`" in text
     # the scoreboard opens the page (pole-full and the cup tasks put claims on it), the tuned quantities follow it
     board, tuned, first = (text.index(h) for h in ("## Scoreboard", "## Quantities we tuned", "## Pole balancing"))
+    assert "Re-checks fixed before they ran" in text[tuned:first]
     assert board < tuned < first and "Fig. 7.5: 2-cup collection" in text[board:tuned]
