@@ -51,3 +51,13 @@ def test_write_results_has_every_chapter_and_names_its_source(tmp_path):
     board, tuned, first = (text.index(h) for h in ("## Scoreboard", "## Quantities we tuned", "## Pole balancing"))
     assert "Re-checks fixed before they ran" in text[tuned:first]
     assert board < tuned < first and "Fig. 7.5: 2-cup collection" in text[board:tuned]
+
+
+def test_the_page_is_the_same_from_the_same_records_even_without_their_plots(tmp_path):
+    """The records alone make the page: written twice, or after the run's own plot is deleted, it is the same."""
+    out = tmp_path / "runs"
+    run_tiny("pole-full", out)
+    first = write_results(out, tmp_path / "a" / "RESULTS.md").read_text()
+    (out / "pole-full" / "curve.png").unlink()
+    second = write_results(out, tmp_path / "a" / "RESULTS.md").read_text()
+    assert first == second and (out / "pole-full" / "curve.png").exists()
