@@ -63,6 +63,11 @@ WINDOW_CAUSE = ("with Table B.1's 10 → 30 window-Q's first policy is nearly de
                 "connrl/experiments/hidden_state.py); 5 → 30 is ours, chosen on development seeds")
 
 
+# docs/RECONSTRUCTION.md, "Hidden-state agents": both were chosen by Task 1 runs stably optimal, Fig. 7.5's own claim
+CUP_CALIBRATED = ("70 replays per trial and window-Q's linear output unit, chosen on development seeds 100-159 by "
+                  "Task 1 runs optimal at the end")
+
+
 def _kept(s: dict) -> tuple[dict, dict]:
     """Per variant: runs optimal at the end (≥ STABLE of the last 100 tests), and runs."""
     kept, n = {}, {}
@@ -95,7 +100,7 @@ def _cup_claims(s: dict, task: int, fig: str, section: str, title: str, tag: str
               "runs optimal at the end: " + ", ".join(shown),
               f"optimal in ≥ {STABLE:.0%} of the last 100 tests, in most / all / some / at most half of the runs as "
               "the thesis says", verdict, "; ".join(c for c in causes if c) if verdict != REPRODUCED else "",
-              anchor=anchor, recheck=bool(tag), setting=setting)
+              anchor=anchor, recheck=bool(tag), setting=setting, calibrated=CUP_CALIBRATED if task == 1 else "")
     if task == 1:
         _lambda_claims(s, fig, section, anchor, tag)
 
