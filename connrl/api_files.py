@@ -21,12 +21,14 @@ from connrl.api_spaces import COMPOSITE, binary_units, check_single, check_space
 from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
 from connrl.core.lessons import Lesson
 from connrl.storage import (
+    MAX_NPZ_BYTES,
     FileError,
     atomic_write_files,
     check_array,
     check_number,
     npz_bytes,
     read_json,
+    read_limited,
     read_npz,
 )
 
@@ -73,10 +75,7 @@ def read_agent(path: Path, kinds: tuple[str, ...]) -> tuple[dict, dict[str, np.n
     npz = path / "agent.npz"
     digest = m.get("npz_sha256")  # files written before it was recorded have none
     if digest is not None:
-        try:
-            same = hashlib.sha256(npz.read_bytes()).hexdigest() == digest
-        except OSError as exc:
-            raise FileError(npz, f"cannot be read ({exc.strerror or exc})") from None
+        same = hashlib.sha256(read_limited(npz, MAX_NPZ_BYTES, "agent array file")).hexdigest() == digest
         if not same:
             raise FileError(npz, "is not the file agent.json was saved with (its SHA-256 differs): it was changed "
                             "or damaged after the save")

@@ -9,7 +9,8 @@ import signal
 import sys
 from pathlib import Path
 
-MAX_STEPS = 10**10  # environment steps of one `connrl train`: months of compute at connrl's speed
+from connrl.settings import MAX_STEPS
+
 DEFAULT_TRAIN_STEPS = 50_000
 
 
@@ -154,11 +155,13 @@ def _train_settings(args) -> dict:
 def _read_run_settings(file: Path) -> dict:
     """A `connrl train` run's settings.json (read by connrl.storage.read_json: strict, size-capped); ValueError in one
     line naming the file otherwise."""
-    from connrl.storage import read_json
+    from connrl.storage import check_number, read_json
 
     s = read_json(file, "connrl train settings file")
     if not isinstance(s, dict):
         raise ValueError(f"{file}: is not a connrl train settings file")
+    if "steps" in s:  # the resumed run's budget: under the same cap as --steps
+        check_number(file, "steps", s["steps"], 1, MAX_STEPS, integer=True)
     return s
 
 

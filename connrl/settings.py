@@ -18,14 +18,40 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from connrl.storage import FileError, read_limited_text
+
 SETTINGS_DIR = Path(__file__).parent / "data" / "hyperparams"
 RESERVED = ("n_timesteps", "env_kwargs")
 MAX_SETTINGS_BYTES = 2**20
+MAX_STEPS = 10**10  # environment steps of one `connrl train` (and a settings file's n_timesteps): months of compute
+MAX_NESTING = 32  # a settings file nests a few levels
 
 
 def shipped_file(kind: str) -> Path:
     """The shipped settings file of an agent kind (it may not exist)."""
     return SETTINGS_DIR / f"{kind.lower()}.yml"
+
+
+def load_plain_yaml(text: str, path):
+    """YAML as plain data: aliases (``*name``, the "billion laughs" expansion) are refused and nesting is bounded,
+    both checked on the parser's event stream before anything is built (the parser is not recursive; the builder
+    is). ValueError in one line naming the file; yaml.YAMLError for what is not YAML."""
+    import yaml
+
+    depth = 0
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(event, yaml.AliasEvent):
+            mark = event.start_mark
+            raise ValueError(f"{path}: uses a YAML alias (*{event.anchor}, line {mark.line + 1}); a settings file "
+                             "holds plain values: write the value out where it is used")
+        if isinstance(event, yaml.MappingStartEvent | yaml.SequenceStartEvent):
+            depth += 1
+            if depth > MAX_NESTING:
+                raise ValueError(f"{path}: nests more than {MAX_NESTING} levels deep (line "
+                                 f"{event.start_mark.line + 1}); a settings file nests a few")
+        elif isinstance(event, yaml.MappingEndEvent | yaml.SequenceEndEvent):
+            depth -= 1
+    return yaml.safe_load(text)
 
 
 def read_settings(path) -> dict[str, dict]:
@@ -34,11 +60,9 @@ def read_settings(path) -> dict[str, dict]:
 
     path = Path(path)
     try:
-        if path.stat().st_size > MAX_SETTINGS_BYTES:
-            raise ValueError(f"{path}: is larger than {MAX_SETTINGS_BYTES:,} bytes; a settings file is small")
-        data = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+        data = load_plain_yaml(read_limited_text(path, MAX_SETTINGS_BYTES, "settings file"), path)
+    except FileError as exc:
+        raise ValueError(str(exc)) from None
     except yaml.YAMLError as exc:
         where = getattr(exc, "problem_mark", None)
         at = f" (line {where.line + 1})" if where is not None else ""
@@ -62,8 +86,9 @@ def check_entry(path, env_id: str, entry) -> dict:
     if not isinstance(entry, dict) or not all(isinstance(k, str) for k in entry):
         raise ValueError(f"{where} must be a mapping of settings, got {type(entry).__name__}")
     n = entry.get("n_timesteps")
-    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
-        raise ValueError(f"{where}: n_timesteps must be a whole number >= 1, got {n!r}")
+    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_STEPS):
+        raise ValueError(f"{where}: n_timesteps must be a whole number from 1 to {MAX_STEPS:.0e} (the --steps "
+                         f"cap), got {repr(n) if len(repr(n)) <= 40 else repr(n)[:37] + '...'}")
     kwargs = entry.get("env_kwargs") or {}
     if not isinstance(kwargs, dict) or not all(isinstance(k, str) for k in kwargs):
         raise ValueError(f"{where}: env_kwargs must be a mapping of argument names to values, got {kwargs!r}")

@@ -19,6 +19,7 @@ import json
 import math
 import os
 import re
+import stat
 import tempfile
 import zipfile
 from pathlib import Path
@@ -165,20 +166,58 @@ def finite_float(text: str) -> float:
     return v
 
 
-def read_json(path, what: str = "file", max_bytes: int = MAX_JSON_BYTES, constants: bool = False):
-    """The JSON document in ``path``; FileError (one line) when it is missing, a folder, too large, not UTF-8,
-    not JSON, nested more than MAX_NESTING deep, or (unless ``constants``) holds NaN / Infinity literals."""
+def read_limited(path, max_bytes: int, what: str = "file") -> bytes:
+    """The bytes of ``path``, trusting nothing the file says about itself: it must be a regular file (checked on the
+    opened descriptor, which is opened without blocking, so a FIFO cannot hang us; a device such as /dev/zero, which
+    reports size 0, is refused), and at most ``max_bytes + 1`` bytes are ever read. FileError (one line) otherwise."""
     path = Path(path)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0)
     try:
-        if path.is_dir():
-            raise FileError(path, f"is a folder; a {what} was expected")
-        if path.stat().st_size > max_bytes:
-            raise FileError(path, f"is {path.stat().st_size} bytes; a {what} is at most {max_bytes}")
-        raw = path.read_bytes()
+        fd = os.open(path, flags)
     except FileNotFoundError:
         raise FileError(path, f"no such {what}") from None
+    except IsADirectoryError:
+        raise FileError(path, f"is a folder; a {what} was expected") from None
     except OSError as exc:
         raise FileError(path, f"cannot read the {what} ({exc.strerror or exc})") from None
+    try:
+        st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise FileError(path, f"is a folder; a {what} was expected")
+        if not stat.S_ISREG(st.st_mode):
+            raise FileError(path, f"is not a regular file (a device, pipe or socket); a {what} is a regular file")
+        if st.st_size > max_bytes:
+            raise FileError(path, f"is {st.st_size} bytes; a {what} is at most {max_bytes}")
+        chunks, n = [], 0
+        while n <= max_bytes:  # the size stat gave may be wrong (a file still growing, a special file system)
+            chunk = os.read(fd, min(1 << 20, max_bytes + 1 - n))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            n += len(chunk)
+        if n > max_bytes:
+            raise FileError(path, f"is more than {max_bytes} bytes; a {what} is at most {max_bytes}")
+        return b"".join(chunks)
+    except OSError as exc:
+        raise FileError(path, f"cannot read the {what} ({exc.strerror or exc})") from None
+    finally:
+        os.close(fd)
+
+
+def read_limited_text(path, max_bytes: int, what: str = "file") -> str:
+    """``read_limited`` decoded as UTF-8; FileError naming the file when it is not."""
+    try:
+        return read_limited(path, max_bytes, what).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise FileError(path, f"is not UTF-8 text (byte {exc.start}); a {what} is UTF-8 text") from None
+
+
+def read_json(path, what: str = "file", max_bytes: int = MAX_JSON_BYTES, constants: bool = False):
+    """The JSON document in ``path`` (read by ``read_limited``); FileError (one line) when it is missing, a folder,
+    not a regular file, too large, not UTF-8, not JSON, nested more than MAX_NESTING deep, or (unless
+    ``constants``) holds NaN / Infinity literals."""
+    path = Path(path)
+    raw = read_limited(path, max_bytes, what)
     if not raw.strip():
         raise FileError(path, f"is empty; a {what} holds JSON")
     depth = max_depth(raw)
@@ -190,9 +229,15 @@ def read_json(path, what: str = "file", max_bytes: int = MAX_JSON_BYTES, constan
     except UnicodeDecodeError:
         raise FileError(path, f"is not text; a {what} holds JSON") from None
     except json.JSONDecodeError as exc:
-        raise FileError(path, f"is not JSON ({exc.msg} at line {exc.lineno}); a {what} holds JSON") from None
+        raise FileError(path, f"is not JSON ({json_problem(exc)}); a {what} holds JSON") from None
     except (ValueError, RecursionError) as exc:
         raise FileError(path, f"{exc}") from None
+
+
+def json_problem(exc: json.JSONDecodeError) -> str:
+    """A JSON error in our words: "Unterminated string starting at: line 1 column 5 (char 4)" would read "starting at
+    at line 1" with a position appended, so the position is given once, as line and column."""
+    return f"{exc.msg.removesuffix(' starting at')} at line {exc.lineno}, column {exc.colno}"
 
 
 def max_depth(raw: bytes) -> int:
@@ -210,20 +255,26 @@ def max_depth(raw: bytes) -> int:
 def read_npz(path, what: str = "array file", max_bytes: int = MAX_NPZ_BYTES) -> dict[str, np.ndarray]:
     """Every array of an NPZ archive (no pickle: loading never runs code); FileError (one line) otherwise."""
     path = Path(path)
+    raw = read_limited(path, max_bytes, what)
+    if not raw.startswith(b"PK"):  # not a zip archive: never let np.load guess (it suggests pickle for random bytes)
+        kind = "a single .npy array" if raw.startswith(b"\x93NUMPY") else "not an .npz archive"
+        raise FileError(path, f"is {kind}; the {what} must be an .npz archive of numeric arrays")
     try:
-        if path.stat().st_size > max_bytes:
-            raise FileError(path, f"is {path.stat().st_size} bytes; a {what} is at most {max_bytes}")
-        z = np.load(path, allow_pickle=False)
-        if not isinstance(z, np.lib.npyio.NpzFile):
-            raise FileError(path, f"is a single .npy array; a {what} is an .npz archive")
-        with z:
-            return {k: z[k] for k in z.files}
-    except FileNotFoundError:
-        raise FileError(path, f"no such {what}") from None
+        with np.load(io.BytesIO(raw), allow_pickle=False) as z:
+            out = {}
+            for k in z.files:
+                info = z.zip.getinfo(f"{k}.npy")
+                if info.file_size > max_bytes:  # a small archive can inflate without bound
+                    raise FileError(path, f"holds an array of {info.file_size} bytes; a {what} holds at most "
+                                          f"{max_bytes}", k)
+                out[k] = z[k]
+            return out
     except FileError:
         raise
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as exc:
-        raise FileError(path, f"is not a readable {what} ({type(exc).__name__}: {exc})") from None
+        problem = "it holds Python objects (pickled data)" if "pickle" in str(exc) else type(exc).__name__
+        raise FileError(path, f"is not a readable {what} ({problem}); it must be an .npz archive of numeric "
+                              "arrays") from None
 
 
 def check_number(path, field: str, v, low: float = -math.inf, high: float = math.inf, *, integer: bool = False,

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.storage import atomic_write_text
+from connrl.storage import FileError, atomic_write_text, read_json, read_limited_text
 
 EVAL_SEED = 2_000_000
 DEFAULT_SPACE = ("lr=0.01:0.2:log", "hidden=8,16,32", "lam=0.3,0.7,0.9", "lessons_per_trial=10,20,40")
@@ -53,6 +53,14 @@ class Dimension:
             v = self.low + u * (self.high - self.low)
         v = int(round(v)) if self.integer else float(f"{v:.4g}")
         return min(max(v, self.low), self.high)  # rounding must not leave the range asked for
+
+    def holds(self, v) -> bool:
+        """Whether ``v`` is a value this dimension can give (a resumed trial's parameter is checked so)."""
+        if self.choices is not None:
+            return any(v == c and type(v) is type(c) for c in self.choices)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            return False
+        return self.low <= v <= self.high and (not self.integer or isinstance(v, int))
 
     def describe(self) -> str:
         if self.choices is not None:
@@ -128,17 +136,16 @@ def run_search(env_fn, study: dict, space: list[Dimension], out: Path, sampler: 
     meta, trials_file = out / "study.json", out / "trials.csv"
     if meta.exists():
         try:
-            old = json.loads(meta.read_text())
-        except (OSError, ValueError) as exc:
-            raise ValueError(f"{meta}: cannot be read as a study ({exc}); remove the folder {out} to start over") \
-                from None
+            old = read_json(meta, "study file", max_bytes=MAX_STUDY_BYTES)
+        except FileError as exc:
+            raise ValueError(f"{exc}; remove the folder {out} to start over") from None
         if not isinstance(old, dict) or {**old, "trials": None} != {**study, "trials": None}:  # more trials may
             raise ValueError(f"{out} holds another search ({meta} differs: env, agent, steps, seeds, space or "  # be
                              "sampler); choose another --out or remove that folder")  # asked of a search
     elif trials_file.exists():
         raise ValueError(f"{trials_file} has no study.json beside it, so what it searched is unknown; remove the "
                          f"folder {out} to start over")
-    done = read_trials(trials_file) if trials_file.exists() else []
+    done = read_trials(trials_file, space) if trials_file.exists() else []
     optuna_study = _optuna_study(space, done, study["seed"]) if sampler == "tpe" else None  # Optuna missing:
     atomic_write_text(meta, json.dumps(study, indent=1) + "\n")  # refused before the study is written
     rng = np.random.default_rng(study["seed"])
@@ -196,6 +203,7 @@ def _suggest(trial, d: Dimension):
 
 
 TRIAL_COLUMNS = ("trial", "params", "scores", "mean", "seconds")
+MAX_STUDY_BYTES = 64 * 2**20  # study.json and trials.csv: a few KB a trial
 
 
 def _write_trials(path: Path, trials: list[dict]) -> None:
@@ -209,21 +217,51 @@ def _write_trials(path: Path, trials: list[dict]) -> None:
     atomic_write_text(path, buf.getvalue())
 
 
-def read_trials(path: Path) -> list[dict]:
-    """The finished trials of a trials.csv; ValueError in one line when it is damaged."""
+def read_trials(path: Path, space: list[Dimension] | None = None) -> list[dict]:
+    """The finished trials of a trials.csv (read through ``connrl.storage.read_limited``), every cell checked: trials
+    numbered 0, 1, ...; parameters a JSON object of the searched options (within ``space`` when given); scores finite
+    numbers or null (a diverged agent); the mean the scores' mean (so a forged mean cannot win); seconds >= 0.
+    ValueError in one line naming the file and the row otherwise."""
+    def number(cell: str, what: str) -> float:
+        v = float(cell)  # ValueError for a string
+        if not math.isfinite(v):
+            raise ValueError(f"{what} is {cell!r}; it must be a finite number")
+        return v
+
     try:
-        rows = list(csv.reader(io.StringIO(path.read_text())))
+        rows = list(csv.reader(io.StringIO(read_limited_text(path, MAX_STUDY_BYTES, "trials file"))))
         if not rows or tuple(rows[0]) != TRIAL_COLUMNS:
             raise ValueError("its header is not " + ",".join(TRIAL_COLUMNS))
+        names = {d.name: d for d in space} if space is not None else None
         trials = []
         for k, r in enumerate(rows[1:]):
-            scores = [-math.inf if s is None else float(s) for s in json.loads(r[2])]
-            trials.append({"trial": int(r[0]), "params": json.loads(r[1]), "scores": scores, "mean": float(r[3]),
-                           "seconds": float(r[4])})
-            if trials[-1]["trial"] != k or not isinstance(trials[-1]["params"], dict):
-                raise ValueError(f"row {k + 2} is not trial {k}")
-            if math.isnan(trials[-1]["mean"]):
-                raise ValueError(f"row {k + 2} has no mean score")
+            where = f"row {k + 2}"
+            if len(r) != len(TRIAL_COLUMNS):
+                raise ValueError(f"{where} has {len(r)} cells, not {len(TRIAL_COLUMNS)}")
+            if r[0] != str(k):
+                raise ValueError(f"{where} is not trial {k}")
+            params, raw_scores = json.loads(r[1]), json.loads(r[2])
+            if not isinstance(params, dict) or (names is not None and set(params) != set(names)):
+                raise ValueError(f"{where}: its parameters are not the searched options")
+            for name, v in params.items():
+                if names is not None and not names[name].holds(v):
+                    raise ValueError(f"{where}: {name} = {v!r} is outside the searched space")
+            if not isinstance(raw_scores, list) or not raw_scores or not all(
+                    x is None or (isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x))
+                    for x in raw_scores):
+                raise ValueError(f"{where}: its scores must be a list of finite numbers or null")
+            scores = [-math.inf if x is None else float(x) for x in raw_scores]
+            mean = float(np.mean(scores))
+            stated = float(r[3])
+            if not (stated == mean or (math.isfinite(mean) and abs(stated - mean) <= 1e-5 * max(1.0, abs(mean)))):
+                raise ValueError(f"{where}: its mean {r[3]!r} is not the mean of its scores")
+            seconds = number(r[4], f"{where}: seconds")
+            if seconds < 0:
+                raise ValueError(f"{where}: seconds is negative")
+            trials.append({"trial": k, "params": params, "scores": scores, "mean": mean, "seconds": seconds})
         return trials
-    except (OSError, ValueError, IndexError, TypeError, csv.Error) as exc:  # UnicodeDecodeError is a ValueError
-        raise ValueError(f"{path}: is not a connrl trials file ({exc}); remove it to start the search over") from None
+    except FileError as exc:
+        raise ValueError(f"{exc}; remove it to start the search over") from None
+    except (ValueError, RecursionError, csv.Error) as exc:  # a JSON error is a ValueError
+        raise ValueError(f"{path}: is not a connrl trials file ({str(exc).splitlines()[0][:200]}); remove it to "
+                         "start the search over") from None

@@ -16,7 +16,15 @@ from pathlib import Path
 import numpy as np
 
 from connrl.core.lessons import Lesson
-from connrl.storage import MAX_JSON_BYTES, MAX_NESTING, atomic_write_text, max_depth
+from connrl.storage import (
+    MAX_JSON_BYTES,
+    MAX_NESTING,
+    FileError,
+    atomic_write_text,
+    json_problem,
+    max_depth,
+    read_limited,
+)
 
 LESSON_FORMAT = "connrl-lesson"
 LESSON_VERSION = 1
@@ -184,20 +192,20 @@ def _check_lesson(raw, where: str, input_dim: int | None, n_actions: int | None)
 def _read_doc(path: Path) -> dict:
     """The file's JSON with its format, version and top-level fields checked."""
     try:
-        if path.stat().st_size > MAX_JSON_BYTES:
-            raise LessonFileError(f"{path}: {path.stat().st_size} bytes; a lesson file is at most {MAX_JSON_BYTES}")
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise LessonFileError(f"{path}: no such lesson file") from None
-    except OSError as exc:
-        raise LessonFileError(f"{path}: cannot read the lesson file ({exc.strerror or exc})") from None
+        raw = read_limited(path, MAX_JSON_BYTES, "lesson file")
+    except FileError as exc:
+        raise LessonFileError(str(exc)) from None
     depth = max_depth(raw)
     if depth > MAX_NESTING:  # the parser recurses: bound the nesting before parsing
         raise LessonFileError(f"{path}: nests {depth} levels deep; a lesson file nests at most {MAX_NESTING}")
     try:
         doc = json.loads(raw.decode("utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise LessonFileError(f"{path}: not a JSON lesson file ({exc})") from None
+    except json.JSONDecodeError as exc:
+        raise LessonFileError(f"{path}: not a JSON lesson file ({json_problem(exc)})") from None
+    except UnicodeDecodeError:
+        raise LessonFileError(f"{path}: not a JSON lesson file (not UTF-8 text)") from None
+    except (ValueError, RecursionError) as exc:  # e.g. an integer of more digits than Python converts
+        raise LessonFileError(f"{path}: not a usable lesson file ({str(exc).splitlines()[0][:200]})") from None
     if not isinstance(doc, dict) or doc.get("format") != LESSON_FORMAT:
         raise LessonFileError(f"{path}: 'format' must be {LESSON_FORMAT!r}")
     if doc.get("version") != LESSON_VERSION or isinstance(doc.get("version"), bool):  # true == 1 in Python
@@ -268,3 +276,8 @@ def _check_options(path: Path, doc: dict, env_kwargs: dict, defaults: dict) -> N
     if differ:
         raise LessonFileError(f"{path}: lessons were recorded with world options {', '.join(differ)}; "
                               f"a lesson file holds lessons of one world, all with the same options")
+
+
+def lesson_file_options(path) -> dict:
+    """The world options (``env_kwargs``) a lesson file records, read by the same checked reader."""
+    return dict(_read_doc(Path(path)).get("env_kwargs") or {})

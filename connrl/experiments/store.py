@@ -19,7 +19,17 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.storage import MAX_NESTING, atomic_write_text, finite_float, max_depth, reject_constant, strict_json
+from connrl.storage import (
+    MAX_JSON_BYTES,
+    MAX_NESTING,
+    FileError,
+    atomic_write_text,
+    finite_float,
+    max_depth,
+    read_limited,
+    reject_constant,
+    strict_json,
+)
 
 # run record key -> allowed JSON types
 RECORD_KEYS = {"experiment": (str,), "variant": (str,), "seed": (int,), "params": (dict,), "metrics": (dict,),
@@ -41,8 +51,12 @@ class DamagedFile(ValueError):
 
 
 def read_json(path) -> object:
-    """The JSON in ``path``; ``DamagedFile`` when it is empty, binary or not JSON."""
-    raw = Path(path).read_bytes()
+    """The JSON in ``path``; ``DamagedFile`` when it is empty, binary, not JSON or not a regular file (a record is
+    read by ``read_limited``: a link to a device or a FIFO neither hangs nor fills memory)."""
+    try:
+        raw = read_limited(path, MAX_JSON_BYTES, "run record")
+    except FileError as exc:
+        raise DamagedFile(path, exc.problem) from None
     if not raw.strip():
         raise DamagedFile(path, "empty")
     if max_depth(raw) > MAX_NESTING:
@@ -105,7 +119,9 @@ def _csv_problem(path: Path) -> str | None:
     if not path.exists():
         return f"its CSV {path.name} is gone"
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = read_limited(path, MAX_JSON_BYTES, "run CSV").decode("utf-8")
+    except FileError as exc:
+        return f"its CSV {path.name} {exc.problem}"
     except UnicodeDecodeError:
         return f"its CSV {path.name} is not text"
     return None if text.strip() else f"its CSV {path.name} is empty"

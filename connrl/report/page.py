@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import importlib
+import io
 import math
 import shutil
 import sys
@@ -21,7 +22,7 @@ from connrl.experiments.registry import all_experiments
 from connrl.experiments.runner import make_jobs, missing_runs, stored_runs
 from connrl.experiments.store import DamagedFile
 from connrl.report import verdicts
-from connrl.storage import atomic_write_text
+from connrl.storage import atomic_write_text, read_limited_text
 
 
 def fmt(v) -> str:
@@ -146,9 +147,9 @@ def run_rows(spec, summary: dict, out_dir: Path, label: str) -> list[list[dict]]
     for j in jobs:
         f = Path(f"{j.path}.csv")
         if j.variant == label and f.exists():
-            with f.open() as fh:
-                out.append([{k: _value(v) for k, v in row.items() if v not in ("", None)}
-                            for row in csv.DictReader(fh)])
+            text = read_limited_text(f, store.MAX_JSON_BYTES, "run CSV")
+            out.append([{k: _value(v) for k, v in row.items() if v not in ("", None)}
+                        for row in csv.DictReader(io.StringIO(text))])
     return [r for r in out if r]
 
 

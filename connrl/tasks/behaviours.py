@@ -23,7 +23,17 @@ import numpy as np
 from connrl.envs.robot import OBS_SIZE, Layout, RobotSim
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, task_observations
 from connrl.nets import OAON, NetConfig
-from connrl.storage import FileError, atomic_save_npz, atomic_write_text, check_array, check_number, read_json, read_npz
+from connrl.storage import (
+    MAX_NPZ_BYTES,
+    FileError,
+    atomic_save_npz,
+    atomic_write_text,
+    check_array,
+    check_number,
+    read_json,
+    read_limited,
+    read_npz,
+)
 
 FORMAT = 1
 APPLICABLE_ABOVE = {"DP": 30.0, "DK": 25.0, "WFL": -math.inf, "WFR": -math.inf}  # 6.4.3
@@ -135,7 +145,7 @@ def library_digest(directory=LIBRARY_DIR) -> str:
     for path in library_paths(directory).values():
         for f in (path.with_suffix(".json"), path.with_suffix(".npz")):
             h.update(f.name.encode())
-            h.update(f.read_bytes() if f.exists() else b"missing")
+            h.update(read_limited(f, MAX_NPZ_BYTES, "behaviour file") if f.exists() else b"missing")
     return h.hexdigest()[:12]
 
 

@@ -173,10 +173,10 @@ def taught_lessons(representation: str) -> list:
 
 def load_survival_lessons(path, representation: str) -> list:
     """Load a survival lesson file; a file for another task or representation raises LessonFileError."""
-    import json
+    from connrl.core.lesson_files import lesson_file_options
 
     lessons = load_lessons(path, env_id=SURVIVAL_ENV_ID, input_dim=145, n_actions=4)
-    recorded = (json.loads(open(path).read()).get("env_kwargs") or {}).get("action_representation", "global")
+    recorded = lesson_file_options(path).get("action_representation", "global")
     if recorded != representation:
         raise LessonFileError(f"{path}: lessons were recorded with action_representation={recorded!r}, "
                               f"the agent uses {representation!r}")

@@ -156,7 +156,7 @@ def test_load_refuses_with_one_line_naming_file_lesson_problem_and_what_is_allow
 def test_load_refuses_a_directory_with_one_line(tmp_path):
     with pytest.raises(LessonFileError) as err:
         load_lessons(tmp_path)
-    assert str(err.value) == f"{tmp_path}: cannot read the lesson file (Is a directory)"
+    assert str(err.value) == f"{tmp_path}: is a folder; a lesson file was expected"
     assert list(tmp_path.iterdir()) == []
 
 
