@@ -268,13 +268,13 @@ def read_progress(path) -> list[dict]:
     """The rows of a progress.csv (numbers; None for empty cells); ValueError in one line naming the file when it
     is not one."""
     path = Path(path)
-    from connrl.storage import FileError, read_limited_text
+    from connrl.storage import FileError, read_limited
 
     try:
-        lines = list(csv.reader(io.StringIO(read_limited_text(path, MAX_PROGRESS_BYTES, "progress.csv"))))
+        lines = list(csv.reader(io.StringIO(read_limited(path, MAX_PROGRESS_BYTES, "progress.csv").decode())))
     except FileError as exc:
         raise ValueError(str(exc)) from None
-    except csv.Error as exc:
+    except (UnicodeDecodeError, csv.Error) as exc:
         raise ValueError(f"{path}: is not a connrl progress.csv ({exc})") from None
     if not lines or tuple(lines[0]) != LOG_COLUMNS:
         raise ValueError(f"{path}: is not a connrl progress.csv (its header must be {','.join(LOG_COLUMNS)})")

@@ -181,18 +181,43 @@ def _resumed_settings(out: Path, settings: dict, args) -> dict:
     return {**old, "steps": args.steps or old.get("steps") or settings["steps"]}  # no --steps: the run's own
 
 
+@contextlib.contextmanager
+def one_writer(out: Path, option: str):
+    """The folder's lock (``connrl.experiments.guards.run_lock``, as `connrl run` takes it) for the block; a second
+    writer is refused in one line before any work."""
+    from connrl.experiments.guards import run_lock
+
+    lock = run_lock(out, option)
+    try:
+        lock.__enter__()
+    except BlockingIOError as exc:
+        raise SystemExit(f"connrl: {exc.strerror}") from None
+    try:
+        yield
+    finally:
+        lock.__exit__(None, None, None)
+
+
 def cmd_train(args) -> int:
+    out, settings = _train_folder(args, _train_settings(args))
+    env = _make_env(args.env_id, settings["env_kwargs"])
+    eval_env = _make_env(args.env_id, settings["env_kwargs"]) if args.eval_every else None
+    fresh = not out.exists()
+    _writable(out)
+    with one_writer(out, "--save"):
+        if args.resume or not (out / "agent.json").exists():  # another writer may have saved while we waited
+            return _train(args, out, settings, env, eval_env, fresh)
+        raise SystemExit(f"connrl: {out} holds a trained agent already: --resume continues it, --save DIR trains a "
+                         "new one elsewhere")
+
+
+def _train(args, out: Path, settings: dict, env, eval_env, fresh: bool) -> int:
     import json
 
     from connrl.api import load, make_agent
     from connrl.callbacks import EvalCallback, ProgressLog, TensorBoardLog
     from connrl.storage import atomic_write_text
 
-    out, settings = _train_folder(args, _train_settings(args))
-    env = _make_env(args.env_id, settings["env_kwargs"])
-    eval_env = _make_env(args.env_id, settings["env_kwargs"]) if args.eval_every else None
-    fresh = not out.exists()
-    _writable(out)
     saved: list[int] = []  # the steps of the latest good save
     evaluation = None if eval_env is None else EvalCallback(
         eval_env, args.eval_every, args.eval_episodes, best_path=out / "best", stop_at=args.stop_at,
@@ -285,8 +310,11 @@ def _checkpoints(every: int, saved: list[int], save):
 
 
 def _remove_if_empty(out: Path, fresh: bool) -> None:
-    if fresh and out.is_dir() and not any(out.iterdir()):
-        out.rmdir()
+    """A folder this command made and left with nothing but its lock file is removed (the lock file with it)."""
+    if fresh and out.is_dir() and {p.name for p in out.iterdir()} <= {".connrl-run.lock"}:
+        with contextlib.suppress(OSError):
+            (out / ".connrl-run.lock").unlink()
+            out.rmdir()
 
 
 def _finish(agent, out: Path, fresh: bool, stopped, saved: list[int], save) -> int:

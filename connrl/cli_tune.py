@@ -13,6 +13,7 @@ from connrl.cli_task import (
     _positive_int,
     _seed,
     _writable,
+    one_writer,
 )
 
 
@@ -39,15 +40,16 @@ def cmd_tune(args) -> int:
     study = {"env_id": args.env_id, "env_kwargs": env_kwargs, "agent": kind, "steps": args.steps,
              "seeds": args.seeds, "eval_episodes": args.eval_episodes, "trials": args.trials, "fixed": fixed,
              "space": [f"{d.name}={d.describe()}" for d in space], "sampler": args.sampler, "seed": args.study_seed}
-    try:
-        trials = run_search(lambda: _make_env(args.env_id, env_kwargs), study, space, out, args.sampler)
-    except ValueError as exc:
-        raise SystemExit(f"connrl: {exc}") from None
-    except KeyboardInterrupt:
-        print(f"\nconnrl: interrupted; the finished trials are in {out / 'trials.csv'} and the same command resumes",
-              file=sys.stderr)
-        return 130
-    return _write_best(out, study, trials)
+    with one_writer(out, "--out"):
+        try:
+            trials = run_search(lambda: _make_env(args.env_id, env_kwargs), study, space, out, args.sampler)
+        except ValueError as exc:
+            raise SystemExit(f"connrl: {exc}") from None
+        except KeyboardInterrupt:
+            print(f"\nconnrl: interrupted; the finished trials are in {out / 'trials.csv'} and the same command "
+                  "resumes", file=sys.stderr)
+            return 130
+        return _write_best(out, study, trials)
 
 
 def _write_best(out: Path, study: dict, trials: list[dict]) -> int:

@@ -486,7 +486,7 @@ def test_a_second_run_into_the_same_folder_is_refused_at_once(tmp_path, monkeypa
     with runner.run_lock(folder):  # as another connrl run holds it
         with pytest.raises(SystemExit) as exc:
             cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(tmp_path), "--quiet", "--workers", "1"])
-    assert "another connrl run is writing to" in _one_line(exc.value)
+    assert "another connrl command is writing to" in _one_line(exc.value)
 
 
 @pytest.mark.parametrize("address, says", [("127.0.0.1:1", "no Ray cluster answers at 127.0.0.1:1"),

@@ -110,10 +110,11 @@ else:
 
 
 @contextlib.contextmanager
-def run_lock(folder: Path):
-    """Hold ``FOLDER/.connrl-run.lock`` while a run writes there: a second ``connrl run`` of the same experiment into
-    the same folder is refused at once (``BlockingIOError`` in one line) instead of computing everything twice. The
-    lock is the OS's (released even when the holder is killed); where ``fcntl`` is missing (Windows) there is none."""
+def run_lock(folder: Path, other: str = "--out"):
+    """Hold ``FOLDER/.connrl-run.lock`` while a run writes there: a second ``connrl run``, ``train`` or ``tune`` into
+    the same folder is refused at once (``BlockingIOError`` in one line; ``other`` names the option that picks another
+    folder) instead of computing twice or losing one writer's work. The lock is the OS's (released even when the
+    holder is killed); where ``fcntl`` is missing (Windows) there is none."""
     try:
         import fcntl
     except ImportError:
@@ -124,8 +125,8 @@ def run_lock(folder: Path):
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
-            raise BlockingIOError(errno.EWOULDBLOCK, f"another connrl run is writing to {folder}; wait for it to "
-                                  "finish (its finished runs are then reused) or give another --out") from None
+            raise BlockingIOError(errno.EWOULDBLOCK, f"another connrl command is writing to {folder}; wait for it "
+                                  f"to finish (what it finished is then reused) or give another {other}") from None
         yield
     finally:
         os.close(fd)

@@ -170,7 +170,7 @@ CH8 = {"xy": False, "paths": 1}
 # ten times the thesis's ~100 lessons per trial; both chosen on development seeds 100-105
 RECURRENT = {"memory": "recurrent", "lr": 0.03, "hidden": 12, "context": 8, "lessons_per_trial": 1000,
              "online": False}
-THESIS_RECURRENT = {**RECURRENT, "lr": 0.08, "lessons_per_trial": 100}  # as 8.3 states them
+THESIS_RECURRENT = {**RECURRENT, "lr": 0.08, "lessons_per_trial": 100}  # as 8.3 (lr) and 8.1 (replays) state them
 SIXTY = "recurrent-Q, no X-Y, 60 lessons per trial (diagnostic)"
 MEMORYLESS_100 = "memoryless, no X-Y, 100 lessons per trial (8.1)"
 EXPERIMENTS = [
@@ -186,7 +186,7 @@ EXPERIMENTS = [
                   # settings; and what the memory adds at the same replays: the memoryless learner, and the
                   # recurrent nets without their context units
                   Variant("recurrent-Q with X-Y (diagnostic)", {**RECURRENT, "xy": True}),
-                  Variant("recurrent-Q, no X-Y, the thesis's lr 0.08 and 100 lessons (diagnostic)",
+                  Variant("Exp. 2 at 8.3's stated values: recurrent-Q, no X-Y, lr 0.08, 100 lessons (8.1)",
                           THESIS_RECURRENT),
                   Variant("memoryless, no X-Y, 1000 lessons per trial (diagnostic)", {"lessons_per_trial": 1000}),
                   Variant("no context units, no X-Y, 1000 lessons per trial (diagnostic)",
