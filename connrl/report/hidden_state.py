@@ -100,7 +100,8 @@ def _cup_claims(s: dict, task: int, fig: str, section: str, title: str, tag: str
               "runs optimal at the end: " + ", ".join(shown),
               f"optimal in ≥ {STABLE:.0%} of the last 100 tests, in most / all / some / at most half of the runs as "
               "the thesis says", verdict, "; ".join(c for c in causes if c) if verdict != REPRODUCED else "",
-              anchor=anchor, recheck=bool(tag), setting=setting, calibrated=CUP_CALIBRATED if task == 1 else "")
+              anchor=anchor, recheck=bool(tag), setting=setting,
+              calibrated="" if task != 1 else CUP_CALIBRATED + ("; window-Q's 1/T 5 → 30 likewise" if setting else ""))
     if task == 1:
         _lambda_claims(s, fig, section, anchor, tag)
 
