@@ -5,10 +5,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
+from connrl.nets.mlp import MAX_UNITS
+
 # the size-like options' ranges: far beyond any task of the thesis or of Gymnasium's classic control, small enough
 # that no typo asks for gigabytes or centuries before it is noticed
-_SIZES = {"hidden": (0, 1024), "anneal_steps": (1, 10**10), "lessons_per_trial": (0, 10_000),
-          "capacity": (1, 100_000), "warmup_steps": (1, 10**7), "window": (1, 64), "context": (0, 1024)}
+_SIZES = {"hidden": (0, MAX_UNITS), "anneal_steps": (1, 10**10), "lessons_per_trial": (0, 10_000),
+          "capacity": (1, 100_000), "warmup_steps": (1, 10**7), "window": (1, 64), "context": (0, MAX_UNITS)}
 MAX_NET_WEIGHTS = 50_000_000  # inputs x hidden units x actions: 400 MB of float64 per array
 
 

@@ -63,9 +63,42 @@ def _make_env(env_id: str, env_kwargs: dict | None = None):
 
     import connrl  # noqa: F401  (registers the thesis's worlds)
     try:
-        return gym.make(env_id, **(env_kwargs or {}))
+        env = gym.make(env_id, **(env_kwargs or {}))
     except Exception as exc:  # an unknown id, a module that is not installed, bad registration: one line
-        raise SystemExit(f"connrl: cannot make environment {env_id!r}: {type(exc).__name__}: {exc}") from None
+        first = (str(exc).strip().splitlines() or [""])[0]
+        raise SystemExit(f"connrl: cannot make environment {env_id!r}: {type(exc).__name__}: {first}") from None
+    _check_render_dependency(env, env_id, env_kwargs or {})
+    return env
+
+
+def _check_render_dependency(env, env_id: str, env_kwargs: dict) -> None:
+    """Gymnasium's own worlds draw a human window with pygame, imported only at the first frame: without it training
+    would end in a long traceback mid-run, so say which package is missing before any step."""
+    import importlib.util
+
+    entry = str(getattr(getattr(env, "spec", None), "entry_point", "") or "")
+    if env_kwargs.get("render_mode") == "human" and entry.startswith("gymnasium.") and \
+            importlib.util.find_spec("pygame") is None:
+        env.close()
+        raise SystemExit(f"connrl: {env_id} with render_mode='human' needs pygame, which is not installed: "
+                         "pip install \"gymnasium[classic-control]\" (or \"gymnasium[box2d]\"), or leave render_mode "
+                         "out")
+
+
+def key_value(text: str) -> str:
+    """An argparse type: KEY=VALUE (one per flag: a bare word after the flag is the command's, not the flag's)."""
+    key, sep, _ = text.partition("=")
+    if not sep or not key.strip():
+        raise argparse.ArgumentTypeError(f"expected KEY=VALUE, got {text!r} (one KEY=VALUE per flag; an environment id "
+                                         "goes before the options)")
+    return text
+
+
+def folder_name(text: str) -> str:
+    """An argparse type: a folder path, not empty (an empty one would silently mean the default)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("must name a folder, got an empty string")
+    return text
 
 
 def _parse_options(items: list[str], flag: str = "--option") -> dict:
@@ -479,11 +512,13 @@ def add_own_task_commands(sub) -> None:
                    "(pip install 'connrl[tensorboard]')")
     s.add_argument("--hyperparams", default=None, metavar="FILE", help="a settings file (RL Zoo's shape, "
                    "connrl/settings.py); default: the shipped one for the agent, if it has ENV_ID")
-    s.add_argument("--env-kwargs", nargs="+", action="extend", default=[], metavar="KEY=VALUE",
-                   help="arguments of gymnasium.make(ENV_ID, ...), e.g. --env-kwargs is_slippery=false")
+    s.add_argument("--env-kwargs", action="append", type=key_value, default=[], metavar="KEY=VALUE",
+                   help="an argument of gymnasium.make(ENV_ID, ...), e.g. --env-kwargs is_slippery=false; repeat "
+                   "for several")
     s.add_argument("--seed", type=_seed, default=0)
-    s.add_argument("--save", default=None, help="folder to save in (default runs/train/ENV-AGENT-seedS)")
-    s.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+    s.add_argument("--save", type=folder_name, default=None,
+                   help="folder to save in (default runs/train/ENV-AGENT-seedS)")
+    s.add_argument("--option", action="append", type=key_value, default=[], metavar="KEY=VALUE",
                    help="an AgentOptions field (connrl/api.py), e.g. --option gamma=0.95; repeat for several")
     s.add_argument("--quiet", action="store_true", help="no progress line")
     s.set_defaults(func=cmd_train)
@@ -494,8 +529,8 @@ def add_own_task_commands(sub) -> None:
     s.add_argument("--episodes", type=_positive_int, default=10)
     s.add_argument("--seed", type=_seed, default=0, help="seed of the first episode (default 0)")
     s.add_argument("--env", default=None, help="environment id (default: the one it was trained on)")
-    s.add_argument("--env-kwargs", nargs="+", action="extend", default=[], metavar="KEY=VALUE",
-                   help="arguments of gymnasium.make (default: those it was trained with)")
+    s.add_argument("--env-kwargs", action="append", type=key_value, default=[], metavar="KEY=VALUE",
+                   help="an argument of gymnasium.make (default: those it was trained with); repeat for several")
     s.add_argument("--max-episode-steps", type=_positive_int, default=None, metavar="N", help="cut each episode "
                    "at N steps (default: the environment's time limit, else 1000)")
     s.set_defaults(func=cmd_evaluate)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from argparse import ArgumentDefaultsHelpFormatter
 from pathlib import Path
 
 from connrl.cli_task import (
@@ -13,6 +14,8 @@ from connrl.cli_task import (
     _positive_int,
     _seed,
     _writable,
+    folder_name,
+    key_value,
     one_writer,
 )
 
@@ -83,16 +86,19 @@ def _seed_list(text: str) -> list[int]:
 def add_tune_command(sub) -> None:
     """tune (connrl.tune)."""
     kinds = ("QCON", "QCON-R", "AHCON", "AHCON-R", "window-Q", "recurrent-Q")  # connrl.api.KINDS without a teacher
-    s = sub.add_parser("tune", help="search an agent's settings for a task", description="Search AgentOptions "
+    s = sub.add_parser("tune", help="search an agent's settings for a task",
+                       formatter_class=ArgumentDefaultsHelpFormatter, description="Search AgentOptions "
                        "for ENV_ID: each trial trains one agent per tuning seed and scores its mean greedy return "
                        "(connrl/tune.py). Writes OUT/trials.csv, OUT/study.json and OUT/best.yml (a settings file "
                        "for `connrl train --hyperparams`); the same command resumes an interrupted search.")
     s.add_argument("env_id")
-    s.add_argument("--agent", default="QCON-R", choices=kinds, metavar="AGENT")
+    s.add_argument("--agent", default="QCON-R", choices=kinds, metavar="AGENT",
+                   help=f"the learner: {', '.join(kinds)} (default QCON-R)")
     s.add_argument("--space", action="append", default=None, metavar="NAME=SPEC", help="a searched option: "
                    "NAME=a,b,c or NAME=low:high[:log]; repeat for several (default: lr, hidden, lam, "
                    "lessons_per_trial)")
-    s.add_argument("--option", action="append", default=[], metavar="KEY=VALUE", help="a fixed option")
+    s.add_argument("--option", action="append", type=key_value, default=[], metavar="KEY=VALUE",
+                   help="a fixed option (an AgentOptions field); repeat for several")
     s.add_argument("--trials", type=_int_at_least(1, 10_000), default=20)
     s.add_argument("--steps", type=_int_at_least(1, MAX_STEPS), default=20_000, help="training steps per agent")
     s.add_argument("--seeds", type=_seed_list, default=[1000, 1001], help="tuning seeds, apart from those you "
@@ -101,6 +107,7 @@ def add_tune_command(sub) -> None:
     s.add_argument("--sampler", choices=("random", "tpe"), default="random", help="random (built in) or tpe "
                    "(Optuna: pip install 'connrl[tune]')")
     s.add_argument("--study-seed", type=_seed, default=0, help="seed of the sampler")
-    s.add_argument("--env-kwargs", nargs="+", action="extend", default=[], metavar="KEY=VALUE")
-    s.add_argument("--out", default=None, help="folder (default runs/tune/ENV-AGENT)")
+    s.add_argument("--env-kwargs", action="append", type=key_value, default=[], metavar="KEY=VALUE",
+                   help="an argument of gymnasium.make(ENV_ID, ...); repeat for several")
+    s.add_argument("--out", type=folder_name, default=None, help="folder (default runs/tune/ENV-AGENT)")
     s.set_defaults(func=cmd_tune)

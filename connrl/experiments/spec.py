@@ -21,6 +21,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from connrl.nets.mlp import MAX_UNITS as NET_MAX_UNITS
+
 PROFILES = ("tiny", "quick", "full")
 
 
@@ -97,7 +99,7 @@ _RANGES = {">0": (lambda v: v > 0, "> 0"), ">=0": (lambda v: v >= 0, ">= 0"), ">
 # Generous: every profile and variant of every experiment stays within a tenth of its cap
 # (tests/experiments/test_bounds.py), while no single value can ask for gigabytes or for years of compute.
 MAX_COUNT = 10**7  # any count: steps spent pre-training, states of a grid, ...
-MAX_UNITS = 4096  # hidden or context units of one net (the thesis's largest: 30)
+MAX_UNITS = NET_MAX_UNITS  # hidden or context units of one net (the thesis's largest: 30): one cap everywhere
 MAX_WINDOW = 100  # window sizes: the last N steps kept as input or for stuck detection (the thesis's: 5 and 8)
 CAPS = {
     **dict.fromkeys(("hidden", "context"), MAX_UNITS),

@@ -34,6 +34,8 @@ from connrl.nets.kernels import (
     _perceptron_values,
 )
 
+MAX_UNITS = 1024  # hidden or context units of one net, wherever one is sized (train, tune, sweep, settings)
+
 
 def symmetric_sigmoid(x):
     """``f(x) = 1/(1+exp(-x)) - 0.5`` (thesis 2.4): the unit used everywhere in the thesis."""

@@ -32,19 +32,19 @@ def _refused(name: str, setting: str, tmp_path, monkeypatch) -> str:
     ("pole-full", "max_trials=100000000000000000000000",
      "parameter max_trials must be in [1, 1000000], got 100000000000000000000000"),
     ("pole-full", "max_trials=2.5", "parameter max_trials must be a whole number in [1, 1000000], got 2.5"),
-    ("pole-full", "hidden=1e8", "parameter hidden must be in [0, 4096], got 100000000"),
+    ("pole-full", "hidden=1e8", "parameter hidden must be in [0, 1024], got 100000000"),
     ("pole-full", "test_steps=1e7", "parameter test_steps must be in [1, 1000000], got 10000000"),
-    ("recharge-flat", "hidden=1e8", "parameter hidden must be in [1, 4096], got 100000000"),
+    ("recharge-flat", "hidden=1e8", "parameter hidden must be in [1, 1024], got 100000000"),
     ("recharge-behaviours", "capacity=1e6", "parameter capacity must be in [1, 100000], got 1000000"),
     ("recharge-together", "pretrain_steps=1e9", "parameter pretrain_steps must be in [0, 10000000], got 1000000000"),
-    ("integration", "context=5000", "parameter context must be at most 4096, got 5000"),
+    ("integration", "context=2000", "parameter context must be at most 1024, got 2000"),
     ("robot-teaching-dp", "hidden_fraction=1e8", "parameter hidden_fraction must be in [0, 10.0], got 100000000.0"),
     ("robot-teaching-dp", "stuck_window=1000", "parameter stuck_window must be in [1, 100], got 1000"),
     ("robot-teaching-dp", "trials=1e7", "parameter trials must be in [1, 1000000], got 10000000"),
     ("robot-dp-copy", "copy_epochs=1e7", "parameter copy_epochs must be at most 1000000, got 10000000"),
     ("survival-eval", "eval_envs=1e9", "parameter eval_envs must be in [0, 100000], got 1000000000"),
     ("cup-task1", "lessons_per_trial=1e6", "parameter lessons_per_trial must be in [0, 100000], got 1000000"),
-    ("cup-task1", 'table={"hq": 100000000}', "parameter table entry 'hq' must be in [0, 4096], got 100000000"),
+    ("cup-task1", 'table={"hq": 100000000}', "parameter table entry 'hq' must be in [0, 1024], got 100000000"),
     ("cup-task1", 'table={"window": 1000}', "parameter table entry 'window' must be in [1, 100], got 1000"),
     ("cup-task1", 'table={"hidden": 5}', "parameter table: unknown entry 'hidden'; allowed: window, hq"),
     ("cup-task1", "probe_steps=[1, 100000000]", "parameter probe_steps must hold whole numbers in [0, 1000]"),
@@ -64,7 +64,7 @@ def test_a_whole_number_float_is_taken_as_the_int_it_spells():
     assert a.params.max_trials == 1000 and type(a.params.max_trials) is int
     assert a.name == b.name  # the same setting, however spelt, is the same run folder
     assert override(spec.params, {"hidden": 12.0}).hidden == 12
-    with pytest.raises(ValueError, match=r"parameter hidden must be a whole number in \[0, 4096\], got True"):
+    with pytest.raises(ValueError, match=r"parameter hidden must be a whole number in \[0, 1024\], got True"):
         override(spec.params, {"hidden": True})
 
 
