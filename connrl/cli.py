@@ -165,6 +165,9 @@ def cmd_plot(args) -> int:
         except (ValueError, OSError) as exc:
             raise SystemExit(f"connrl: {exc}") from None
         return 0
+    if Path(args.name).is_dir() or os.sep in args.name:
+        raise SystemExit(f"connrl: {args.name} holds no progress.csv; `connrl plot` draws a `connrl train` folder "
+                         "(its progress.csv) or a stored experiment by name (`connrl list`)")
     spec = _get(args.name)
     from connrl.experiments.store import DamagedFile
 
@@ -422,6 +425,9 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # e.g. `connrl show NAME | head`: the reader left, nothing is wrong
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:  # a full disk, a folder gone read-only, ...: one line naming the file
+        where = f"{exc.filename}: " if exc.filename else ""
+        raise SystemExit(f"connrl: {where}{exc.strerror or exc}") from None
 
 
 if __name__ == "__main__":

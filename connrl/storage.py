@@ -67,11 +67,14 @@ def atomic_write_files(files: dict) -> None:
             path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
             temps.append((tmp, path))
-            os.fchmod(fd, _FILE_MODE)  # mkstemp's 0600 would hide results from the user's group
-            with os.fdopen(fd, "wb") as f:
-                f.write(data)
-                f.flush()
-                os.fsync(f.fileno())
+            try:
+                os.fchmod(fd, _FILE_MODE)  # mkstemp's 0600 would hide results from the user's group
+                with os.fdopen(fd, "wb") as f:
+                    f.write(data)
+                    f.flush()
+                    os.fsync(f.fileno())
+            except OSError as exc:  # a full disk names no file of its own: name the one being written
+                raise OSError(exc.errno, exc.strerror, str(path)) from None
         with _signals_held(len(temps) > 1):  # a signal between two moves would pair files of two saves
             for tmp, path in temps:
                 os.replace(tmp, path)

@@ -27,11 +27,20 @@ def env() -> dict:
     return e
 
 
-def cli(args, cwd, timeout: float = 120) -> subprocess.CompletedProcess:
-    """``python -m connrl.cli ARGS`` in ``cwd`` (never the repo)."""
+MEMORY_CAP = 3 * 2**30  # issue 43's attacks must end under a 3 GB address-space cap
+
+
+def _capped():  # in the child, before exec: a reader that fills memory fails fast instead of taking the machine
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_CAP, MEMORY_CAP))
+
+
+def cli(args, cwd, timeout: float = 120, memory_cap: bool = False) -> subprocess.CompletedProcess:
+    """``python -m connrl.cli ARGS`` in ``cwd`` (never the repo); with ``memory_cap`` under ``MEMORY_CAP``."""
     assert Path(cwd).resolve() != REPO
     return subprocess.run([PY, "-m", "connrl.cli", *map(str, args)], cwd=cwd, env=env(), capture_output=True,
-                          text=True, timeout=timeout)
+                          text=True, timeout=timeout, preexec_fn=_capped if memory_cap else None)
 
 
 def script(code: str, args, cwd, timeout: float = 120) -> subprocess.CompletedProcess:

@@ -66,6 +66,17 @@ def params_hash(params: dict) -> str:
     return hashlib.sha256(json.dumps(params, sort_keys=True, default=str).encode()).hexdigest()[:10]
 
 
+def remove_stale_temporaries(folder: Path) -> list[Path]:
+    """Remove the temporary files (``.NAME.*.tmp``, ``connrl.storage``'s) a killed writer left in ``folder``: called
+    under the folder's lock, so no other writer's file is among them."""
+    gone = []
+    for p in Path(folder).rglob(".*.tmp"):
+        if p.is_file() and not p.is_symlink():
+            p.unlink(missing_ok=True)
+            gone.append(p)
+    return gone
+
+
 def make_jobs(spec: ExperimentSpec, profile: str, runs: int | None, seed: int, out: Path) -> list[Job]:
     base, n = spec.resolve(profile, runs)
     root = out / spec.name / "runs" / f"{profile}-{params_hash(as_dict(base))}"
@@ -356,6 +367,7 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     jobs = make_jobs(spec, profile, runs, seed, out)
     prepare_outputs(out / spec.name, jobs)
     with run_lock(out / spec.name):
+        remove_stale_temporaries(out / spec.name)
         records, todo = [], []
         for job in jobs:
             rec, damage = load_record(job.path, job)
