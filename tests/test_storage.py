@@ -96,6 +96,7 @@ def test_strict_json_writes_nothing_a_json_parser_refuses():
     (b"", "is empty"),
     (b"\xff\xfe{", "is not text"),
     (b'{"a": ', "is not JSON (Expecting value at line 1, column 7)"),
+    (b'{"a": "open', "is not JSON (Unterminated string at line 1, column 7)"),  # never "starting at at"
     (b'{"a": NaN}', "NaN is not JSON"),
     (b'{"a": -Infinity}', "-Infinity is not JSON"),
     (b'{"a": 1e400}', "the number 1e400 is too large for a float"),

@@ -25,6 +25,7 @@ from connrl.storage import (
     FileError,
     atomic_write_text,
     finite_float,
+    json_problem,
     max_depth,
     read_limited,
     reject_constant,
@@ -66,7 +67,7 @@ def read_json(path) -> object:
     except UnicodeDecodeError:
         raise DamagedFile(path, "not text") from None
     except json.JSONDecodeError as exc:
-        raise DamagedFile(path, f"not JSON: {exc.msg} at line {exc.lineno}") from None
+        raise DamagedFile(path, f"not JSON: {json_problem(exc)}") from None
     except ValueError as exc:  # NaN / Infinity, or a number beyond a float: connrl writes strict JSON
         raise DamagedFile(path, str(exc)) from None
     except RecursionError:
