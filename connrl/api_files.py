@@ -26,10 +26,10 @@ from connrl.storage import (
     atomic_write_files,
     check_array,
     check_number,
+    npz_arrays,
     npz_bytes,
     read_json,
     read_limited,
-    read_npz,
 )
 
 FORMAT = 1
@@ -73,13 +73,12 @@ def read_agent(path: Path, kinds: tuple[str, ...]) -> tuple[dict, dict[str, np.n
         raise FileError(meta, f"agent file format {m.get('format')!r}; this connrl reads format {FORMAT}")
     check_record(meta, m, kinds)
     npz = path / "agent.npz"
+    raw = read_limited(npz, MAX_NPZ_BYTES, "connrl agent weight file")  # read once: the bytes checked are those used
     digest = m.get("npz_sha256")  # files written before it was recorded have none
-    if digest is not None:
-        same = hashlib.sha256(read_limited(npz, MAX_NPZ_BYTES, "agent array file")).hexdigest() == digest
-        if not same:
-            raise FileError(npz, "is not the file agent.json was saved with (its SHA-256 differs): it was changed "
-                            "or damaged after the save")
-    return m, read_npz(npz, "connrl agent weight file")
+    if digest is not None and hashlib.sha256(raw).hexdigest() != digest:
+        raise FileError(npz, "is not the file agent.json was saved with (its SHA-256 differs): it was changed or "
+                        "damaged after the save")
+    return m, npz_arrays(raw, npz, "connrl agent weight file")
 
 
 MAX_RECORD_BYTES = 16 * 2**20

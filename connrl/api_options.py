@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
 
 from connrl.nets.mlp import MAX_UNITS
@@ -11,6 +10,9 @@ from connrl.nets.mlp import MAX_UNITS
 # that no typo asks for gigabytes or centuries before it is noticed
 _SIZES = {"hidden": (0, MAX_UNITS), "anneal_steps": (1, 10**10), "lessons_per_trial": (0, 10_000),
           "capacity": (1, 100_000), "warmup_steps": (1, 10**7), "window": (1, 64), "context": (0, MAX_UNITS)}
+# the positive real options' upper ends: far beyond any sensible value (the thesis's rates are 0.01-0.4), small enough
+# that a typo (lr: 1e20) is refused here, not met as an overflow inside a compiled kernel mid-run
+_POSITIVE = {"lr": 100.0, "lr_end": 100.0, "init_range": 100.0, "t_start": 1e6, "t_end": 1e6}
 MAX_NET_WEIGHTS = 50_000_000  # inputs x hidden units x actions: 400 MB of float64 per array
 
 
@@ -59,14 +61,13 @@ class AgentOptions:
         for name, (low, high) in _SIZES.items():
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
-                raise ValueError(f"option {name} must be a whole number from {low} to {high:,}, got {v!r}")
-        for name, lo, hi in (("lr", 0, math.inf), ("lr_end", 0, math.inf), ("init_range", 0, math.inf),
-                             ("t_start", 0, math.inf), ("t_end", 0, math.inf)):
+                raise ValueError(f"option {name} must be a whole number from {low} to {high:,}, got {shown(v)}")
+        for name, hi in _POSITIVE.items():
             v = getattr(self, name)
             if v is None and name in ("t_start", "t_end", "lr_end"):
                 continue
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo < v < hi:
-                raise ValueError(f"option {name} must be a number > 0, got {v!r}")
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= hi:
+                raise ValueError(f"option {name} must be a number > 0 and <= {hi:g}, got {shown(v)}")
         for name in ("momentum", "p_threshold"):
             v = getattr(self, name)
             if v is None and name == "p_threshold":
@@ -78,8 +79,24 @@ class AgentOptions:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
                 raise ValueError(f"option {name} must be in [0, 1], got {v!r}")
         if self.value_range is not None and (isinstance(self.value_range, bool) or not (
-                isinstance(self.value_range, (int, float)) and 0 < self.value_range < math.inf)):
-            raise ValueError(f"option value_range must be None or a number > 0, got {self.value_range!r}")
+                isinstance(self.value_range, (int, float)) and 0 < self.value_range <= MAX_OPTION_RANGE)):
+            raise ValueError(f"option value_range must be None or a number > 0 and <= {MAX_OPTION_RANGE:g}, got "
+                             f"{shown(self.value_range)}")
+
+
+MAX_OPTION_RANGE = 1e12  # as an agent file holds it (connrl.api_files.MAX_VALUE_RANGE)
+
+
+def shown(v) -> str:
+    """``repr(v)`` for a message, short: an integer too long to print is described (repr of one beyond 4300 digits
+    raises), anything else cut at 40 characters."""
+    if isinstance(v, int) and not isinstance(v, bool) and v.bit_length() > 128:
+        return f"an integer of {v.bit_length()} bits"
+    try:
+        r = repr(v)
+    except ValueError:  # a container holding such an integer
+        return f"a {type(v).__name__} holding an integer too long to show"
+    return r if len(r) <= 40 else r[:37] + "..."
 
 
 def options_from(kwargs: dict) -> AgentOptions:
@@ -87,5 +104,7 @@ def options_from(kwargs: dict) -> AgentOptions:
     allowed = [f.name for f in fields(AgentOptions)]
     unknown = sorted(set(kwargs) - set(allowed))
     if unknown:
-        raise ValueError(f"unknown option(s) {', '.join(map(repr, unknown))}; allowed: {', '.join(allowed)}")
+        named = ", ".join(repr(u[:40]) for u in unknown[:5]) + (f" and {len(unknown) - 5} more" if len(unknown) > 5
+                                                                 else "")
+        raise ValueError(f"unknown option(s) {named}; allowed: {', '.join(allowed)}")
     return AgentOptions(**kwargs)

@@ -261,7 +261,8 @@ class TensorBoardLog(Callback):
         self.writer.close()
 
 
-MAX_PROGRESS_BYTES = 1 << 30  # a row per evaluation: far beyond any run
+MAX_PROGRESS_BYTES = 32 << 20  # a row per trial, ~100 bytes: far beyond any run, and cheap to parse
+MAX_LOGGED = 1e15  # steps, returns, ... a run writes
 
 
 def read_progress(path) -> list[dict]:
@@ -287,5 +288,7 @@ def read_progress(path) -> list[dict]:
                    for c, v in zip(LOG_COLUMNS, cells, strict=True)}
         except ValueError:
             raise ValueError(f"{path}: line {n} holds a cell that is not a number") from None
+        if not all(v is None or abs(v) <= MAX_LOGGED for v in row.values()):  # inf, nan, or a forged huge value
+            raise ValueError(f"{path}: line {n} holds a cell that is not a finite number within ±{MAX_LOGGED:.0e}")
         rows.append(row)
     return rows

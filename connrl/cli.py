@@ -165,7 +165,9 @@ def cmd_plot(args) -> int:
         except (ValueError, OSError) as exc:
             raise SystemExit(f"connrl: {exc}") from None
         return 0
-    if Path(args.name).is_dir() or os.sep in args.name:
+    from connrl.experiments.registry import all_experiments
+
+    if args.name not in all_experiments() and (Path(args.name).is_dir() or os.sep in args.name):
         raise SystemExit(f"connrl: {args.name} holds no progress.csv; `connrl plot` draws a `connrl train` folder "
                          "(its progress.csv) or a stored experiment by name (`connrl list`)")
     spec = _get(args.name)
@@ -428,6 +430,8 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # a full disk, a folder gone read-only, ...: one line naming the file
         where = f"{exc.filename}: " if exc.filename else ""
         raise SystemExit(f"connrl: {where}{exc.strerror or exc}") from None
+    except MemoryError:  # the readers' limits keep connrl's own files far below this; say so, not a traceback
+        raise SystemExit("connrl: out of memory; the command needs more memory than this machine allows") from None
 
 
 if __name__ == "__main__":

@@ -238,7 +238,7 @@ def cmd_train(args) -> int:
     fresh = not out.exists()
     _writable(out)
     with one_writer(out, "--save"):
-        if args.resume or not (out / "agent.json").exists():  # another writer may have saved while we waited
+        if args.resume or not (out / "agent.json").exists():  # another writer may have saved since the first check
             return _train(args, out, settings, env, eval_env, fresh)
         raise SystemExit(f"connrl: {out} holds a trained agent already: --resume continues it, --save DIR trains a "
                          "new one elsewhere")

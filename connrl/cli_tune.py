@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from argparse import ArgumentDefaultsHelpFormatter
+from argparse import SUPPRESS, ArgumentDefaultsHelpFormatter
 from pathlib import Path
 
 from connrl.cli_task import (
@@ -18,6 +18,15 @@ from connrl.cli_task import (
     key_value,
     one_writer,
 )
+
+
+class _Defaults(ArgumentDefaultsHelpFormatter):
+    """Help that shows each default an option has (not the None or [] of an option with none)."""
+
+    def _get_help_string(self, action):
+        if action.default in (None, [], SUPPRESS) or isinstance(action.default, bool):
+            return action.help
+        return super()._get_help_string(action)
 
 
 def cmd_tune(args) -> int:
@@ -87,27 +96,27 @@ def add_tune_command(sub) -> None:
     """tune (connrl.tune)."""
     kinds = ("QCON", "QCON-R", "AHCON", "AHCON-R", "window-Q", "recurrent-Q")  # connrl.api.KINDS without a teacher
     s = sub.add_parser("tune", help="search an agent's settings for a task",
-                       formatter_class=ArgumentDefaultsHelpFormatter, description="Search AgentOptions "
+                       formatter_class=_Defaults, description="Search AgentOptions "
                        "for ENV_ID: each trial trains one agent per tuning seed and scores its mean greedy return "
                        "(connrl/tune.py). Writes OUT/trials.csv, OUT/study.json and OUT/best.yml (a settings file "
                        "for `connrl train --hyperparams`); the same command resumes an interrupted search.")
-    s.add_argument("env_id")
+    s.add_argument("env_id", help="a Gymnasium environment id")
     s.add_argument("--agent", default="QCON-R", choices=kinds, metavar="AGENT",
-                   help=f"the learner: {', '.join(kinds)} (default QCON-R)")
+                   help=f"the learner: {', '.join(kinds)}")
     s.add_argument("--space", action="append", default=None, metavar="NAME=SPEC", help="a searched option: "
-                   "NAME=a,b,c or NAME=low:high[:log]; repeat for several (default: lr, hidden, lam, "
-                   "lessons_per_trial)")
+                   "NAME=a,b,c or NAME=low:high[:log]; repeat for several (none given: lr, hidden, lam and "
+                   "lessons_per_trial over connrl.tune.DEFAULT_SPACE)")
     s.add_argument("--option", action="append", type=key_value, default=[], metavar="KEY=VALUE",
                    help="a fixed option (an AgentOptions field); repeat for several")
-    s.add_argument("--trials", type=_int_at_least(1, 10_000), default=20)
+    s.add_argument("--trials", type=_int_at_least(1, 10_000), default=20, help="settings tried")
     s.add_argument("--steps", type=_int_at_least(1, MAX_STEPS), default=20_000, help="training steps per agent")
-    s.add_argument("--seeds", type=_seed_list, default=[1000, 1001], help="tuning seeds, apart from those you "
-                   "report (default 1000,1001)")
-    s.add_argument("--eval-episodes", type=_positive_int, default=5)
+    s.add_argument("--seeds", type=_seed_list, default="1000,1001", help="tuning seeds, comma-separated, apart "
+                   "from those you report")
+    s.add_argument("--eval-episodes", type=_positive_int, default=5, help="greedy episodes that score an agent")
     s.add_argument("--sampler", choices=("random", "tpe"), default="random", help="random (built in) or tpe "
                    "(Optuna: pip install 'connrl[tune]')")
     s.add_argument("--study-seed", type=_seed, default=0, help="seed of the sampler")
     s.add_argument("--env-kwargs", action="append", type=key_value, default=[], metavar="KEY=VALUE",
                    help="an argument of gymnasium.make(ENV_ID, ...); repeat for several")
-    s.add_argument("--out", type=folder_name, default=None, help="folder (default runs/tune/ENV-AGENT)")
+    s.add_argument("--out", type=folder_name, default=None, help="folder (none given: runs/tune/ENV-AGENT)")
     s.set_defaults(func=cmd_tune)

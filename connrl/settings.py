@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from connrl.api_options import shown
 from connrl.storage import FileError, read_limited_text
 
 SETTINGS_DIR = Path(__file__).parent / "data" / "hyperparams"
@@ -51,7 +52,10 @@ def load_plain_yaml(text: str, path):
                                  f"{event.start_mark.line + 1}); a settings file nests a few")
         elif isinstance(event, yaml.MappingEndEvent | yaml.SequenceEndEvent):
             depth -= 1
-    return yaml.safe_load(text)
+    try:
+        return yaml.safe_load(text)
+    except ValueError as exc:  # a value Python will not build, e.g. an integer of more than 4300 digits
+        raise ValueError(f"{path}: holds a value that cannot be read ({str(exc).splitlines()[0][:120]})") from None
 
 
 def read_settings(path) -> dict[str, dict]:
@@ -66,7 +70,8 @@ def read_settings(path) -> dict[str, dict]:
     except yaml.YAMLError as exc:
         where = getattr(exc, "problem_mark", None)
         at = f" (line {where.line + 1})" if where is not None else ""
-        raise ValueError(f"{path}: is not valid YAML{at}: {getattr(exc, 'problem', None) or exc}") from None
+        problem = (str(getattr(exc, "problem", None) or exc).strip().splitlines() or ["?"])[0][:200]
+        raise ValueError(f"{path}: is not valid YAML{at}: {problem}") from None
     if data is None:
         return {}
     if not isinstance(data, dict) or not all(isinstance(k, str) for k in data):
@@ -88,13 +93,17 @@ def check_entry(path, env_id: str, entry) -> dict:
     n = entry.get("n_timesteps")
     if n is not None and (isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_STEPS):
         raise ValueError(f"{where}: n_timesteps must be a whole number from 1 to {MAX_STEPS:.0e} (the --steps "
-                         f"cap), got {repr(n) if len(repr(n)) <= 40 else repr(n)[:37] + '...'}")
+                         f"cap), got {shown(n)}")
     kwargs = entry.get("env_kwargs") or {}
     if not isinstance(kwargs, dict) or not all(isinstance(k, str) for k in kwargs):
-        raise ValueError(f"{where}: env_kwargs must be a mapping of argument names to values, got {kwargs!r}")
-    if json.loads(json.dumps(kwargs, default=str)) != kwargs:  # a YAML date, set or bytes: not kept in settings.json
+        raise ValueError(f"{where}: env_kwargs must be a mapping of argument names to values, got {shown(kwargs)}")
+    try:
+        plain = json.loads(json.dumps(kwargs, default=str)) == kwargs  # a YAML date, set or bytes: not kept
+    except ValueError:  # an integer too long to write as text
+        plain = False
+    if not plain:
         raise ValueError(f"{where}: env_kwargs must be plain values (numbers, strings, true/false, null, lists, "
-                         f"mappings), got {kwargs!r}")
+                         f"mappings), got {shown(kwargs)}")
     options = {k: v for k, v in entry.items() if k not in RESERVED}
     try:
         options_from(options)

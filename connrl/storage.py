@@ -26,8 +26,10 @@ from pathlib import Path
 
 import numpy as np
 
-MAX_JSON_BYTES = 256 * 2**20  # far beyond any file connrl writes (the largest lesson file is a few MiB)
-MAX_NPZ_BYTES = 1 * 2**30
+# Limits on what a file may hold, sized to what reading it may cost in memory (a parsed JSON or CSV file takes up to
+# ~10-30x its bytes as Python objects), not only to what connrl writes (its largest JSON files are under 1 MiB).
+MAX_JSON_BYTES = 32 * 2**20
+MAX_NPZ_BYTES = 512 * 2**20  # an archive's bytes, and separately the bytes its arrays unpack to
 MAX_NESTING = 32  # connrl's JSON files nest at most ~6 levels
 
 
@@ -170,41 +172,54 @@ def finite_float(text: str) -> float:
 
 
 def read_limited(path, max_bytes: int, what: str = "file") -> bytes:
-    """The bytes of ``path``, trusting nothing the file says about itself: it must be a regular file (checked on the
-    opened descriptor, which is opened without blocking, so a FIFO cannot hang us; a device such as /dev/zero, which
-    reports size 0, is refused), and at most ``max_bytes + 1`` bytes are ever read. FileError (one line) otherwise."""
+    """The bytes of ``path``, trusting nothing the file says about itself: it must be a regular file, checked before
+    it is opened (a device is never opened: opening one can act, e.g. a tape rewinds) and again on the opened
+    descriptor (the same file, still regular); it is opened without blocking, so a FIFO cannot hang us; and at most
+    ``max_bytes + 1`` bytes are ever read, whatever size it reports (a /proc file reports 0). FileError (one line)
+    otherwise."""
     path = Path(path)
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0)
+    try:
+        before = os.stat(path)
+    except FileNotFoundError:
+        raise FileError(path, f"no such {what}") from None
+    except OSError as exc:
+        raise FileError(path, f"cannot read the {what} ({exc.strerror or exc})") from None
+    _check_regular(path, before, what, max_bytes)
+    flags = (os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
+             | getattr(os, "O_BINARY", 0))
     try:
         fd = os.open(path, flags)
     except FileNotFoundError:
         raise FileError(path, f"no such {what}") from None
-    except IsADirectoryError:
-        raise FileError(path, f"is a folder; a {what} was expected") from None
     except OSError as exc:
         raise FileError(path, f"cannot read the {what} ({exc.strerror or exc})") from None
     try:
         st = os.fstat(fd)
-        if stat.S_ISDIR(st.st_mode):
-            raise FileError(path, f"is a folder; a {what} was expected")
-        if not stat.S_ISREG(st.st_mode):
-            raise FileError(path, f"is not a regular file (a device, pipe or socket); a {what} is a regular file")
-        if st.st_size > max_bytes:
-            raise FileError(path, f"is {st.st_size} bytes; a {what} is at most {max_bytes}")
-        chunks, n = [], 0
-        while n <= max_bytes:  # the size stat gave may be wrong (a file still growing, a special file system)
-            chunk = os.read(fd, min(1 << 20, max_bytes + 1 - n))
+        if (st.st_dev, st.st_ino) != (before.st_dev, before.st_ino):
+            raise FileError(path, f"changed while it was being opened; a {what} must stay put while it is read")
+        _check_regular(path, st, what, max_bytes)
+        data = bytearray()
+        while len(data) <= max_bytes:  # the size stat gave may be wrong (a file still growing, /proc)
+            chunk = os.read(fd, min(1 << 20, max_bytes + 1 - len(data)))
             if not chunk:
                 break
-            chunks.append(chunk)
-            n += len(chunk)
-        if n > max_bytes:
+            data += chunk
+        if len(data) > max_bytes:
             raise FileError(path, f"is more than {max_bytes} bytes; a {what} is at most {max_bytes}")
-        return b"".join(chunks)
+        return bytes(data)
     except OSError as exc:
         raise FileError(path, f"cannot read the {what} ({exc.strerror or exc})") from None
     finally:
         os.close(fd)
+
+
+def _check_regular(path, st, what: str, max_bytes: int) -> None:
+    if stat.S_ISDIR(st.st_mode):
+        raise FileError(path, f"is a folder; a {what} was expected")
+    if not stat.S_ISREG(st.st_mode):
+        raise FileError(path, f"is not a regular file (a device, pipe or socket); a {what} is a regular file")
+    if st.st_size > max_bytes:
+        raise FileError(path, f"is {st.st_size} bytes; a {what} is at most {max_bytes}")
 
 
 def read_limited_text(path, max_bytes: int, what: str = "file") -> str:
@@ -243,41 +258,76 @@ def json_problem(exc: json.JSONDecodeError) -> str:
     return f"{exc.msg.removesuffix(' starting at')} at line {exc.lineno}, column {exc.colno}"
 
 
+# a string (escapes inside it, an unterminated one running to the end: possessive, so never rescanned) or a bracket
+_JSON_TOKENS = re.compile(rb'"(?:[^"\\]++|\\.)*+"?|[\[\]{}]', re.S)
+
+
 def max_depth(raw: bytes) -> int:
-    """How deep brackets nest outside strings (a bound checked before parsing: the parser recurses)."""
-    text = raw.decode("latin-1")
-    # strings can hold brackets: drop them first (escaped quotes inside them included)
-    stripped = re.sub(r'"(?:[^"\\]|\\.)*"', "", text)
+    """How deep brackets nest outside strings (a bound checked before parsing: the parser recurses). One pass, linear
+    in the file's length whatever it holds."""
     depth = best = 0
-    for m in re.finditer(r"[\[\]{}]", stripped):
-        depth += 1 if m.group() in "[{" else -1
-        best = max(best, depth)
+    for m in _JSON_TOKENS.finditer(raw):
+        c = m.group()[:1]
+        if c in (b"[", b"{"):
+            depth += 1
+            best = max(best, depth)
+        elif c in (b"]", b"}"):
+            depth -= 1
     return best
 
 
 def read_npz(path, what: str = "array file", max_bytes: int = MAX_NPZ_BYTES) -> dict[str, np.ndarray]:
-    """Every array of an NPZ archive (no pickle: loading never runs code); FileError (one line) otherwise."""
-    path = Path(path)
-    raw = read_limited(path, max_bytes, what)
-    if not raw.startswith(b"PK"):  # not a zip archive: never let np.load guess (it suggests pickle for random bytes)
+    """Every array of an NPZ archive (``npz_arrays`` on its bytes); FileError (one line) otherwise."""
+    return npz_arrays(read_limited(path, max_bytes, what), path, what, max_bytes)
+
+
+NPZ_DTYPES = "biuf"  # bool, integers, floats: what connrl's archives hold
+
+
+def npz_arrays(raw: bytes, path, what: str = "array file", max_bytes: int = MAX_NPZ_BYTES) -> dict[str, np.ndarray]:
+    """The arrays of the NPZ archive ``raw`` (read from ``path``), trusting nothing it says about itself: NumPy's
+    loader is never called (no pickle, and no allocation sized by a header's claimed shape); each member must be a
+    .npy array of numbers whose header's shape and dtype account exactly for the bytes the member holds, and the
+    members together unpack to at most ``max_bytes``."""
+    fmt = np.lib.format
+    if not raw.startswith(b"PK"):
         kind = "a single .npy array" if raw.startswith(b"\x93NUMPY") else "not an .npz archive"
         raise FileError(path, f"is {kind}; the {what} must be an .npz archive of numeric arrays")
     try:
-        with np.load(io.BytesIO(raw), allow_pickle=False) as z:
+        with zipfile.ZipFile(io.BytesIO(raw)) as zf:
+            infos = zf.infolist()
+            total = sum(i.file_size for i in infos)
+            if total > max_bytes:
+                raise FileError(path, f"unpacks to {total} bytes; a {what} unpacks to at most {max_bytes}")
             out = {}
-            for k in z.files:
-                info = z.zip.getinfo(f"{k}.npy")
-                if info.file_size > max_bytes:  # a small archive can inflate without bound
-                    raise FileError(path, f"holds an array of {info.file_size} bytes; a {what} holds at most "
-                                          f"{max_bytes}", k)
-                out[k] = z[k]
+            for info in infos:
+                name = info.filename.removesuffix(".npy")
+                if name == info.filename or name in out:
+                    raise FileError(path, f"holds {info.filename[:60]!r}; a {what} holds .npy arrays only")
+                with zf.open(info) as f:
+                    version = fmt.read_magic(f)
+                    if version not in ((1, 0), (2, 0)):
+                        raise FileError(path, f"uses .npy format {version}; connrl reads 1.0 and 2.0", name)
+                    shape, fortran, dtype = (fmt.read_array_header_1_0 if version == (1, 0)
+                                             else fmt.read_array_header_2_0)(f)
+                    if dtype.hasobject or dtype.kind not in NPZ_DTYPES or dtype.fields is not None:
+                        raise FileError(path, f"holds {dtype} data (Python objects, strings or records); a {what} "
+                                              "holds numbers only", name)
+                    nbytes = math.prod(shape) * dtype.itemsize
+                    if f.tell() + nbytes != info.file_size:
+                        raise FileError(path, f"its header claims shape {shape} ({nbytes} bytes) but it holds "
+                                              f"{info.file_size - f.tell()}", name)
+                    data = f.read(nbytes)
+                out[name] = np.frombuffer(data, dtype=dtype).reshape(shape, order="F" if fortran else "C").copy()
             return out
     except FileError:
         raise
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as exc:
-        problem = "it holds Python objects (pickled data)" if "pickle" in str(exc) else type(exc).__name__
-        raise FileError(path, f"is not a readable {what} ({problem}); it must be an .npz archive of numeric "
-                              "arrays") from None
+    except MemoryError:
+        raise FileError(path, f"is too large to load; a {what} unpacks to at most {max_bytes} bytes") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError, NotImplementedError) as exc:
+        detail = (str(exc).splitlines() or [""])[0][:120]
+        raise FileError(path, f"is not a readable {what} ({type(exc).__name__}: {detail}); it must be an .npz "
+                              "archive of numeric arrays") from None
 
 
 def check_number(path, field: str, v, low: float = -math.inf, high: float = math.inf, *, integer: bool = False,

@@ -58,7 +58,9 @@ class Dimension:
         """Whether ``v`` is a value this dimension can give (a resumed trial's parameter is checked so)."""
         if self.choices is not None:
             return any(v == c and type(v) is type(c) for c in self.choices)
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            return False
+        if isinstance(v, int) and v.bit_length() > 63 or isinstance(v, float) and not math.isfinite(v):
             return False
         return self.low <= v <= self.high and (not self.integer or isinstance(v, int))
 
@@ -203,7 +205,8 @@ def _suggest(trial, d: Dimension):
 
 
 TRIAL_COLUMNS = ("trial", "params", "scores", "mean", "seconds")
-MAX_STUDY_BYTES = 64 * 2**20  # study.json and trials.csv: a few KB a trial
+MAX_STUDY_BYTES = 16 * 2**20  # study.json and trials.csv: a few hundred bytes a trial
+MAX_SCORE = 1e15  # a mean greedy return beyond this is not one a trial wrote
 
 
 def _write_trials(path: Path, trials: list[dict]) -> None:
@@ -247,14 +250,14 @@ def read_trials(path: Path, space: list[Dimension] | None = None) -> list[dict]:
                 if names is not None and not names[name].holds(v):
                     raise ValueError(f"{where}: {name} = {v!r} is outside the searched space")
             if not isinstance(raw_scores, list) or not raw_scores or not all(
-                    x is None or (isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x))
-                    for x in raw_scores):
-                raise ValueError(f"{where}: its scores must be a list of finite numbers or null")
-            scores = [-math.inf if x is None else float(x) for x in raw_scores]
-            mean = float(np.mean(scores))
+                    x is None or (isinstance(x, float) and abs(x) <= MAX_SCORE) for x in raw_scores):
+                raise ValueError(f"{where}: its scores must be a list of numbers within ±{MAX_SCORE:.0e} (written "
+                                 "with a decimal point) or null")
+            scores = [-math.inf if x is None else x for x in raw_scores]
+            mean = -math.inf if None in raw_scores else math.fsum(scores) / len(scores)  # finite: scores bounded
             stated = float(r[3])
-            if not (stated == mean or (math.isfinite(mean) and abs(stated - mean) <= 1e-5 * max(1.0, abs(mean)))):
-                raise ValueError(f"{where}: its mean {r[3]!r} is not the mean of its scores")
+            if not (stated == mean or (math.isfinite(stated) and abs(stated - mean) <= 1e-5 * max(1.0, abs(mean)))):
+                raise ValueError(f"{where}: its mean {r[3][:40]!r} is not the mean of its scores")
             seconds = number(r[4], f"{where}: seconds")
             if seconds < 0:
                 raise ValueError(f"{where}: seconds is negative")
@@ -262,6 +265,6 @@ def read_trials(path: Path, space: list[Dimension] | None = None) -> list[dict]:
         return trials
     except FileError as exc:
         raise ValueError(f"{exc}; remove it to start the search over") from None
-    except (ValueError, RecursionError, csv.Error) as exc:  # a JSON error is a ValueError
+    except (ValueError, RecursionError, OverflowError, csv.Error) as exc:  # a JSON error is a ValueError
         raise ValueError(f"{path}: is not a connrl trials file ({str(exc).splitlines()[0][:200]}); remove it to "
                          "start the search over") from None

@@ -345,7 +345,10 @@ def test_qcon_t_learns_from_lessons_on_a_task_with_a_discrete_observation(tmp_pa
 
 
 def test_an_agent_whose_range_a_file_cannot_hold_is_refused_at_save_in_one_line(tmp_path):
-    agent = make_agent(Toy(), "QCON-R", warmup_steps=10, value_range=2e12)
+    with pytest.raises(ValueError, match="option value_range must be None or a number > 0 and <= 1e\\+12"):
+        make_agent(Toy(), "QCON-R", warmup_steps=10, value_range=2e12)  # refused before any step
+    agent = make_agent(Toy(), "QCON-R", warmup_steps=10, value_range=1e12)
+    agent.value_range = 2e12  # as rewards seen while learning could grow it
     with pytest.raises(ValueError, match="value_range 2e\\+12 is beyond 1e\\+12"):
         agent.save(tmp_path / "a")
 
@@ -365,7 +368,7 @@ def test_the_learning_rate_goes_linearly_to_lr_end_each_trial_at_the_rate_of_its
     np.testing.assert_array_equal(same[0].nets.w1, same[1].nets.w1)
     slower = make_agent(Toy(), "QCON-R", seed=2, warmup_steps=10, lr=0.1, lr_end=0.001, anneal_steps=5).learn(30)
     assert not np.array_equal(slower.nets.w1, same[0].nets.w1)
-    with pytest.raises(ValueError, match="option lr_end must be a number > 0, got 0"):
+    with pytest.raises(ValueError, match="option lr_end must be a number > 0 and <= 100, got 0"):
         make_agent(Toy(), lr_end=0)
 
 

@@ -137,7 +137,7 @@ def test_read_npz_never_unpickles_and_names_the_file(tmp_path):
     np.save(tmp_path / "one.npy", np.zeros(2))
     (tmp_path / "trunc.npz").write_bytes((tmp_path / "ok.npz").read_bytes()[:40])
     (tmp_path / "noise.npz").write_bytes(np.random.default_rng(0).bytes(4096))
-    for name, message in (("obj.npz", "it holds Python objects (pickled data)"), ("one.npy", "is a single .npy array"),
+    for name, message in (("obj.npz", "holds object data (Python objects"), ("one.npy", "is a single .npy array"),
                           ("trunc.npz", "is not a readable array file"), ("none.npz", "no such array file"),
                           ("noise.npz", "is not an .npz archive")):
         with pytest.raises(FileError) as e:

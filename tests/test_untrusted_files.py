@@ -27,7 +27,7 @@ def _run(args, cwd) -> object:
 @pytest.fixture(scope="module")
 def agent_folder(tmp_path_factory) -> Path:
     cwd = tmp_path_factory.mktemp("agent43")
-    proc = ft.cli(["train", "CartPole-v1", "--steps", "300", "--quiet", "--save", "agent"], cwd)
+    proc = ft.cli(["train", "CartPole-v1", "--steps", "300", "--quiet", "--save", "agent"], cwd, timeout=300)
     assert proc.returncode == 0, ft.describe(proc)
     return cwd / "agent"
 
@@ -129,15 +129,15 @@ def test_a_lesson_file_with_a_5000_digit_integer_names_the_file(tmp_path):
                            cwd), "l.json")
 
 
-def _tune(cwd: Path, *extra: str):
-    return _run(["tune", "CartPole-v1", "--trials", "1", "--steps", "200", "--seeds", "5", "--eval-episodes", "1",
-                 "--space", "lr=0.02,0.05", "--out", "t", *extra], cwd)
+def _tune(cwd: Path, *extra: str, timeout: float = LIMIT):
+    return ft.cli(["tune", "CartPole-v1", "--trials", "1", "--steps", "200", "--seeds", "5", "--eval-episodes", "1",
+                   "--space", "lr=0.02,0.05", "--out", "t", *extra], cwd, timeout=timeout, memory_cap=True)
 
 
 @pytest.fixture(scope="module")
 def tuned(tmp_path_factory) -> Path:
     cwd = tmp_path_factory.mktemp("tune43")
-    proc = _tune(cwd)
+    proc = _tune(cwd, timeout=300)  # a fixture trains, so it gets the time a loaded machine needs
     assert proc.returncode == 0, ft.describe(proc)
     return cwd / "t"
 
@@ -145,7 +145,7 @@ def tuned(tmp_path_factory) -> Path:
 @pytest.mark.parametrize("change, words", [
     (lambda rows: rows[1].__setitem__(3, "inf"), "is not the mean of its scores"),
     (lambda rows: rows[1].__setitem__(3, "999"), "is not the mean of its scores"),
-    (lambda rows: rows[1].__setitem__(2, '["high"]'), "scores must be a list of finite numbers"),
+    (lambda rows: rows[1].__setitem__(2, '["high"]'), "scores must be a list of numbers within"),
     (lambda rows: rows[1].__setitem__(1, '{"lr": 7}'), "lr = 7 is outside the searched space"),
     (lambda rows: rows[1].__setitem__(4, "soon"), "could not convert"),
 ])
@@ -236,3 +236,139 @@ def test_a_special_file_is_refused_by_the_reader_itself(tmp_path):
         read_limited(big, 100)
     assert read_limited(big, 101) == b"x" * 101
     assert stat.S_ISREG(os.stat(big).st_mode)
+
+
+# ------------------------------------------------------------------------------- the review's attacks (issue 43)
+
+def test_nesting_is_measured_in_linear_time():
+    """An unterminated string of escaped quotes once cost O(n^2) to skip (40 KB: 6.7 s)."""
+    import time
+
+    from connrl.storage import max_depth
+
+    raw = b'"' + b'\\"' * 500_000
+    t0 = time.perf_counter()
+    assert max_depth(raw) == 0 and max_depth(b'[{"a": "]]]", "b": [[1]]}]') == 4
+    assert time.perf_counter() - t0 < 2.0
+
+
+def test_an_agent_json_of_escaped_quotes_is_refused_quickly(agent_folder, tmp_path):
+    cwd = _cwd(tmp_path, agent_folder)
+    (cwd / "agent" / "agent.json").write_bytes(b'"' + b'\\"' * 200_000)
+    ft.assert_refused(_run(["evaluate", "agent", "--episodes", "1"], cwd), "agent.json")
+
+
+def _npz_member(name: str, header: dict, data: bytes) -> tuple[str, bytes]:
+    import numpy as np
+
+    buf = __import__("io").BytesIO()
+    np.lib.format.write_array_header_1_0(buf, header)
+    return f"{name}.npy", buf.getvalue() + data
+
+
+def test_an_archive_is_not_believed_about_its_arrays(tmp_path):
+    """A header claiming 10^15 elements must not make NumPy allocate them; members that unpack past the limit are
+    refused before any is unpacked; object arrays are refused without unpickling."""
+    import zipfile
+
+    from connrl.storage import FileError, read_npz
+
+    bomb = tmp_path / "shape.npz"
+    with zipfile.ZipFile(bomb, "w") as z:
+        z.writestr(*_npz_member("w", {"descr": "<f8", "fortran_order": False, "shape": (10**15,)}, b"\0" * 64))
+    with pytest.raises(FileError, match=r"w: its header claims shape \(1000000000000000,\)"):
+        read_npz(bomb)
+    big = tmp_path / "inflates.npz"
+    zeros = b"\0" * 2**20
+    with zipfile.ZipFile(big, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as z:
+        for k in range(2):
+            with z.open(f"a{k}.npy", "w", force_zip64=True) as f:
+                for _ in range(300):
+                    f.write(zeros)
+    assert big.stat().st_size < 5 * 2**20
+    with pytest.raises(FileError, match="unpacks to 629145600 bytes; a array file unpacks to at most"):
+        read_npz(big)
+
+
+@pytest.mark.parametrize("scores, mean, words", [("[1e308, 1e308]", "inf", "scores must be a list of numbers"),
+                                                 ("[1.5e16, 1.0]", "7.5e+15", "scores must be a list of numbers"),
+                                                 ("[" + "1" * 401 + "]", "1", "scores must be a list of numbers")])
+def test_a_trials_row_cannot_win_by_overflow(scores, mean, words, tuned, tmp_path):
+    import csv
+    import io
+
+    cwd = _cwd(tmp_path)
+    shutil.copytree(tuned, cwd / "t")
+    (cwd / "t" / "best.yml").unlink()
+    rows = list(csv.reader(io.StringIO((cwd / "t" / "trials.csv").read_text())))
+    rows[1][2], rows[1][3] = scores, mean
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerows(rows)
+    (cwd / "t" / "trials.csv").write_text(buf.getvalue())
+    line = ft.assert_refused(_tune(cwd, "--trials", "2"), "trials.csv")
+    assert words in line and not (cwd / "t" / "best.yml").exists()
+
+
+@pytest.mark.parametrize("text, words", [
+    ("CartPole-v1:\n  n_timesteps: " + "7" * 5000 + "\n", "holds a value that cannot be read"),
+    ("CartPole-v1:\n  n_timesteps: 0x" + "f" * 5000 + "\n", "an integer of"),
+    ("CartPole-v1:\n  env_kwargs: {a: 0x" + "f" * 5000 + "}\n", "env_kwargs must be plain values"),
+    ("CartPole-v1:\n  lr: 0.05\x00\n", "is not valid YAML"),
+    ("CartPole-v1:\n  lr: 100000000000000000000\n", "option lr must be a number > 0 and <= 100"),
+])
+def test_a_settings_value_python_cannot_use_names_the_file(text, words, tmp_path):
+    cwd = _cwd(tmp_path)
+    path = _settings(cwd, text)
+    line = ft.assert_refused(_run(["train", "CartPole-v1", "--hyperparams", path.name, "--quiet", "--save", "out"],
+                                  cwd), path.name)
+    assert words in line and not (cwd / "out").exists()
+
+
+def test_an_option_too_large_for_the_kernels_is_refused_before_training(tmp_path):
+    cwd = _cwd(tmp_path)
+    line = ft.assert_refused(_run(["train", "CartPole-v1", "--option", "lr=100000000000000000000", "--quiet",
+                                   "--save", "out"], cwd), "option lr")
+    assert "<= 100" in line and not (cwd / "out").exists()
+
+
+def test_a_forged_progress_row_is_refused_on_resume(agent_folder, tmp_path):
+    cwd = _cwd(tmp_path, agent_folder)
+    log = cwd / "agent" / "progress.csv"
+    lines = log.read_text().splitlines()
+    head = lines[0].split(",")
+    cells = lines[1].split(",")
+    cells[head.index("return")] = "inf"
+    log.write_text("\n".join([lines[0], ",".join(cells), *lines[2:]]) + "\n")
+    line = ft.assert_refused(_run(["train", "CartPole-v1", "--steps", "600", "--quiet", "--save", "agent",
+                                   "--resume"], cwd), "progress.csv")
+    assert "not a finite number" in line
+
+
+def test_a_resumed_train_takes_the_lock_too(agent_folder, tmp_path):
+    from connrl.experiments.guards import run_lock
+
+    cwd = _cwd(tmp_path, agent_folder)
+    with run_lock(cwd / "agent"):
+        line = ft.assert_refused(_run(["train", "CartPole-v1", "--steps", "600", "--quiet", "--save", "agent",
+                                       "--resume"], cwd), "agent")
+    assert "another connrl command is writing to" in line and "give another --save" in line
+
+
+def test_one_bad_run_csv_leaves_out_its_run_not_the_page(tmp_path):
+    from connrl import cli
+
+    out = tmp_path / "runs"
+    assert cli.main(["run", "pole-full", "--profile", "tiny", "--out", str(out), "--workers", "1", "--quiet"]) == 0
+    csv_file = next(out.rglob("seed-0.csv"))
+    csv_file.write_bytes(b"\xff\xfe not text")
+    assert cli.main(["results", "--out", str(out), "--doc", str(tmp_path / "R.md")]) == 0
+    assert (tmp_path / "R.md").exists()
+
+
+def test_plot_of_an_experiment_is_not_mistaken_for_a_folder(tmp_path, monkeypatch):
+    from connrl import cli
+
+    assert cli.main(["run", "td-depth", "--profile", "tiny", "--out", str(tmp_path), "--workers", "1",
+                     "--quiet"]) == 0
+    monkeypatch.chdir(tmp_path)  # ./td-depth is the stored experiment's folder
+    assert cli.main(["plot", "td-depth", "--out", "."]) == 0

@@ -125,8 +125,9 @@ def run_lock(folder: Path, other: str = "--out"):
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
+            then = " (its finished runs are then reused)" if other == "--out" else ""
             raise BlockingIOError(errno.EWOULDBLOCK, f"another connrl command is writing to {folder}; wait for it "
-                                  f"to finish (what it finished is then reused) or give another {other}") from None
+                                  f"to finish{then} or give another {other}") from None
         yield
     finally:
         os.close(fd)

@@ -67,11 +67,12 @@ def params_hash(params: dict) -> str:
 
 
 def remove_stale_temporaries(folder: Path) -> list[Path]:
-    """Remove the temporary files (``.NAME.*.tmp``, ``connrl.storage``'s) a killed writer left in ``folder``: called
-    under the folder's lock, so no other writer's file is among them."""
+    """Remove the temporary files (``.NAME.*.tmp``, ``connrl.storage``'s) a killed run left in ``folder``: those of
+    the run records and the summary only, which only a run writes, and under the folder's lock, so no live writer's
+    (a plot being redrawn meanwhile writes ``.curve.png.*.tmp``, which is left alone)."""
     gone = []
     for p in Path(folder).rglob(".*.tmp"):
-        if p.is_file() and not p.is_symlink():
+        if p.name.startswith((".seed-", ".summary.json.")) and p.is_file() and not p.is_symlink():
             p.unlink(missing_ok=True)
             gone.append(p)
     return gone

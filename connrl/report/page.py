@@ -22,7 +22,7 @@ from connrl.experiments.registry import all_experiments
 from connrl.experiments.runner import make_jobs, missing_runs, stored_runs
 from connrl.experiments.store import DamagedFile
 from connrl.report import verdicts
-from connrl.storage import atomic_write_text, read_limited_text
+from connrl.storage import FileError, atomic_write_text, read_limited_text
 
 
 def fmt(v) -> str:
@@ -147,7 +147,11 @@ def run_rows(spec, summary: dict, out_dir: Path, label: str) -> list[list[dict]]
     for j in jobs:
         f = Path(f"{j.path}.csv")
         if j.variant == label and f.exists():
-            text = read_limited_text(f, store.MAX_JSON_BYTES, "run CSV")
+            try:
+                text = read_limited_text(f, store.MAX_JSON_BYTES, "run CSV")
+            except FileError as exc:  # one bad file leaves out its run, not the page
+                warn(f"{exc}; left out")
+                continue
             out.append([{k: _value(v) for k, v in row.items() if v not in ("", None)}
                         for row in csv.DictReader(io.StringIO(text))])
     return [r for r in out if r]
