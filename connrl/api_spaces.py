@@ -183,3 +183,16 @@ def check_space(meta, d, key: str, max_width: int, depth: int = 0) -> int:
     if any(float(lo) > float(hi) for lo, hi in zip(d["low"], d["high"], strict=True)):
         raise FileError(meta, "holds a low bound above its high bound", f"{key}.low")
     return size
+
+
+def check_render_dependency(env, env_id: str, env_kwargs: dict) -> None:
+    """Gymnasium's own worlds draw a human window with pygame, imported only at the first frame: without it training
+    would end in a long traceback mid-run, so say which package is missing before any step."""
+    import importlib.util
+
+    entry = str(getattr(getattr(env, "spec", None), "entry_point", "") or "")
+    if env_kwargs.get("render_mode") == "human" and entry.startswith("gymnasium.") and \
+            importlib.util.find_spec("pygame") is None:
+        raise ValueError(f"{env_id} with render_mode='human' needs pygame, which is not installed: "
+                         "pip install \"gymnasium[classic-control]\" (or \"gymnasium[box2d]\"), or leave render_mode "
+                         "out")

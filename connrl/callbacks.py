@@ -292,3 +292,29 @@ def read_progress(path) -> list[dict]:
             raise ValueError(f"{path}: line {n} holds a cell that is not a finite number within ±{MAX_LOGGED:.0e}")
         rows.append(row)
     return rows
+
+
+def write_training_curve(out: Path, rows: list[dict], title: str) -> Path:
+    """``out/curve.png``: each training trial's return and, where evaluated, the greedy mean (progress.csv's rows;
+    `connrl train` and `connrl plot FOLDER` draw it)."""
+    import io
+
+    import matplotlib.pyplot as plt
+
+    from connrl.storage import atomic_write_bytes
+
+    fig, ax = plt.subplots(figsize=(6, 3.5), dpi=110)
+    ax.plot([r["steps"] for r in rows], [r["return"] for r in rows], lw=0.8, label="training trial")
+    ev = [r for r in rows if r["eval_mean"] is not None]
+    if ev:
+        ax.plot([r["steps"] for r in ev], [r["eval_mean"] for r in ev], "o-", ms=3, lw=1, label="greedy evaluation")
+        ax.legend(fontsize=8)
+    ax.set_xlabel("environment steps")
+    ax.set_ylabel("return")
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    plt.close(fig)
+    atomic_write_bytes(out / "curve.png", buf.getvalue())
+    return out / "curve.png"

@@ -62,27 +62,19 @@ def _make_env(env_id: str, env_kwargs: dict | None = None):
     import gymnasium as gym
 
     import connrl  # noqa: F401  (registers the thesis's worlds)
+    from connrl.api_spaces import check_render_dependency
+
     try:
         env = gym.make(env_id, **(env_kwargs or {}))
     except Exception as exc:  # an unknown id, a module that is not installed, bad registration: one line
         first = (str(exc).strip().splitlines() or [""])[0]
         raise SystemExit(f"connrl: cannot make environment {env_id!r}: {type(exc).__name__}: {first}") from None
-    _check_render_dependency(env, env_id, env_kwargs or {})
-    return env
-
-
-def _check_render_dependency(env, env_id: str, env_kwargs: dict) -> None:
-    """Gymnasium's own worlds draw a human window with pygame, imported only at the first frame: without it training
-    would end in a long traceback mid-run, so say which package is missing before any step."""
-    import importlib.util
-
-    entry = str(getattr(getattr(env, "spec", None), "entry_point", "") or "")
-    if env_kwargs.get("render_mode") == "human" and entry.startswith("gymnasium.") and \
-            importlib.util.find_spec("pygame") is None:
+    try:
+        check_render_dependency(env, env_id, env_kwargs or {})
+    except ValueError as exc:
         env.close()
-        raise SystemExit(f"connrl: {env_id} with render_mode='human' needs pygame, which is not installed: "
-                         "pip install \"gymnasium[classic-control]\" (or \"gymnasium[box2d]\"), or leave render_mode "
-                         "out")
+        raise SystemExit(f"connrl: {exc}") from None
+    return env
 
 
 def key_value(text: str) -> str:
@@ -248,7 +240,7 @@ def _train(args, out: Path, settings: dict, env, eval_env, fresh: bool) -> int:
     import json
 
     from connrl.api import load, make_agent
-    from connrl.callbacks import EvalCallback, ProgressLog, TensorBoardLog
+    from connrl.callbacks import EvalCallback, ProgressLog, TensorBoardLog, write_training_curve
     from connrl.storage import atomic_write_text
 
     saved: list[int] = []  # the steps of the latest good save
@@ -268,7 +260,7 @@ def _train(args, out: Path, settings: dict, env, eval_env, fresh: bool) -> int:
             agent.save(out)
             atomic_write_text(out / "settings.json", json.dumps(settings, indent=1) + "\n")  # --resume reads it
             log.flush()
-            _write_curve(out, log.rows, f"{args.env_id}, {settings['agent']}, seed {settings['seed']}")
+            write_training_curve(out, log.rows, f"{args.env_id}, {settings['agent']}, seed {settings['seed']}")
             saved.append(agent.steps_done)
 
     agent, stopped = None, None
@@ -382,34 +374,9 @@ def _finish(agent, out: Path, fresh: bool, stopped, saved: list[int], save) -> i
     return 0
 
 
-def _write_curve(out: Path, rows: list[dict], title: str) -> Path:
-    """``out/curve.png``: each training trial's return and, where evaluated, the greedy mean (progress.csv's rows)."""
-    import io
-
-    import matplotlib.pyplot as plt
-
-    from connrl.storage import atomic_write_bytes
-
-    fig, ax = plt.subplots(figsize=(6, 3.5), dpi=110)
-    ax.plot([r["steps"] for r in rows], [r["return"] for r in rows], lw=0.8, label="training trial")
-    ev = [r for r in rows if r["eval_mean"] is not None]
-    if ev:
-        ax.plot([r["steps"] for r in ev], [r["eval_mean"] for r in ev], "o-", ms=3, lw=1, label="greedy evaluation")
-        ax.legend(fontsize=8)
-    ax.set_xlabel("environment steps")
-    ax.set_ylabel("return")
-    ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    plt.close(fig)
-    atomic_write_bytes(out / "curve.png", buf.getvalue())
-    return out / "curve.png"
-
-
 def plot_training(folder: Path) -> Path:
     """Redraw a trained agent's curve.png from its progress.csv (``connrl plot FOLDER``)."""
-    from connrl.callbacks import read_progress
+    from connrl.callbacks import read_progress, write_training_curve
 
     rows = read_progress(folder / "progress.csv")
     title = str(folder)
@@ -418,7 +385,7 @@ def plot_training(folder: Path) -> Path:
         title = f"{s['env_id']}, {s['agent']}, seed {s['seed']}"
     except (ValueError, KeyError):  # no settings (an agent saved by the API): the folder names the plot
         pass
-    return _write_curve(folder, rows, title)
+    return write_training_curve(folder, rows, title)
 
 
 def _saved_env_id(path: str) -> str | None:

@@ -141,12 +141,12 @@ def test_an_environment_id_in_a_file_never_imports_code(saved, tmp_path, monkeyp
 def test_train_never_saves_a_diverged_agent_and_says_so(tmp_path, capsys):
     out = tmp_path / "div"
     code = cli.main(["train", "CartPole-v1", "--steps", "2000", "--quiet", "--save", str(out),
-                     "--option", "lr=1e308"])
+                     "--option", "lr=100", "--option", "value_range=0.000001"])  # a huge step on a tiny scale
     err = capsys.readouterr().err.strip()
     assert code == 1 and err.startswith("connrl: training diverged by step ") and "it was not saved" in err
     assert "\n" not in err and not (out / "agent.json").exists()
     assert read_progress(out / "progress.csv")[-1]["steps"] <= 2000  # the log of what diverged is kept
-    agent = connrl.make_agent(gym.make("CartPole-v1"), lr=1e308, warmup_steps=100).learn(300)
+    agent = connrl.make_agent(gym.make("CartPole-v1"), lr=100, value_range=1e-6, warmup_steps=100).learn(300)
     with pytest.raises(ValueError, match="the agent diverged after"):
         agent.save(tmp_path / "api")
 

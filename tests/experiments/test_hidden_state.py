@@ -104,8 +104,12 @@ def test_the_window_size_experiment_changes_only_the_window():
     from connrl.experiments.registry import get_experiment
     from connrl.tasks.hidden_state import table_entry
     spec = get_experiment("cup-window")
-    n5, n2 = (spec.variant_params(spec.params, v) for v in spec.variants)
+    n5, n2, s5, s2 = (spec.variant_params(spec.params, v) for v in spec.variants)
     assert table_entry(n5)["window"] == 5 and table_entry(n2)["window"] == 2  # Table B.1: N = 5 for Task 1
     t5, t2 = table_entry(n5), table_entry(n2)
     assert {k: v for k, v in t5.items() if k != "window"} == {k: v for k, v in t2.items() if k != "window"}
     assert table_entry(CupParams(task=1, arch="window-Q", lam=0.8)) == t5  # N = 5 is cup-task1's window-Q
+    # the same pair again at Table B.1's own 1/T schedule (issue 42): only the schedule differs
+    assert (s5.window_q_inv_t, s2.window_q_inv_t) == (None, None) and n5.window_q_inv_t == (5.0, 30.0)
+    assert table_entry(s5)["inv_t"] == table_entry(s2)["inv_t"] == (10.0, 30.0) and t5["inv_t"] == (5.0, 30.0)
+    assert {k: v for k, v in table_entry(s5).items() if k != "inv_t"} == {k: v for k, v in t5.items() if k != "inv_t"}

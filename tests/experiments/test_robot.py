@@ -18,7 +18,7 @@ def test_specs_cover_chapter_5():
     assert names == {"robot-teaching-dp", "robot-teaching-dk", "robot-teaching-wfl", "robot-lambda-dp",
                      "robot-lambda-wfl", "robot-repairs-3", "robot-repairs-10", "robot-single-layer",
                      "robot-dp-geometry", "robot-dk-geometry", "robot-dp-calibration", "robot-dp-replay-order",
-                     "robot-dp-fresh", "robot-dp-lesson-use"}
+                     "robot-dp-fresh", "robot-dp-lesson-use", "robot-teaching-dk-fresh"}
     for s in EXPERIMENTS:
         params, runs = s.resolve("full")
         assert runs == 7 and params.trials == 300 and params.test_every == 10 and params.test_tasks == 50
