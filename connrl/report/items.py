@@ -438,5 +438,6 @@ def item_rows(claims) -> list[ItemRow]:
             notes.append("not tested: " + PARTS_UNCHECKED[key])
         rows.append(ItemRow(key, section, statement, verdict, len(stated), sum(bool(c.setting) for c in cs
                                                                                if not c.recheck),
-                            sum(c.recheck for c in cs), "; ".join(notes)))
+                            sum(c.recheck and not c.setting for c in cs),  # re-checks of stated-value checks
+                            "; ".join(dict.fromkeys(notes))))
     return rows

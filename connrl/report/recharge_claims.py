@@ -264,8 +264,9 @@ def _checks_exps_1_4_5(r: dict, q: dict) -> list[Check]:
             bn, bg = run_end(r["e4n"], "docked_B"), run_end(r[g], "docked_B")
             out.append(_done("Fig. 6.6, Exp. 4", "6.6.4", "with steps a fifth as long, Exp. 4 without grouping is "
                              "unable to dock from room B, and state grouping is what makes the difference",
-                             f"the grouping arm's room-B share (the same within ±{SHARE_MARGIN:.2f} = no "
-                             f"difference); fewer than {MOST:.0%} of B's tasks without grouping",
+                             "the grouping arm's room-B share (above it by a one-sided Welch test = a difference; "
+                             f"the same within ±{SHARE_MARGIN:.2f} by TOST = none); fewer than {MOST:.0%} of B's "
+                             "tasks without grouping",
                              f"room B docked, last 3 tests: no grouping {_mean_text(bn)}, grouping {_mean_text(bg)}",
                              [level_test(bn, MOST, above=False), _grouping_gain(bn, bg)], ROOM_B_CAUSE,
                              setting=setting))

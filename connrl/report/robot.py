@@ -392,8 +392,10 @@ def _chapter_claims(summaries: dict, curves) -> list[str]:
                             _heading(specs["robot-lambda-dp"]), labels=("lambda=0", "lambda=0.3"))
     if "robot-dp-fresh" in summaries:
         s = summaries["robot-dp-fresh"]
-        checks.meets_claims(s, "", "5.4.1", _heading(specs["robot-dp-fresh"]), tag=recheck_tag([s], 1000, 7),
-                            item_for=_fresh_dp_item)
+        for section, labels in (("5.4.1", [v for v in s["variants"] if "lambda=" not in v]),
+                                ("5.4.2", [v for v in s["variants"] if "lambda=" in v])):
+            checks.meets_claims(s, "", section, _heading(specs["robot-dp-fresh"]), labels=labels,
+                                tag=recheck_tag([s], 1000, 7), item_for=_fresh_dp_item)
     lines = [_teaching_claim(name, summaries[name]) for name in TEACHING if name in summaries]
     if "robot-teaching-dk-fresh" in summaries:
         s = summaries["robot-teaching-dk-fresh"]

@@ -110,16 +110,16 @@ def speedup(out: Path, doc: Path, name: str = "survival-speedup", tag: str = "",
                    "food over all tests " + ", ".join(f"{lab} {m:.2f}" for lab, m in means.items()),
                    "each adjacent pair in order, one-sided Welch at 0.05 on food over all tests",
                    checks.ordering_verdict(word), anchor=heading, recheck=bool(tag))
-    # the re-check repeats the check's own rule (the thesis's plays); a looser factor is a row of its own, so a
-    # re-check never stands in for a check under an easier rule
-    for f in (1, factor) if factor != 1 else (1,):
-        verdict = plays_verdict(ours, f)
-        rule = "the thesis's plays" if f == 1 else f"{f:g}× the thesis's plays"
-        verdicts.claim(f"Table 4.5: plays to reach 8{'' if f == 1 else f' within {f:g}×'}{tag}", "4.5",
-                       ", ".join(f"{lab} {t}" for lab, _, t in SPEEDUP_ROWS),
-                       ", ".join(f"{lab} {'not reached' if ours[lab] is None else f'{ours[lab]:.0f}'}" for lab in ours),
-                       f"the mean curve reaches 8 within {rule}, every agent (no test of spread)",
-                       verdict, "" if verdict == verdicts.REPRODUCED else cause, anchor=heading, recheck=bool(tag))
+    # the re-check repeats the check's own rule (the thesis's plays), so it never stands in for the check under an
+    # easier one; issue 31's looser factor is said in the section, not scored a second time on the same cells
+    verdict = plays_verdict(ours, 1)
+    verdicts.claim(f"Table 4.5: plays to reach 8{tag}", "4.5", ", ".join(f"{lab} {t}" for lab, _, t in SPEEDUP_ROWS),
+                   ", ".join(f"{lab} {'not reached' if ours[lab] is None else f'{ours[lab]:.0f}'}" for lab in ours),
+                   "the mean curve reaches 8 within the thesis's plays, every agent (no test of spread)",
+                   verdict, "" if verdict == verdicts.REPRODUCED else cause, anchor=heading, recheck=bool(tag))
+    if factor != 1:
+        lines += [f"Within {factor:g}× the thesis's plays (issue 31's looser criterion, shown, not scored a second "
+                  f"time): **{plays_verdict(ours, factor)}**.", ""]
     if source == "survival-speedup":  # elsewhere the study's own section shows the curves
         lines += [figure(out / source / "curve.png", doc, source), ""]
     return lines

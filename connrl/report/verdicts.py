@@ -275,8 +275,8 @@ def scoreboard(claims: list[Claim]) -> list[str]:
     lines = ["## Scoreboard", "",
              f"**The thesis's result items**: one row per figure, table or reported sentence of Chs. 4-8 "
              f"({len(rows)}; `connrl/report/items.py`). {items.RULE}", "",
-             "| thesis item | section | the thesis reports | checks: stated values / our departures / re-checks | "
-             "verdict | notes |", "|---|---|---|---|---|---|"]
+             "| thesis item | section | the thesis reports | checks: stated values / our departures / their re-checks "
+             "| verdict | notes |", "|---|---|---|---|---|---|"]
     for r in rows:
         c = first.get(r.key)
         key = f"[{r.key}](#{_slug(c.anchor)})" if c is not None and c.anchor else r.key
@@ -296,7 +296,8 @@ def scoreboard(claims: list[Claim]) -> list[str]:
         item = f"[{c.item}](#{_slug(c.anchor)})" if c.anchor else c.item
         verdict = c.verdict if c.verdict == REPRODUCED else f"**{c.verdict}**"
         setting = c.setting or "stated values"
-        criterion = (f"**calibrated on this claim**: {c.calibrated}; " if c.calibrated else "") + c.criterion
+        mark = "a re-check of a setting **calibrated on this claim**" if c.recheck else "**calibrated on this claim**"
+        criterion = (f"{mark}: {c.calibrated}; " if c.calibrated else "") + c.criterion
         lines.append(f"| {item} | {c.section} | {c.thesis} | {c.ours} | {setting} | {criterion} | {verdict}"
                      f"{': ' + c.cause if c.cause else ''} |")
     lines += [""]
@@ -304,8 +305,10 @@ def scoreboard(claims: list[Claim]) -> list[str]:
                                                                    c.setting]),
                         ("Checks at our departures from them (shown, not counted for an item)",
                          [c for c in claims if not c.recheck and c.setting]),
-                        ("Re-checks on seeds never used in development (an item counts one in place of the "
-                         "stated-value check it repeats)", [c for c in claims if c.recheck])):
+                        ("Re-checks on seeds never used in development, of stated-value checks (an item counts one "
+                         "in place of the check it repeats)", [c for c in claims if c.recheck and not c.setting]),
+                        ("Re-checks of departures (shown, not counted for an item)",
+                         [c for c in claims if c.recheck and c.setting])):
         if group:
             lines.append(f"{kind}: {_tally(group)}.")
     return lines + [""]
