@@ -45,14 +45,13 @@ from gymnasium import spaces
 from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
 from connrl.agents.memory import RecurrentQ, RecurrentQConfig, WindowQ, window_input_size
 from connrl.api_files import (
-    MAX_VALUE_RANGE,
     check_arrays,
     read_agent,
     read_taught,
     record_lessons,
     write_agent,
 )
-from connrl.api_options import MAX_NET_WEIGHTS, AgentOptions, options_from, temperatures
+from connrl.api_options import MAX_NET_WEIGHTS, MAX_VALUE_RANGE, AgentOptions, options_from, temperatures
 from connrl.api_spaces import (
     affine_scales,
     check_observation_space,

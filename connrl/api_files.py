@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
+from connrl.api_options import MAX_VALUE_RANGE
 from connrl.api_spaces import COMPOSITE, binary_units, check_single, check_space, flatten
 from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
 from connrl.core.lessons import Lesson
@@ -82,7 +83,6 @@ def read_agent(path: Path, kinds: tuple[str, ...]) -> tuple[dict, dict[str, np.n
 
 
 MAX_RECORD_BYTES = 16 * 2**20
-MAX_VALUE_RANGE = 1e12  # Agent.save refuses a larger one, so every saved agent loads
 MAX_LESSONS = 100_000
 MAX_INPUTS, MAX_ACTIONS = 100_000, 10_000  # observation width and actions an agent file may declare
 KINDS_OF_SCALER = {"Discrete": "onehot", "Box": "affine"}  # the scaler kind of each space type; others: "flat"

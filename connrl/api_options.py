@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 from connrl.nets.mlp import MAX_UNITS
+from connrl.storage import shown
 
 # the size-like options' ranges: far beyond any task of the thesis or of Gymnasium's classic control, small enough
 # that no typo asks for gigabytes or centuries before it is noticed
@@ -79,24 +80,12 @@ class AgentOptions:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
                 raise ValueError(f"option {name} must be in [0, 1], got {v!r}")
         if self.value_range is not None and (isinstance(self.value_range, bool) or not (
-                isinstance(self.value_range, (int, float)) and 0 < self.value_range <= MAX_OPTION_RANGE)):
-            raise ValueError(f"option value_range must be None or a number > 0 and <= {MAX_OPTION_RANGE:g}, got "
+                isinstance(self.value_range, (int, float)) and 0 < self.value_range <= MAX_VALUE_RANGE)):
+            raise ValueError(f"option value_range must be None or a number > 0 and <= {MAX_VALUE_RANGE:g}, got "
                              f"{shown(self.value_range)}")
 
 
-MAX_OPTION_RANGE = 1e12  # as an agent file holds it (connrl.api_files.MAX_VALUE_RANGE)
-
-
-def shown(v) -> str:
-    """``repr(v)`` for a message, short: an integer too long to print is described (repr of one beyond 4300 digits
-    raises), anything else cut at 40 characters."""
-    if isinstance(v, int) and not isinstance(v, bool) and v.bit_length() > 128:
-        return f"an integer of {v.bit_length()} bits"
-    try:
-        r = repr(v)
-    except ValueError:  # a container holding such an integer
-        return f"a {type(v).__name__} holding an integer too long to show"
-    return r if len(r) <= 40 else r[:37] + "..."
+MAX_VALUE_RANGE = 1e12  # value_range an option may set and an agent file may hold (Agent.save refuses more)
 
 
 def options_from(kwargs: dict) -> AgentOptions:

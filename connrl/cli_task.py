@@ -212,15 +212,12 @@ def one_writer(out: Path, option: str):
     writer is refused in one line before any work."""
     from connrl.experiments.guards import run_lock
 
-    lock = run_lock(out, option)
-    try:
-        lock.__enter__()
-    except BlockingIOError as exc:
-        raise SystemExit(f"connrl: {exc.strerror}") from None
-    try:
+    with contextlib.ExitStack() as stack:
+        try:  # only taking the lock is refused here; the block's own errors pass through
+            stack.enter_context(run_lock(out, option))
+        except BlockingIOError as exc:
+            raise SystemExit(f"connrl: {exc.strerror}") from None
         yield
-    finally:
-        lock.__exit__(None, None, None)
 
 
 def cmd_train(args) -> int:

@@ -18,14 +18,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from connrl.api_options import shown
-from connrl.storage import FileError, read_limited_text
+from connrl.storage import MAX_NESTING, FileError, read_limited_text, shown
 
 SETTINGS_DIR = Path(__file__).parent / "data" / "hyperparams"
 RESERVED = ("n_timesteps", "env_kwargs")
 MAX_SETTINGS_BYTES = 2**20
 MAX_STEPS = 10**10  # environment steps of one `connrl train` (and a settings file's n_timesteps): months of compute
-MAX_NESTING = 32  # a settings file nests a few levels
 
 
 def shipped_file(kind: str) -> Path:

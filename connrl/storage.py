@@ -330,6 +330,18 @@ def npz_arrays(raw: bytes, path, what: str = "array file", max_bytes: int = MAX_
                               "archive of numeric arrays") from None
 
 
+def shown(v) -> str:
+    """``repr(v)`` for a message, short: an integer too long to print is described (repr of one beyond 4300 digits
+    raises), anything else cut at 40 characters."""
+    if isinstance(v, int) and not isinstance(v, bool) and v.bit_length() > 128:
+        return f"an integer of {v.bit_length()} bits"
+    try:
+        r = repr(v)
+    except ValueError:  # a container holding such an integer
+        return f"a {type(v).__name__} holding an integer too long to show"
+    return r if len(r) <= 40 else r[:37] + "..."
+
+
 def check_number(path, field: str, v, low: float = -math.inf, high: float = math.inf, *, integer: bool = False,
                  low_open: bool = False) -> float | int:
     """A JSON number (not a bool) that is finite, whole if ``integer``, and in [low, high] (or (low, high])."""
@@ -341,8 +353,7 @@ def check_number(path, field: str, v, low: float = -math.inf, high: float = math
     if not in_range:
         bounds = " and ".join(([f"{'>' if low_open else '>='} {low:g}"] if low > -math.inf else [])
                               + ([f"<= {high:g}"] if high < math.inf else []))
-        shown = repr(v) if len(repr(v)) <= 40 else repr(v)[:37] + "..."
-        raise FileError(path, f"is {shown}; it must be {kind}{' ' + bounds if bounds else ''}", field)
+        raise FileError(path, f"is {shown(v)}; it must be {kind}{' ' + bounds if bounds else ''}", field)
     return v
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.storage import FileError, atomic_write_text, read_json, read_limited_text
+from connrl.storage import FileError, atomic_write_text, read_json, read_limited_text, shown
 
 EVAL_SEED = 2_000_000
 DEFAULT_SPACE = ("lr=0.01:0.2:log", "hidden=8,16,32", "lam=0.3,0.7,0.9", "lessons_per_trial=10,20,40")
@@ -225,12 +225,6 @@ def read_trials(path: Path, space: list[Dimension] | None = None) -> list[dict]:
     numbered 0, 1, ...; parameters a JSON object of the searched options (within ``space`` when given); scores finite
     numbers or null (a diverged agent); the mean the scores' mean (so a forged mean cannot win); seconds >= 0.
     ValueError in one line naming the file and the row otherwise."""
-    def number(cell: str, what: str) -> float:
-        v = float(cell)  # ValueError for a string
-        if not math.isfinite(v):
-            raise ValueError(f"{what} is {cell!r}; it must be a finite number")
-        return v
-
     try:
         rows = list(csv.reader(io.StringIO(read_limited_text(path, MAX_STUDY_BYTES, "trials file"))))
         if not rows or tuple(rows[0]) != TRIAL_COLUMNS:
@@ -248,7 +242,7 @@ def read_trials(path: Path, space: list[Dimension] | None = None) -> list[dict]:
                 raise ValueError(f"{where}: its parameters are not the searched options")
             for name, v in params.items():
                 if names is not None and not names[name].holds(v):
-                    raise ValueError(f"{where}: {name} = {v!r} is outside the searched space")
+                    raise ValueError(f"{where}: {name} = {shown(v)} is outside the searched space")
             if not isinstance(raw_scores, list) or not raw_scores or not all(
                     x is None or (isinstance(x, float) and abs(x) <= MAX_SCORE) for x in raw_scores):
                 raise ValueError(f"{where}: its scores must be a list of numbers within ±{MAX_SCORE:.0e} (written "
@@ -258,9 +252,9 @@ def read_trials(path: Path, space: list[Dimension] | None = None) -> list[dict]:
             stated = float(r[3])
             if not (stated == mean or (math.isfinite(stated) and abs(stated - mean) <= 1e-5 * max(1.0, abs(mean)))):
                 raise ValueError(f"{where}: its mean {r[3][:40]!r} is not the mean of its scores")
-            seconds = number(r[4], f"{where}: seconds")
-            if seconds < 0:
-                raise ValueError(f"{where}: seconds is negative")
+            seconds = float(r[4])  # ValueError for a string
+            if not (math.isfinite(seconds) and seconds >= 0):
+                raise ValueError(f"{where}: seconds is {r[4][:40]!r}; it must be a finite number >= 0")
             trials.append({"trial": k, "params": params, "scores": scores, "mean": mean, "seconds": seconds})
         return trials
     except FileError as exc:

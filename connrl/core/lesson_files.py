@@ -278,6 +278,8 @@ def _check_options(path: Path, doc: dict, env_kwargs: dict, defaults: dict) -> N
                               f"a lesson file holds lessons of one world, all with the same options")
 
 
-def lesson_file_options(path) -> dict:
-    """The world options (``env_kwargs``) a lesson file records, read by the same checked reader."""
-    return dict(_read_doc(Path(path)).get("env_kwargs") or {})
+def load_lessons_and_options(path, *, env_id: str | None = None, input_dim: int | None = None,
+                             n_actions: int | None = None) -> tuple[list[Lesson], dict]:
+    """``load_lessons`` and the world options (``env_kwargs``) the file records, from one read of it."""
+    doc, lessons = _load(Path(path), env_id, input_dim, n_actions)
+    return lessons, dict(doc.get("env_kwargs") or {})

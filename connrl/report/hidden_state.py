@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.experiments.hidden_state import CUP_FIGURES, EXPERIMENTS, FRESH_SEED, STATED_WINDOW_Q
+from connrl.experiments.hidden_state import CUP_FIGURES, EXPERIMENTS, FRESH_SEED, STATED, STATED_WINDOW_Q
 from connrl.report.checks import better_runs
 from connrl.report.hidden_state_models import frozen_model, imperfect_model
 from connrl.report.page import fixed, load_summary, note, recheck_tag
@@ -58,8 +58,7 @@ _CUP_THESIS = {1: "all three optimal (λ = 0.8)", 2: "window-Q and recurrent-Q l
 
 WINDOW_OURS = "ours: window-Q's 1/T 5 → 30 (Table B.1: 10 → 30)"
 WINDOW_CAUSE = ("with Table B.1's 10 → 30 window-Q's first policy is nearly deterministic and failed runs settle "
-                "into a "
-                "19-28-step habit whose untried actions keep negative values (our reading, "
+                "into a 19-28-step habit whose untried actions keep negative values (our reading, "
                 "connrl/experiments/hidden_state.py); 5 → 30 is ours, chosen on development seeds")
 
 
@@ -108,7 +107,7 @@ def _cup_claims(s: dict, task: int, fig: str, section: str, title: str, tag: str
 
 def _lambda_claims(s: dict, fig: str, section: str, anchor: str, tag: str) -> None:
     """Fig. 7.5's "lambda = 0 much worse", at Table B.1's window-Q schedule and at ours."""
-    for window, setting in ((" 1/T 10->30", ""), ("", WINDOW_OURS)):
+    for window, setting in ((STATED, ""), ("", WINDOW_OURS)):
         votes = []
         for arch in _CUP_EXPECT[1]:
             end = window if arch == "window-Q" else ""
@@ -223,7 +222,7 @@ def _window_table(s: dict) -> list[str]:
         lines.append(f"| {label} | {reached[label]}/{n} | {kept[label]}/{n} | "
                      f"{fixed(q['optimal_last100']['mean'], 2)} | {fixed(q['mean_steps_last100']['mean'], 2)} |")
     lines.append("")
-    for five, two, setting in (("N=5 (Table B.1), 1/T 10->30", "N=2, 1/T 10->30", ""),
+    for five, two, setting in ((f"N=5 (Table B.1),{STATED}", f"N=2,{STATED}", ""),
                                ("N=5 (Table B.1)", "N=2", WINDOW_OURS)):
         if two not in reached or five not in reached:
             continue
@@ -250,13 +249,13 @@ def _robustness_table(s: dict) -> list[str]:
               "recurrent-Q": "between the two", "recurrent-model": "robust (acts on the world state)"}
     for label, v in s["variants"].items():
         arch = label.split(" ")[0]
-        if label not in (arch, f"{arch} lambda=0.8", "window-Q 1/T 10->30"):
+        if label not in (arch, f"{arch} lambda=0.8", f"window-Q{STATED}"):
             continue
         runs = v["quantities"]["robust_fraction"]["per_run"]
         samples[label.replace(" lambda=0.8", "")] = [np.nan if x is None else x for x in runs]
         per = ", ".join(fixed(x, 2) for x in runs)
         lines.append(f"| {label.replace(' lambda=0.8', '')} | {per} | {thesis.get(arch, '')} |")
-    for window, setting in (("window-Q 1/T 10->30", ""), ("window-Q", WINDOW_OURS)):
+    for window, setting in ((f"window-Q{STATED}", ""), ("window-Q", WINDOW_OURS)):
         expected = [a for a in ("recurrent-model", "recurrent-Q", window) if a in samples]
         if len(expected) == 3 and np.isfinite(samples[window]).sum() < 2:  # too few optimal policies to probe
             k, n = int(np.isfinite(samples[window]).sum()), len(samples[window])

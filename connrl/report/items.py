@@ -358,6 +358,9 @@ PARTS_UNCHECKED = {
 # ------------------------------------------------------------------------------------------ verdict per item
 
 NOT_BUILT = "not built"
+# the items some check is placed on: one without any stored is "not run", not "not built"
+PLACED = set(CHECK_TO_ITEM.values()) | set(_BY_SECTION.values()) | {k for _, k in _PATTERNS} | set(
+    THESIS_ITEM_TO_ITEM.values())
 NOT_THE_CHECK = "not the check"  # connrl.report.page.recheck_tag's mark on a re-check run at other seeds or profile
 ITEM_VERDICTS = ("reproduced", "partly", "not reproduced", "undetermined", NOT_BUILT)
 RULE = ("An item's verdict comes from its checks at the thesis's stated values (rows at our departures are shown, "
@@ -403,7 +406,6 @@ def item_rows(claims) -> list[ItemRow]:
     for c in claims:
         by_item.setdefault(item_of(c.item, c.section, c.thesis_item, strict=False), []).append(c)
     unscored = {v: k for k, v in UNSCORED_TO_ITEM.items()}
-    expected = set(CHECK_TO_ITEM.values()) | set(_BY_SECTION.values()) | {k for _, k in _PATTERNS}
     unplaced = [(k, by_item[k][0].section, "(a check of ours not placed among the thesis's items)")
                 for k in by_item if k.startswith(UNPLACED)]
     rows = []
@@ -427,7 +429,7 @@ def item_rows(claims) -> list[ItemRow]:
             verdict = _combine(words)
         elif cs:
             verdict, notes = "undetermined", ["checked only at departures from the stated values"]
-        elif key in expected:
+        elif key in PLACED:
             verdict, notes = "undetermined", ["not run: no stored results for its checks"]
         elif key in UNCHECKED:
             verdict = NOT_BUILT if UNCHECKED[key].startswith("not built") else "undetermined"

@@ -33,7 +33,7 @@ from connrl.agents.ahcon import AHCON, AHCONConfig
 from connrl.agents.base import Exploration, LinearSchedule, ReplayConfig
 from connrl.agents.qcon import QCON, QCONConfig
 from connrl.core.exploration import StuckConfig, TemperatureSchedule
-from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
+from connrl.core.lesson_files import LessonFileError, save_lessons
 from connrl.core.lessons import Lesson
 from connrl.core.planning import PlanningConfig, RelaxationPlanner
 from connrl.core.rollout import run_trial
@@ -173,10 +173,10 @@ def taught_lessons(representation: str) -> list:
 
 def load_survival_lessons(path, representation: str) -> list:
     """Load a survival lesson file; a file for another task or representation raises LessonFileError."""
-    from connrl.core.lesson_files import lesson_file_options
+    from connrl.core.lesson_files import load_lessons_and_options
 
-    lessons = load_lessons(path, env_id=SURVIVAL_ENV_ID, input_dim=145, n_actions=4)
-    recorded = lesson_file_options(path).get("action_representation", "global")
+    lessons, options = load_lessons_and_options(path, env_id=SURVIVAL_ENV_ID, input_dim=145, n_actions=4)
+    recorded = options.get("action_representation", "global")
     if recorded != representation:
         raise LessonFileError(f"{path}: lessons were recorded with action_representation={recorded!r}, "
                               f"the agent uses {representation!r}")
