@@ -10,6 +10,7 @@ from pathlib import Path
 
 from connrl.cli_task import _positive_int, _seed, _writable, add_own_task_commands
 from connrl.cli_tune import add_tune_command
+from connrl.cli_world import add_world_family_command
 from connrl.experiments.spec import PROFILES
 
 
@@ -281,6 +282,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_tool_commands(sub)
     add_own_task_commands(sub)
     add_tune_command(sub)
+    add_world_family_command(sub, _executor_options)
     return p
 
 

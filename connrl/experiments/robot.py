@@ -34,6 +34,7 @@ import numpy as np
 from connrl.core.replay import REPAIRS
 from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.robot import ROBOT_RADIUS, SONAR_MAX
+from connrl.envs.robot.sim import COLLISIONS, EDGE_MARKS, SONAR_ORIGINS
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
 from connrl.tasks.robot import DP_FAR, SHIPPED_WORLD, TAUGHT_COUNTS, TAUGHT_ORDERS, evaluate, make_agent, make_env
@@ -87,10 +88,22 @@ class RobotParams:
     dp_far: float = DP_FAR  # DP starts lie 24..dp_far in from the door's wall (R)
     edge_jump: float = SHIPPED_WORLD["edge_jump"]  # readings this far apart mark a door edge (R, Fig. 5.3b; SPEC 24)
     lesson_starts: str = "random"  # DP teacher's starts: "random" headings or "spread" (hand-picked, R)
+    # issue 44's world family (R; docs/RECONSTRUCTION.md, "The robot world as a family")
+    sonar_origin: str = SHIPPED_WORLD["sonar_origin"]  # sonar distances from the "body" surface or the "centre"
+    collision: str = SHIPPED_WORLD["collision"]  # a touching move is "cancel"led or made "partial"ly to the contact
+    edge_mark: str = SHIPPED_WORLD["edge_mark"]  # a door-edge jump marks the "nearer" reading or "both"
+    dp_lateral: float = SHIPPED_WORLD["dp_lateral"]  # DP starts within +-this x half the door width of its centre
+    pass_depth: float = SHIPPED_WORLD["pass_depth"]  # DP succeeds this far past the door line (0: in the other room)
 
     def __post_init__(self):
         check_types(self, ROBOT_RANGES, task=("DP", "DK", "WFL", "WFR"), repair=REPAIRS, taught_order=TAUGHT_ORDERS,
-                    lesson_starts=("random", "spread"))
+                    lesson_starts=("random", "spread"), sonar_origin=SONAR_ORIGINS, collision=COLLISIONS,
+                    edge_mark=EDGE_MARKS)
+        if not 0.25 <= self.dp_lateral <= 3.0:
+            raise ValueError(f"parameter dp_lateral must be in [0.25, 3] (DP starts within +-dp_lateral x half the "
+                             f"door width of its centre), got {self.dp_lateral}")
+        if not 0.0 <= self.pass_depth <= 48.0:
+            raise ValueError(f"parameter pass_depth must be in [0, 48] (in past the door line), got {self.pass_depth}")
         if not self.door_width > 2 * ROBOT_RADIUS:
             raise ValueError(f"parameter door_width must exceed the robot's diameter ({2 * ROBOT_RADIUS:g} in), "
                              f"got {self.door_width}")
@@ -113,7 +126,8 @@ class RobotParams:
 
     def check_combination(self):
         defaults = {f.name: f.default for f in fields(RobotParams)}
-        dp_only = [k for k in ("dp_heading", "dp_far", "lesson_starts", "edge_jump") if getattr(self, k) != defaults[k]]
+        dp_only = [k for k in ("dp_heading", "dp_far", "lesson_starts", "edge_jump", "edge_mark", "dp_lateral",
+                               "pass_depth") if getattr(self, k) != defaults[k]]
         if self.task != "DP" and dp_only:
             raise ValueError(f"parameter(s) {', '.join(dp_only)} apply to task DP only (its start region, teacher "
                              f"and door-edge inputs), got task {self.task}")

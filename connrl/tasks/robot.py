@@ -31,7 +31,14 @@ LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
 TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5, "WFR": 5}  # lessons shipped per task (5.4.1; WFR for Ch. 6)
 # The world the shipped taught lessons were made in: the default layout's doors, docking, door edges, starts.
 SHIPPED_WORLD = {"door_width": float(Layout.load("default").doors["A"].width), "dock_tolerance": 30.0,
-                 "edge_jump": float(DOOR_EDGE_JUMP), "spread": False}
+                 "edge_jump": float(DOOR_EDGE_JUMP), "spread": False, "sonar_origin": "body", "collision": "cancel",
+                 "edge_mark": "nearer", "dp_lateral": 1.0, "pass_depth": 0.0}
+# The world details each task's demonstrations depend on (the rest are put back to the shipped values, so a change
+# elsewhere still reads the file): docking happens away from the doors, only DP sees door edges and DP starts.
+_TASK_WORLD = {"DP": ("door_width", "edge_jump", "spread", "sonar_origin", "collision", "edge_mark", "dp_lateral",
+                      "pass_depth"),
+               "DK": ("dock_tolerance", "sonar_origin", "collision"),
+               "WFL": ("door_width", "sonar_origin", "collision"), "WFR": ("door_width", "sonar_origin", "collision")}
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 DP_FAR = 72.0  # DP starts lie 24..DP_FAR in from the door's wall (R)
 
@@ -59,6 +66,16 @@ class RobotWorldParams(Protocol):
     def dock_tolerance(self) -> float: ...
     @property
     def edge_jump(self) -> float: ...
+    @property
+    def edge_mark(self) -> str: ...
+    @property
+    def sonar_origin(self) -> str: ...
+    @property
+    def collision(self) -> str: ...
+    @property
+    def dp_lateral(self) -> float: ...
+    @property
+    def pass_depth(self) -> float: ...
     @property
     def noise(self) -> bool: ...  # RobotParams: always on (a class constant); RobotNoiseParams (5.5): a parameter
 
@@ -112,12 +129,7 @@ class RobotAgentParams(Protocol):
     def lessons(self) -> int: ...
     @property
     def binary_low(self) -> float: ...
-    @property
-    def door_width(self) -> float: ...
-    @property
-    def dock_tolerance(self) -> float: ...
-    @property
-    def edge_jump(self) -> float: ...
+    # and the world details of SHIPPED_WORLD (``world_of``)
     @property
     def lesson_starts(self) -> str: ...
 
@@ -129,7 +141,13 @@ def make_env(p: RobotWorldParams) -> RobotTaskEnv:
         layout = layout.with_door_width(p.door_width)
     return RobotTaskEnv(p.task, layout=layout, binary_low=p.binary_low, max_steps=p.max_steps,
                         dp_heading=p.dp_heading, dp_depth=(24.0, p.dp_far), dock_tolerance=p.dock_tolerance,
-                        edge_jump=p.edge_jump, noise=p.noise)
+                        edge_jump=p.edge_jump, noise=p.noise, sonar_origin=p.sonar_origin, collision=p.collision,
+                        edge_mark=p.edge_mark, dp_offset=p.dp_lateral * p.door_width / 2.0, pass_depth=p.pass_depth)
+
+
+def world_of(p) -> dict:
+    """The world details of a parameter set, keyed as SHIPPED_WORLD (``spread``: DP lessons from spread starts)."""
+    return {k: (p.lesson_starts == "spread") if k == "spread" else getattr(p, k) for k in SHIPPED_WORLD}
 
 
 def spread_heading(start: tuple, k: int, layout: Layout) -> tuple:
@@ -196,37 +214,33 @@ def binary_columns(task: str) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=8)
-def _demonstrated(task: str, n: int, door_width: float, dock_tolerance: float, edge_jump: float,
-                  spread: bool) -> tuple[Lesson, ...]:
+def _demonstrated(task: str, n: int, world: tuple) -> tuple[Lesson, ...]:
     """The shipped lessons' recipe (seed 0, the default start region with any heading, 30 steps) in another world
     or for more lessons than the file has; cached per process (callers copy the inputs before changing them)."""
-    env = make_env(SimpleNamespace(task=task, door_width=door_width, dock_tolerance=dock_tolerance, binary_low=-0.5,
-                                   max_steps=30, dp_heading=180.0, dp_far=DP_FAR, edge_jump=edge_jump,
-                                   noise=True))
+    w = dict(world)
+    spread = w.pop("spread")
+    env = make_env(SimpleNamespace(task=task, binary_low=-0.5, max_steps=30, dp_heading=180.0, dp_far=DP_FAR,
+                                   noise=True, **w))
     return tuple(make_taught_lessons(task, n, seed=0, env=env, max_tries=max(200, 20 * n), spread=spread))
 
 
-def taught_lessons(task: str, n: int, binary_low: float = -0.5, door_width: float = SHIPPED_WORLD["door_width"],
-                   dock_tolerance: float = 30.0, edge_jump: float = DOOR_EDGE_JUMP,
-                   spread: bool = False) -> list[Lesson]:
+def taught_lessons(task: str, n: int, binary_low: float = -0.5, **world) -> list[Lesson]:
     """The first ``n`` taught lessons of ``task``, re-encoded for ``binary_low`` (files use -0.5/+0.5).
 
-    In the world of the shipped lessons (SHIPPED_WORLD), and for at most as many as the file has, they are read
-    from the file; otherwise the same scripted teacher demonstrates afresh (same seed and starts, deterministic),
-    so the first lessons of a longer list are the file's.
+    ``world``: details of SHIPPED_WORLD that differ (e.g. ``door_width=36``). In the world of the shipped lessons,
+    and for at most as many as the file has, they are read from the file; otherwise the same scripted teacher
+    demonstrates afresh (same seed and starts, deterministic), so the first lessons of a longer list are the file's.
     """
     if n == 0:
         return []
-    world = {"door_width": float(door_width), "dock_tolerance": float(dock_tolerance), "edge_jump": float(edge_jump),
-             "spread": bool(spread) and task == "DP"}
-    if task != "DK":
-        world["dock_tolerance"] = SHIPPED_WORLD["dock_tolerance"]  # only docking depends on it
-    if task == "DK":
-        world["door_width"] = SHIPPED_WORLD["door_width"]  # docking happens away from the doors
-    if task != "DP":
-        world["edge_jump"] = SHIPPED_WORLD["edge_jump"]  # only DP sees the door-edge bits
-    if world != SHIPPED_WORLD or n > TAUGHT_COUNTS[task]:
-        lessons = _demonstrated(task, n, **world)
+    unknown = set(world) - set(SHIPPED_WORLD)
+    if unknown:
+        raise TypeError(f"taught_lessons: unknown world detail(s) {sorted(unknown)}; known: {sorted(SHIPPED_WORLD)}")
+    full = {**SHIPPED_WORLD, **world}
+    full = {k: (type(SHIPPED_WORLD[k])(v) if k in _TASK_WORLD[task] else SHIPPED_WORLD[k]) for k, v in full.items()}
+    full["spread"] = full["spread"] and task == "DP"
+    if full != SHIPPED_WORLD or n > TAUGHT_COUNTS[task]:
+        lessons = _demonstrated(task, n, tuple(full.items()))
     else:
         lessons = load_lessons(lesson_path(task), env_id=f"connrl/Robot-{task}-v0", input_dim=OBS_SIZE[task],
                                n_actions=6)
@@ -255,8 +269,7 @@ def make_agent(p: RobotAgentParams, rng: np.random.Generator) -> TeachingQCON:
                      gamma=p.gamma, lam=p.lam, online=p.online, replay=replay,
                      stuck=StuckConfig(p.stuck_window, p.stuck_radius, p.stuck_boost))
     agent = TeachingQCON(cfg, 6, rng, TeachingConfig(repair=p.repair, merit_scale=p.value_range))
-    agent.add_taught_lessons(taught_lessons(p.task, p.lessons, p.binary_low, p.door_width,
-                                            p.dock_tolerance, p.edge_jump, p.lesson_starts == "spread"))
+    agent.add_taught_lessons(taught_lessons(p.task, p.lessons, p.binary_low, **world_of(p)))
     return agent
 
 

@@ -54,7 +54,8 @@ class RobotTaskEnv(gym.Env):
                  dk_radius: float = 96.0, dp_offset: float | None = None,
                  dp_depth: tuple[float, float] = (24.0, 72.0), dp_heading: float = 180.0,
                  dock_tolerance: float = 30.0, pass_depth: float = 0.0, render_rays: bool = False,
-                 edge_jump: float = DOOR_EDGE_JUMP):
+                 edge_jump: float = DOOR_EDGE_JUMP, sonar_origin: str = "body", collision: str = "cancel",
+                 edge_mark: str = "nearer"):
         if task not in TASKS:
             raise ValueError(f"task must be one of {TASKS}, got {task!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -85,7 +86,7 @@ class RobotTaskEnv(gym.Env):
         sn = noise if sensor_noise is None else sensor_noise
         cn = noise if control_noise is None else control_noise
         self.sim = RobotSim(self.layout, np.random.default_rng(), sensor_noise=sn, control_noise=cn,
-                            edge_jump=edge_jump)
+                            edge_jump=edge_jump, sonar_origin=sonar_origin, collision=collision, edge_mark=edge_mark)
 
         n = OBS_SIZE[task]
         lo = np.full(n, min(self.binary_low, -0.25), dtype=np.float32)
@@ -120,7 +121,9 @@ class RobotTaskEnv(gym.Env):
     def _observe(self, rd: Reading) -> np.ndarray:
         out = np.empty(self.observation_space.shape[0], dtype=np.float32)
         if self.task in ("WFL", "WFR"):
-            _side_features(rd.sonar, ROBOT_RADIUS, self._feat)
+            # the side features are body clearances (5.3.1): a centre-origin sonar reads the radius more
+            body = rd.sonar - (ROBOT_RADIUS - self.sim.sonar_radius) if self.sim.sonar_radius == 0.0 else rd.sonar
+            _side_features(body, ROBOT_RADIUS, self._feat)
             _fill_obs(1, rd.sonar, rd.light, rd.collision, self.binary_low, self.binary_high, self._feat, out)
         else:
             bits = rd.light if self.task == "DK" else rd.door_edge

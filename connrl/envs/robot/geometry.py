@@ -134,15 +134,16 @@ def _time_of_impact(x, y, dx, dy, segs, radius):
 
 
 @nb.njit(cache=True)
-def _scan(x, y, heading_deg, segs, kinds, lx, ly, radius, u, noise, edge_jump, true_out, sonar_out, light_out,
-          door_out):
-    """One sensor sweep: true body ranges, noisy sonar, light bits and door-edge bits."""
+def _scan(x, y, heading_deg, segs, kinds, lx, ly, radius, sonar_radius, u, noise, edge_jump, edge_both, true_out,
+          sonar_out, light_out, door_out):
+    """One sensor sweep: true body ranges, noisy sonar (measured from ``sonar_radius`` off the centre: the body's
+    radius, or 0 for the centre), light bits and door-edge bits (the nearer reading of a jump, or ``edge_both``)."""
     n = true_out.shape[0]
     _cast_rays(x, y, heading_deg, segs, true_out)
     for k in range(n):
-        r = true_out[k] - radius
-        r = min(max(r, 0.0), 1e6)
-        true_out[k] = min(r, float(SONAR_MAX))
+        raw = true_out[k]
+        true_out[k] = min(min(max(raw - radius, 0.0), 1e6), float(SONAR_MAX))
+        r = min(max(raw - sonar_radius, 0.0), 1e6)
         if noise:
             r = r * (1.0 - SONAR_ERROR + 2.0 * SONAR_ERROR * u[k])
         sonar_out[k] = min(float(SONAR_MAX), float(np.floor(r + 0.5)))
@@ -164,7 +165,10 @@ def _scan(x, y, heading_deg, segs, kinds, lx, ly, radius, u, noise, edge_jump, t
     for k in range(n):
         j = (k + 1) % n
         diff = sonar_out[k] - sonar_out[j]
-        if diff >= edge_jump:
+        if edge_both and abs(diff) >= edge_jump:
+            door_out[j] = 1
+            door_out[k] = 1
+        elif diff >= edge_jump:
             door_out[j] = 1
         elif -diff >= edge_jump:
             door_out[k] = 1

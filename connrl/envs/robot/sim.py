@@ -25,6 +25,11 @@ from connrl.envs.robot.constants import (
 from connrl.envs.robot.geometry import _cast_rays, _scan, _time_of_impact
 from connrl.envs.robot.layout import Layout
 
+SONAR_ORIGINS = ("body", "centre")
+COLLISIONS = ("cancel", "partial")
+EDGE_MARKS = ("nearer", "both")
+CONTACT_GAP = 1e-3  # in: a partial move stops this short of the surface
+
 
 # ---------------------------------------------------------------------------------------------------
 # Simulator
@@ -32,7 +37,7 @@ class Motion(NamedTuple):
     """Outcome of one action."""
 
     action: int
-    collided: bool  # the move was cancelled
+    collided: bool  # the move touched a surface (cancelled, or stopped at the contact)
     side: int  # collision side (FRONT/BACK/LEFT/RIGHT) or -1
     contact_kind: int  # SEG_* kind of the surface touched, or -1
     contact_angle: float  # contact direction relative to the heading, degrees in (-180, 180]; nan if none
@@ -66,16 +71,27 @@ class RobotSim:
         control_noise: 8% control error on (5.2.1). Off gives exact 15/60 deg and 12 in.
         edge_jump: neighbouring sonar readings differing by at least this many inches mark a door edge (R).
         step_scale: every turn and move is this fraction of its size (Ch. 6's Experiment 4: 1/5).
+        sonar_origin: sonar distances from the "body" surface or the robot's "centre" (R; issue 44's family).
+        collision: a move that would touch is "cancel"led, or made "partial"ly up to the contact (R; issue 44).
+        edge_mark: a door-edge jump marks the "nearer" reading or "both" readings (R; issue 44).
     """
 
     def __init__(self, layout: Layout | str = "default", rng: np.random.Generator | None = None, *,
                  sensor_noise: bool = True, control_noise: bool = True, edge_jump: float = DOOR_EDGE_JUMP,
-                 step_scale: float = 1.0):
+                 step_scale: float = 1.0, sonar_origin: str = "body", collision: str = "cancel",
+                 edge_mark: str = "nearer"):
         if not 0 < edge_jump < math.inf:
             raise ValueError(f"edge_jump must be a finite number of inches > 0, got {edge_jump!r}")
         if not 0 < step_scale <= 1:
             raise ValueError(f"step_scale must be in (0, 1] (a fraction of the primitive actions), got {step_scale!r}")
         self.step_scale = float(step_scale)
+        for name, value, allowed in (("sonar_origin", sonar_origin, SONAR_ORIGINS),
+                                     ("collision", collision, COLLISIONS), ("edge_mark", edge_mark, EDGE_MARKS)):
+            if value not in allowed:
+                raise ValueError(f"{name} must be one of {', '.join(allowed)}, got {value!r}")
+        self.sonar_radius = ROBOT_RADIUS if sonar_origin == "body" else 0.0
+        self.partial_moves = collision == "partial"
+        self.edge_both = edge_mark == "both"
         self.edge_jump = float(edge_jump)
         self.layout = layout if isinstance(layout, Layout) else Layout.load(layout)
         self.rng = rng if rng is not None else np.random.default_rng()
@@ -136,6 +152,9 @@ class RobotSim:
             self.y += dy
             return Motion(action, False, -1, -1, float("nan"))
         px, py = self.x + t * dx, self.y + t * dy
+        if self.partial_moves:  # up to the contact, a hair short so the disc never overlaps the surface
+            back = min(t, CONTACT_GAP / math.hypot(dx, dy))
+            self.x, self.y = self.x + (t - back) * dx, self.y + (t - back) * dy
         rel = wrap_deg(math.degrees(math.atan2(cy - py, cx - px)) - self.heading)
         side = collision_side(rel)
         self.last_collision[side] = 1
@@ -148,7 +167,8 @@ class RobotSim:
         ranges, sonar = np.empty(N_RAYS), np.empty(N_RAYS)
         light, door = np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8)
         _scan(self.x, self.y, self.heading, self._segs, self._kinds, self._light[0], self._light[1],
-              ROBOT_RADIUS, u, self.sensor_noise, self.edge_jump, ranges, sonar, light, door)
+              ROBOT_RADIUS, self.sonar_radius, u, self.sensor_noise, self.edge_jump, self.edge_both, ranges, sonar,
+              light, door)
         return Reading(sonar, ranges, light, door, self.last_collision.copy(), self.heading, self.room)
 
     def true_ranges(self) -> np.ndarray:

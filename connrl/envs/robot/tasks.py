@@ -62,7 +62,8 @@ Arguments:
     sensor_noise and control_noise unless given), sensor_noise, control_noise, start_sampler
     (callable(rng, layout) -> (x, y, heading)), dk_radius (96), dp_offset (None = half the door width),
     dp_depth ((24, 72)), dp_heading (180 = any), dock_tolerance (30 deg), pass_depth (0 in), render_rays (False),
-    edge_jump (44 in: the door-edge threshold).
+    edge_jump (44 in: the door-edge threshold), sonar_origin ("body" | "centre"), collision ("cancel" |
+    "partial"), edge_mark ("nearer" | "both") (the last three: issue 44's world family, R).
 
 info:
     "pose" (x, y, heading deg) -- the true pose, which the agent's stuck detector dead-reckons with

@@ -1,0 +1,253 @@
+"""Issue 44: the robot world as a family of readings of the text, measured (``connrl world-family``).
+
+The protocol is docs/RECONSTRUCTION.md, "The robot world as a family (issue 44)", committed before the search ran:
+
+1. ``search``: Optuna's TPE over ``SPACE`` (the DP world's open details). A world first passes the Fig. 5.3b caption
+   filter (``caption_shares``), then gets 7 no-teaching DP runs at full profile on the development seeds 100-106;
+   it is accepted when the mean curve first reaches 2.5 at trial 190-300 and at most 3 runs never do (thesis: 280,
+   one run of 7 failing). Never a teaching result.
+2. ``recheck``: every accepted world again on seeds 5100-5106; it stays accepted only if it meets the target there.
+3. ``predict``: for the worlds accepted twice, and today's world, the teaching and lambda claims of 5.6 and the
+   copy bound, as predictions; ``pick`` is the rule fixed before they were seen (the accepted world nearest today's).
+
+Every stage reuses finished run records (an interrupted stage resumes), logs every world in ``out`` as JSON and CSV,
+and runs its jobs on the process pool or as Ray tasks (``executor="ray"``, ``address`` of a cluster).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from connrl.envs.robot import Layout, RobotSim
+from connrl.experiments.robot import RobotParams
+from connrl.experiments.runner import Job, _execute, params_hash
+from connrl.experiments.spec import as_dict, qualified_name
+from connrl.experiments.store import load_record
+from connrl.storage import atomic_write_text, read_json, strict_json
+
+
+@dataclass(frozen=True)
+class Detail:
+    """One open detail of the world: a range [low, high] on a grid of ``step``, or ``choices``."""
+
+    name: str
+    low: float = 0.0
+    high: float = 0.0
+    step: float = 1.0
+    choices: tuple = ()
+
+    def span(self) -> float:
+        return self.high - self.low
+
+
+SPACE = (Detail("door_width", 36.0, 72.0, 1.0), Detail("edge_jump", 24.0, 64.0, 1.0),
+         Detail("edge_mark", choices=("nearer", "both")), Detail("sonar_origin", choices=("body", "centre")),
+         Detail("collision", choices=("cancel", "partial")), Detail("dp_far", 48.0, 96.0, 1.0),
+         Detail("dp_lateral", 0.5, 2.0, 0.05), Detail("pass_depth", 0.0, 24.0, 1.0))
+TODAY = {d.name: getattr(RobotParams(), d.name) for d in SPACE}
+SEARCH_SEEDS, RECHECK_SEEDS = tuple(range(100, 107)), tuple(range(5100, 5107))
+LEVEL, TARGET_T, T_LOW, T_HIGH, MAX_FAILING = 2.5, 280, 190, 300, 3
+BUDGET, STARTUP = 160, 24
+CAPTION_SCANS, CAPTION_SHARE = 200, 0.5
+REJECTED_LOSS = 5.0
+LAMBDA_WORLDS = 6  # the accepted worlds nearest today's that also get the lambda table
+_RUN, _COPY = "connrl.experiments.robot:run_robot", "connrl.experiments.robot_bounds:run_copy"
+_PARAMS, _COPY_PARAMS = qualified_name(RobotParams), "connrl.experiments.robot_bounds:CopyParams"
+
+
+def caption_shares(world: dict, scans: int = CAPTION_SCANS) -> tuple[float, float]:
+    """Share of noisy scans at L3 and at L4, facing north, showing exactly four door-edge bits (Fig. 5.3b/c)."""
+    layout = Layout.load("default")
+    if world["door_width"] != layout.doors["A"].width:
+        layout = layout.with_door_width(world["door_width"])
+    shares = []
+    for name in ("L3", "L4"):
+        x, y = layout.locations[name][:2]
+        sim = RobotSim(layout, np.random.default_rng(0), edge_jump=world["edge_jump"], edge_mark=world["edge_mark"],
+                       sonar_origin=world["sonar_origin"])
+        sim.place(x, y, 90.0)
+        shares.append(sum(int(sim.sense().door_edge.sum()) == 4 for _ in range(scans)) / scans)
+    return shares[0], shares[1]
+
+
+def distance(world: dict) -> float:
+    """Distance from today's world: each range's change over its span, plus one per changed choice."""
+    return sum((world[d.name] != TODAY[d.name]) if d.choices else abs(world[d.name] - TODAY[d.name]) / d.span()
+               for d in SPACE)
+
+
+def score(curves: list[list[float]], reached: list) -> dict:
+    """T (first trial of the mean curve at LEVEL), F (runs never at LEVEL), the loss and the verdict."""
+    mean = np.mean(np.asarray(curves, dtype=float), axis=0)
+    xs = np.arange(len(mean)) * 10
+    hit = np.nonzero(mean >= LEVEL)[0]
+    t = int(xs[hit[0]]) if hit.size else None
+    failing = sum(r is None for r in reached)
+    extra = 0.1 * max(0, failing - 1)
+    loss = (abs(math.log(t / TARGET_T)) if t else math.log(T_HIGH / TARGET_T) + (LEVEL - mean.max()) / LEVEL) + extra
+    return {"T": t, "F": failing, "loss": round(float(loss), 4), "mean_curve": [round(float(v), 4) for v in mean],
+            "accepted": t is not None and T_LOW <= t <= T_HIGH and failing <= MAX_FAILING}
+
+
+def _jobs(out: Path, world: dict, seeds, label: str, extra: dict | None = None, copy: bool = False) -> list[Job]:
+    params = as_dict(RobotParams(lessons=0, **world)) | (extra or {})
+    if copy:
+        params |= {"policy": "copy", "copy_epochs": 200}
+    root = out / "runs" / params_hash(params)
+    return [Job("world-family", _COPY if copy else _RUN, label, params, s, str(root / f"seed-{s}"),
+                _COPY_PARAMS if copy else _PARAMS) for s in seeds]
+
+
+def run_jobs(jobs: list[Job], workers: int, executor: str, address: str | None, show: bool) -> dict[str, dict]:
+    """The records of ``jobs`` by path: stored ones reused (a damaged one is redone), the rest run."""
+    done, todo = {}, []
+    for job in jobs:
+        rec, _damage = load_record(job.path, job)
+        (done.__setitem__(job.path, rec) if rec is not None else todo.append(job))
+    if todo:
+        _execute(todo, min(workers, len(todo)), show, "world-family", executor, address)  # writes the records
+        for job in todo:
+            rec, damage = load_record(job.path, job)
+            if rec is None:
+                raise RuntimeError(f"run {job.path} left no record ({damage or 'missing'})")
+            done[job.path] = rec
+    return done
+
+
+def evaluate_worlds(out: Path, worlds: list[dict], seeds, **run) -> list[dict]:
+    """The no-teaching target for each world (the caption filter first)."""
+    rows, jobs = [], []
+    for w in worlds:
+        l3, l4 = caption_shares(w)
+        ok = min(l3, l4) >= CAPTION_SHARE
+        rows.append({"world": w, "caption_L3": l3, "caption_L4": l4, "caption_ok": ok})
+        if ok:
+            jobs += _jobs(out, w, seeds, "no teaching")
+    recs = run_jobs(jobs, **run) if jobs else {}
+    for row in rows:
+        if not row["caption_ok"]:
+            row |= {"T": None, "F": None, "loss": REJECTED_LOSS, "accepted": False, "mean_curve": []}
+            continue
+        rs = [recs[j.path] for j in _jobs(out, row["world"], seeds, "no teaching")]
+        row |= score([r["curve_y"] for r in rs], [r["metrics"].get(f"trials_to_{LEVEL:g}") for r in rs])
+    return rows
+
+
+# ------------------------------------------------------------------------------------------------ stages
+
+def _study(done: list[dict], seed: int):
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    dists = {d.name: (optuna.distributions.CategoricalDistribution(list(d.choices)) if d.choices else
+                      optuna.distributions.FloatDistribution(d.low, d.high, step=d.step)) for d in SPACE}
+    sampler = optuna.samplers.TPESampler(seed=seed + len(done), n_startup_trials=STARTUP, multivariate=True,
+                                         constant_liar=True)
+    study = optuna.create_study(direction="minimize", sampler=sampler)
+    for t in done:
+        study.add_trial(optuna.trial.create_trial(params=t["world"], distributions=dists, value=t["loss"]))
+    return study, dists
+
+
+def search(out: Path, budget: int = BUDGET, seed: int = 0, workers: int = 2, executor: str = "process",
+           address: str | None = None, show: bool = True, log=print) -> list[dict]:
+    """Stage 1: the TPE search, resumed from ``out/search.json``; returns every world's row."""
+    path = out / "search.json"
+    done = read_json(path)["worlds"] if path.exists() else []
+    run = {"workers": workers, "executor": executor, "address": address, "show": show}
+    while len(done) < budget:
+        study, dists = _study(done, seed)
+        batch = [study.ask(dists) for _ in range(min(max(2, workers), budget - len(done)))]
+        worlds = [{d.name: _plain(t.params[d.name]) for d in SPACE} for t in batch]
+        for row in evaluate_worlds(out, worlds, SEARCH_SEEDS, **run):
+            row["number"] = len(done)
+            done.append(row)
+            log(_line(row))
+        _write(out, "search", done)
+    return done
+
+
+def recheck(out: Path, **run) -> list[dict]:
+    """Stage 2: the accepted worlds on seeds 5100-5106."""
+    accepted = [r for r in read_json(out / "search.json")["worlds"] if r["accepted"]]
+    rows = evaluate_worlds(out, [r["world"] for r in accepted], RECHECK_SEEDS, **run)
+    for row, first in zip(rows, accepted, strict=True):
+        row["number"] = first["number"]
+    _write(out, "recheck", rows)
+    return rows
+
+
+PREDICTIONS = (("3 lessons", {"lessons": 3}, False), ("10 lessons", {"lessons": 10}, False),
+               ("copy 10 lessons", {"lessons": 10}, True))
+LAMBDAS = (("10 lessons, lambda=0", {"lessons": 10, "lam": 0.0}),
+           ("10 lessons, lambda=0.3", {"lessons": 10, "lam": 0.3}))
+
+
+def predict(out: Path, **run) -> dict:
+    """Stage 3: teaching, lambda and copy-bound predictions for the worlds accepted twice and today's; the pick."""
+    twice = [r for r in read_json(out / "recheck.json")["worlds"] if r["accepted"]]
+    worlds = [{"number": "today", "world": dict(TODAY)}] + [{"number": r["number"], "world": r["world"]} for r in twice]
+    near = sorted(twice, key=lambda r: (distance(r["world"]), r["loss"]))[:LAMBDA_WORLDS]
+    with_lambda = {"today"} | {r["number"] for r in near}
+    plan = []
+    for w in worlds:
+        cases = [*PREDICTIONS, *((label, extra, False) for label, extra in LAMBDAS if w["number"] in with_lambda)]
+        if w["number"] == "today":
+            cases.insert(0, ("no teaching", {}, False))
+        plan += [(w, label, _jobs(out, w["world"], RECHECK_SEEDS, label, extra, copy)) for label, extra, copy in cases]
+    recs = run_jobs([j for *_, jobs in plan for j in jobs], **run)
+    for w, label, jobs in plan:
+        rs = [recs[j.path] for j in jobs]
+        w.setdefault("cases", {})[label] = _case(rs, copy=label.startswith("copy"))
+    pick = min(twice, key=lambda r: (distance(r["world"]), r["loss"]), default=None)
+    doc = {"worlds": worlds, "pick": None if pick is None else pick["number"],
+           "rule": "the world accepted twice nearest today's (docs/RECONSTRUCTION.md, issue 44)"}
+    atomic_write_text(out / "predictions.json", strict_json(doc, indent=1))
+    return doc
+
+
+def _case(rs: list[dict], copy: bool) -> dict:
+    if copy:
+        return {"performance": float(np.mean([r["metrics"]["performance"] for r in rs]))}
+    mean = np.mean([r["curve_y"] for r in rs], axis=0)
+    out = {"mean_curve": [round(float(v), 4) for v in mean]}
+    for level in (2.5, 5.0):
+        hit = np.nonzero(mean >= level)[0]
+        per_run = [r["metrics"].get(f"trials_to_{level:g}") for r in rs]
+        out[f"T{level:g}"] = int(hit[0] * 10) if hit.size else None
+        out[f"runs_to_{level:g}"] = per_run
+    return out
+
+
+def _plain(v):
+    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+
+
+def _line(row: dict) -> str:
+    w = row["world"]
+    what = ("caption filter: no" if not row["caption_ok"] else
+            f"T {row['T'] if row['T'] is not None else '-'}, F {row['F']}/7, loss {row['loss']:.3f}"
+            f"{', ACCEPTED' if row['accepted'] else ''}")
+    return (f"world {row['number']:3d}: door {w['door_width']:g}, edge {w['edge_jump']:g} {w['edge_mark']}, "
+            f"sonar {w['sonar_origin']}, {w['collision']}, far {w['dp_far']:g}, lateral {w['dp_lateral']:g}, "
+            f"pass {w['pass_depth']:g} -> {what}")
+
+
+COLUMNS = ("number", *(d.name for d in SPACE), "caption_L3", "caption_L4", "caption_ok", "T", "F", "loss", "accepted")
+
+
+def _write(out: Path, stage: str, rows: list[dict]) -> None:
+    """``stage``.json (the log the next stage and the report read) and ``stage``.csv (one row a world)."""
+    atomic_write_text(out / f"{stage}.json", strict_json({"stage": stage, "worlds": rows}, indent=1))
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, COLUMNS, extrasaction="ignore")
+    writer.writeheader()
+    for r in rows:
+        writer.writerow(r | r["world"])
+    atomic_write_text(out / f"{stage}.csv", buf.getvalue())
