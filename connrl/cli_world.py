@@ -3,6 +3,7 @@ world's open details)."""
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import os
 from pathlib import Path
@@ -29,9 +30,9 @@ def cmd_world_family(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     run = {"workers": args.workers or os.cpu_count() or 1, "executor": args.executor, "address": args.address,
            "show": not args.quiet}
-    with one_writer(out, "--out"):
+    with one_writer(out, "--out"), _one_line(ValueError):
         if args.stage in ("search", "all"):
-            rows = wf.search(out, budget=args.budget, **run)
+            rows = wf.search(out, budget=args.budget, trials=args.trials, **run)
             print(f"search: {sum(r['accepted'] for r in rows)} of {len(rows)} worlds accepted ({out / 'search.csv'})")
         if args.stage in ("recheck", "all"):
             rows = wf.recheck(out, **run)
@@ -44,6 +45,14 @@ def cmd_world_family(args) -> int:
     return 0
 
 
+@contextlib.contextmanager
+def _one_line(*kinds):
+    try:
+        yield
+    except kinds as exc:
+        raise SystemExit(f"connrl: {exc}") from None
+
+
 def add_world_family_command(sub, executor_options) -> None:
     s = sub.add_parser("world-family", help="search the robot world's open details (issue 44)",
                        description="Measure the family of robot worlds the text allows (docs/RECONSTRUCTION.md, "
@@ -53,6 +62,8 @@ def add_world_family_command(sub, executor_options) -> None:
     s.add_argument("--stage", choices=STAGES, default="all", help="which stage (default all, in order)")
     s.add_argument("--budget", type=_int_at_least(1, 10_000), default=160, help="worlds the search tries (default "
                    "160, the protocol's)")
+    s.add_argument("--trials", type=_int_at_least(10, 10_000), default=300, help="trials per run (default 300, the "
+                   "protocol's; fewer only for a smoke test: a search is resumed at its own length)")
     s.add_argument("--out", type=folder_name, default="runs/world-family", help="folder of the logs and run records "
                    "(default runs/world-family)")
     s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")

@@ -95,8 +95,9 @@ def score(curves: list[list[float]], reached: list) -> dict:
             "accepted": t is not None and T_LOW <= t <= T_HIGH and failing <= MAX_FAILING}
 
 
-def _jobs(out: Path, world: dict, seeds, label: str, extra: dict | None = None, copy: bool = False) -> list[Job]:
-    params = as_dict(RobotParams(lessons=0, **world)) | (extra or {})
+def _jobs(out: Path, world: dict, seeds, label: str, trials: int, extra: dict | None = None,
+          copy: bool = False) -> list[Job]:
+    params = as_dict(RobotParams(lessons=0, trials=trials, **world)) | (extra or {})
     if copy:
         params |= {"policy": "copy", "copy_epochs": 200}
     root = out / "runs" / params_hash(params)
@@ -120,7 +121,7 @@ def run_jobs(jobs: list[Job], workers: int, executor: str, address: str | None, 
     return done
 
 
-def evaluate_worlds(out: Path, worlds: list[dict], seeds, **run) -> list[dict]:
+def evaluate_worlds(out: Path, worlds: list[dict], seeds, trials: int, **run) -> list[dict]:
     """The no-teaching target for each world (the caption filter first)."""
     rows, jobs = [], []
     for w in worlds:
@@ -128,13 +129,13 @@ def evaluate_worlds(out: Path, worlds: list[dict], seeds, **run) -> list[dict]:
         ok = min(l3, l4) >= CAPTION_SHARE
         rows.append({"world": w, "caption_L3": l3, "caption_L4": l4, "caption_ok": ok})
         if ok:
-            jobs += _jobs(out, w, seeds, "no teaching")
+            jobs += _jobs(out, w, seeds, "no teaching", trials)
     recs = run_jobs(jobs, **run) if jobs else {}
     for row in rows:
         if not row["caption_ok"]:
             row |= {"T": None, "F": None, "loss": REJECTED_LOSS, "accepted": False, "mean_curve": []}
             continue
-        rs = [recs[j.path] for j in _jobs(out, row["world"], seeds, "no teaching")]
+        rs = [recs[j.path] for j in _jobs(out, row["world"], seeds, "no teaching", trials)]
         row |= score([r["curve_y"] for r in rs], [r["metrics"].get(f"trials_to_{LEVEL:g}") for r in rs])
     return rows
 
@@ -155,31 +156,37 @@ def _study(done: list[dict], seed: int):
     return study, dists
 
 
-def search(out: Path, budget: int = BUDGET, seed: int = 0, workers: int = 2, executor: str = "process",
-           address: str | None = None, show: bool = True, log=print) -> list[dict]:
-    """Stage 1: the TPE search, resumed from ``out/search.json``; returns every world's row."""
+def search(out: Path, budget: int = BUDGET, trials: int = 300, seed: int = 0, workers: int = 2,
+           executor: str = "process", address: str | None = None, show: bool = True, log=print) -> list[dict]:
+    """Stage 1: the TPE search, resumed from ``out/search.json``; returns every world's row. ``trials``: per run
+    (300, the protocol's; fewer only for a smoke test)."""
     path = out / "search.json"
-    done = read_json(path)["worlds"] if path.exists() else []
+    log_doc = read_json(path) if path.exists() else {"trials": trials, "worlds": []}
+    if log_doc["trials"] != trials:
+        raise ValueError(f"{path} is a search with {log_doc['trials']} trials per run, not {trials}: resume it with "
+                         f"the same --trials or use another --out")
+    done = log_doc["worlds"]
     run = {"workers": workers, "executor": executor, "address": address, "show": show}
     while len(done) < budget:
         study, dists = _study(done, seed)
         batch = [study.ask(dists) for _ in range(min(max(2, workers), budget - len(done)))]
         worlds = [{d.name: _plain(t.params[d.name]) for d in SPACE} for t in batch]
-        for row in evaluate_worlds(out, worlds, SEARCH_SEEDS, **run):
+        for row in evaluate_worlds(out, worlds, SEARCH_SEEDS, trials, **run):
             row["number"] = len(done)
             done.append(row)
             log(_line(row))
-        _write(out, "search", done)
+        _write(out, "search", done, trials)
     return done
 
 
 def recheck(out: Path, **run) -> list[dict]:
     """Stage 2: the accepted worlds on seeds 5100-5106."""
-    accepted = [r for r in read_json(out / "search.json")["worlds"] if r["accepted"]]
-    rows = evaluate_worlds(out, [r["world"] for r in accepted], RECHECK_SEEDS, **run)
+    first = read_json(out / "search.json")
+    accepted = [r for r in first["worlds"] if r["accepted"]]
+    rows = evaluate_worlds(out, [r["world"] for r in accepted], RECHECK_SEEDS, first["trials"], **run)
     for row, first in zip(rows, accepted, strict=True):
         row["number"] = first["number"]
-    _write(out, "recheck", rows)
+    _write(out, "recheck", rows, first["trials"])
     return rows
 
 
@@ -191,7 +198,8 @@ LAMBDAS = (("10 lessons, lambda=0", {"lessons": 10, "lam": 0.0}),
 
 def predict(out: Path, **run) -> dict:
     """Stage 3: teaching, lambda and copy-bound predictions for the worlds accepted twice and today's; the pick."""
-    twice = [r for r in read_json(out / "recheck.json")["worlds"] if r["accepted"]]
+    again = read_json(out / "recheck.json")
+    twice, trials = [r for r in again["worlds"] if r["accepted"]], again["trials"]
     worlds = [{"number": "today", "world": dict(TODAY)}] + [{"number": r["number"], "world": r["world"]} for r in twice]
     near = sorted(twice, key=lambda r: (distance(r["world"]), r["loss"]))[:LAMBDA_WORLDS]
     with_lambda = {"today"} | {r["number"] for r in near}
@@ -200,13 +208,14 @@ def predict(out: Path, **run) -> dict:
         cases = [*PREDICTIONS, *((label, extra, False) for label, extra in LAMBDAS if w["number"] in with_lambda)]
         if w["number"] == "today":
             cases.insert(0, ("no teaching", {}, False))
-        plan += [(w, label, _jobs(out, w["world"], RECHECK_SEEDS, label, extra, copy)) for label, extra, copy in cases]
+        plan += [(w, label, _jobs(out, w["world"], RECHECK_SEEDS, label, trials, extra, copy))
+                 for label, extra, copy in cases]
     recs = run_jobs([j for *_, jobs in plan for j in jobs], **run)
     for w, label, jobs in plan:
         rs = [recs[j.path] for j in jobs]
         w.setdefault("cases", {})[label] = _case(rs, copy=label.startswith("copy"))
     pick = min(twice, key=lambda r: (distance(r["world"]), r["loss"]), default=None)
-    doc = {"worlds": worlds, "pick": None if pick is None else pick["number"],
+    doc = {"trials": trials, "worlds": worlds, "pick": None if pick is None else pick["number"],
            "rule": "the world accepted twice nearest today's (docs/RECONSTRUCTION.md, issue 44)"}
     atomic_write_text(out / "predictions.json", strict_json(doc, indent=1))
     return doc
@@ -242,9 +251,10 @@ def _line(row: dict) -> str:
 COLUMNS = ("number", *(d.name for d in SPACE), "caption_L3", "caption_L4", "caption_ok", "T", "F", "loss", "accepted")
 
 
-def _write(out: Path, stage: str, rows: list[dict]) -> None:
+def _write(out: Path, stage: str, rows: list[dict], trials: int) -> None:
     """``stage``.json (the log the next stage and the report read) and ``stage``.csv (one row a world)."""
-    atomic_write_text(out / f"{stage}.json", strict_json({"stage": stage, "worlds": rows}, indent=1))
+    atomic_write_text(out / f"{stage}.json", strict_json({"stage": stage, "trials": trials, "worlds": rows},
+                                                         indent=1))
     buf = io.StringIO()
     writer = csv.DictWriter(buf, COLUMNS, extrasaction="ignore")
     writer.writeheader()

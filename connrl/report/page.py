@@ -94,7 +94,9 @@ def figure(png: Path, doc: Path, name: str) -> str:
 
 NOTES_DIR = Path(__file__).resolve().parents[2] / "docs" / "notes"
 SECTIONS = ("connrl.report.pole", "connrl.report.survival", "connrl.report.hidden_state", "connrl.report.robot",
-            "connrl.report.td_depth", "connrl.report.recharge", "connrl.report.complexity", "connrl.report.integration")
+            "connrl.report.world_family", "connrl.report.td_depth", "connrl.report.recharge",
+            "connrl.report.complexity",
+            "connrl.report.integration")
 
 
 def note(name: str) -> str:
