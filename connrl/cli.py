@@ -282,7 +282,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_tool_commands(sub)
     add_own_task_commands(sub)
     add_tune_command(sub)
-    add_world_family_command(sub, _executor_options)
+    add_world_family_command(sub, _executor_options, _check_executor)
     return p
 
 

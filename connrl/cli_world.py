@@ -14,10 +14,9 @@ STAGES = ("search", "recheck", "predict", "all")
 
 
 def cmd_world_family(args) -> int:
-    from connrl.cli import _check_executor
     from connrl.experiments import world_family as wf
 
-    _check_executor(args)
+    args.check_executor(args)
     if args.stage in ("search", "all") and importlib.util.find_spec("optuna") is None:
         raise SystemExit("connrl: world-family's search needs Optuna: pip install -e \".[tune]\" "
                          "(or pip install optuna)")
@@ -53,7 +52,9 @@ def _one_line(*kinds):
         raise SystemExit(f"connrl: {exc}") from None
 
 
-def add_world_family_command(sub, executor_options) -> None:
+def add_world_family_command(sub, executor_options, check_executor) -> None:
+    """``executor_options(parser)`` adds --executor and --address; ``check_executor(args)`` checks them (connrl.cli's,
+    passed in: this module is imported by it)."""
     s = sub.add_parser("world-family", help="search the robot world's open details (issue 44)",
                        description="Measure the family of robot worlds the text allows (docs/RECONSTRUCTION.md, "
                        "'The robot world as a family'): search (TPE on the no-teaching DP target, development seeds "
@@ -69,4 +70,4 @@ def add_world_family_command(sub, executor_options) -> None:
     s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")
     s.add_argument("--quiet", action="store_true", help="no live progress display")
     executor_options(s)
-    s.set_defaults(func=cmd_world_family)
+    s.set_defaults(func=cmd_world_family, check_executor=check_executor)

@@ -129,9 +129,24 @@ class RobotAgentParams(Protocol):
     def lessons(self) -> int: ...
     @property
     def binary_low(self) -> float: ...
-    # and the world details of SHIPPED_WORLD (``world_of``)
     @property
     def lesson_starts(self) -> str: ...
+    @property
+    def door_width(self) -> float: ...
+    @property
+    def dock_tolerance(self) -> float: ...
+    @property
+    def edge_jump(self) -> float: ...
+    @property
+    def edge_mark(self) -> str: ...
+    @property
+    def sonar_origin(self) -> str: ...
+    @property
+    def collision(self) -> str: ...
+    @property
+    def dp_lateral(self) -> float: ...
+    @property
+    def pass_depth(self) -> float: ...
 
 
 def make_env(p: RobotWorldParams) -> RobotTaskEnv:
@@ -145,9 +160,11 @@ def make_env(p: RobotWorldParams) -> RobotTaskEnv:
                         edge_mark=p.edge_mark, dp_offset=p.dp_lateral * p.door_width / 2.0, pass_depth=p.pass_depth)
 
 
-def world_of(p) -> dict:
+def world_of(p: RobotAgentParams) -> dict:
     """The world details of a parameter set, keyed as SHIPPED_WORLD (``spread``: DP lessons from spread starts)."""
-    return {k: (p.lesson_starts == "spread") if k == "spread" else getattr(p, k) for k in SHIPPED_WORLD}
+    return {"door_width": p.door_width, "dock_tolerance": p.dock_tolerance, "edge_jump": p.edge_jump,
+            "spread": p.lesson_starts == "spread", "sonar_origin": p.sonar_origin, "collision": p.collision,
+            "edge_mark": p.edge_mark, "dp_lateral": p.dp_lateral, "pass_depth": p.pass_depth}
 
 
 def spread_heading(start: tuple, k: int, layout: Layout) -> tuple:

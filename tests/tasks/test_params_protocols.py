@@ -36,6 +36,7 @@ PASSED = {
     hidden_state.make_agent: (CupParams, PoleHiddenParams, FrozenModelParams),
     robot.make_env: (RobotParams, RobotNoiseParams, CopyParams),
     robot.make_agent: (RobotParams, RobotNoiseParams, CopyParams),
+    robot.world_of: (RobotParams, RobotNoiseParams, CopyParams),
     recharge.make_recharge_env: (RechargeParams, OwnLibraryParams, BoundParams),
     recharge.make_high_level_agent: (RechargeParams, IntegrationParams),
     recharge.cooling: (RechargeParams, IntegrationParams),
