@@ -34,10 +34,11 @@ import numpy as np
 from connrl.core.replay import REPAIRS
 from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.robot import ROBOT_RADIUS, SONAR_MAX
+from connrl.envs.robot.constants import DP_FAR
 from connrl.envs.robot.sim import COLLISIONS, EDGE_MARKS, SONAR_ORIGINS
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
-from connrl.tasks.robot import DP_FAR, SHIPPED_WORLD, TAUGHT_COUNTS, TAUGHT_ORDERS, evaluate, make_agent, make_env
+from connrl.tasks.robot import SHIPPED_WORLD, TAUGHT_COUNTS, TAUGHT_ORDERS, evaluate, make_agent, make_env
 
 MAX_TAUGHT = 200  # taught lessons an agent may ask for: the shipped ones, then fresh demonstrations
 THRESHOLDS = (2.5, 5.0)  # the two performance levels of the tables in 5.6

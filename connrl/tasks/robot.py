@@ -24,15 +24,23 @@ from connrl.core.exploration import StuckConfig, TemperatureSchedule
 from connrl.core.lesson_files import load_lessons, save_lessons
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import run_trial
-from connrl.envs.robot import DOOR_EDGE_JUMP, OBS_SIZE, Layout, RobotTaskEnv, teach
+from connrl.envs.robot import OBS_SIZE, Layout, RobotTaskEnv, teach
+from connrl.envs.robot.constants import (
+    COLLISION,
+    DOOR_EDGE_JUMP,
+    DP_LATERAL,
+    EDGE_MARK,
+    PASS_DEPTH,
+    SONAR_ORIGIN,
+)
 from connrl.nets import NetConfig
 
 LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
 TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5, "WFR": 5}  # lessons shipped per task (5.4.1; WFR for Ch. 6)
 # The world the shipped taught lessons were made in: the default layout's doors, docking, door edges, starts.
 SHIPPED_WORLD = {"door_width": float(Layout.load("default").doors["A"].width), "dock_tolerance": 30.0,
-                 "edge_jump": float(DOOR_EDGE_JUMP), "spread": False, "sonar_origin": "body", "collision": "cancel",
-                 "edge_mark": "nearer", "dp_lateral": 1.0, "pass_depth": 0.0}
+                 "edge_jump": float(DOOR_EDGE_JUMP), "spread": False, "sonar_origin": SONAR_ORIGIN,
+                 "collision": COLLISION, "edge_mark": EDGE_MARK, "dp_lateral": DP_LATERAL, "pass_depth": PASS_DEPTH}
 # The world details each task's demonstrations depend on (the rest are put back to the shipped values, so a change
 # elsewhere still reads the file): docking happens away from the doors, only DP sees door edges and DP starts.
 _TASK_WORLD = {"DP": ("door_width", "edge_jump", "spread", "sonar_origin", "collision", "edge_mark", "dp_lateral",
@@ -40,7 +48,9 @@ _TASK_WORLD = {"DP": ("door_width", "edge_jump", "spread", "sonar_origin", "coll
                "DK": ("dock_tolerance", "sonar_origin", "collision"),
                "WFL": ("door_width", "sonar_origin", "collision"), "WFR": ("door_width", "sonar_origin", "collision")}
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
-DP_FAR = 72.0  # DP starts lie 24..DP_FAR in from the door's wall (R)
+# The teacher's DP starts lie 24..LESSON_FAR in from the door's wall (R): the band of the worlds before issue 44,
+# kept so the default world's lessons are the ones its predictions were measured with.
+LESSON_FAR = 72.0
 
 
 def lesson_path(task: str) -> Path:
@@ -214,7 +224,7 @@ def write_taught_lessons(seed: int = 0) -> list[Path]:
     """Regenerate connrl/data/lessons/robot-{dp,dk,wfl}.json (``connrl make-lessons robot``)."""
     paths = []
     for task in TAUGHT_COUNTS:
-        lessons = make_taught_lessons(task, seed=seed)
+        lessons = make_taught_lessons(task, seed=seed, env=lesson_env(task, SHIPPED_WORLD))
         p = lesson_path(task)
         save_lessons(p, lessons, env_id=f"connrl/Robot-{task}-v0", env_kwargs={},
                      source=f"connrl.tasks.robot.make_taught_lessons({task!r}, n={len(lessons)}, "
@@ -234,11 +244,16 @@ def binary_columns(task: str) -> np.ndarray:
 def _demonstrated(task: str, n: int, world: tuple) -> tuple[Lesson, ...]:
     """The shipped lessons' recipe (seed 0, the default start region with any heading, 30 steps) in another world
     or for more lessons than the file has; cached per process (callers copy the inputs before changing them)."""
-    w = dict(world)
-    spread = w.pop("spread")
-    env = make_env(SimpleNamespace(task=task, binary_low=-0.5, max_steps=30, dp_heading=180.0, dp_far=DP_FAR,
-                                   noise=True, **w))
-    return tuple(make_taught_lessons(task, n, seed=0, env=env, max_tries=max(200, 20 * n), spread=spread))
+    spread = dict(world)["spread"]
+    return tuple(make_taught_lessons(task, n, seed=0, env=lesson_env(task, dict(world)), max_tries=max(200, 20 * n),
+                                     spread=spread))
+
+
+def lesson_env(task: str, world: dict) -> RobotTaskEnv:
+    """Where the scripted teacher demonstrates: the world's details, DP starts 24..LESSON_FAR in out, any heading."""
+    w = {k: v for k, v in world.items() if k != "spread"}
+    return make_env(SimpleNamespace(task=task, binary_low=-0.5, max_steps=30, dp_heading=180.0, dp_far=LESSON_FAR,
+                                    noise=True, **w))
 
 
 def taught_lessons(task: str, n: int, binary_low: float = -0.5, **world) -> list[Lesson]:

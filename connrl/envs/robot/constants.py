@@ -22,7 +22,15 @@ from connrl.envs.robot.geometry import (  # noqa: F401
 ROBOT_RADIUS = 12.0  # inches (Fig. 5.3 caption)
 N_RAYS = 24  # sonar / light readings per rotation, 15 deg apart (5.2.1)
 CONTROL_ERROR = 0.08  # "about 8% control error" (5.2.1; R: uniform on length and angle)
-DOOR_EDGE_JUMP = 44  # neighbouring readings differing by this much mark a potential door edge (R, Fig. 5.3b)
+# The default world: issue 44's pick among the readings of the text that meet the no-teaching DP target
+# (docs/RECONSTRUCTION.md, "The robot world as a family"; all R). The layout file holds its 49-in doors.
+DOOR_EDGE_JUMP = 37  # neighbouring readings differing by this much mark a potential door edge
+EDGE_MARK = "nearer"  # ... on the nearer of the two readings
+SONAR_ORIGIN = "centre"  # sonar distances from the robot's centre (not its body surface)
+COLLISION = "partial"  # a move that would touch a surface stops at the contact
+DP_FAR = 52.0  # DP starts lie 24..DP_FAR in from the door's wall ...
+DP_LATERAL = 0.9  # ... within +-DP_LATERAL x half the door's width of its centre
+PASS_DEPTH = 0.0  # DP succeeds once the centre is in another room
 
 # Actions, in the order of 5.2.1 ("turn +-15, turn +-60, move +-12").
 TURN_LEFT_15, TURN_RIGHT_15, TURN_LEFT_60, TURN_RIGHT_60, MOVE_FORWARD, MOVE_BACKWARD = range(6)

@@ -12,13 +12,18 @@ from gymnasium import spaces
 
 from connrl.envs.robot.constants import (
     ACTION_NAMES,
+    COLLISION,
     COLLISION_SIDES,
     DOOR_EDGE_JUMP,
+    DP_FAR,
+    EDGE_MARK,
     MOVE_BACKWARD,
     MOVE_FORWARD,
     N_ACTIONS,
+    PASS_DEPTH,
     ROBOT_RADIUS,
     SEG_CHARGER,
+    SONAR_ORIGIN,
 )
 from connrl.envs.robot.layout import Layout
 from connrl.envs.robot.render import HumanViewer, render_frame
@@ -52,10 +57,10 @@ class RobotTaskEnv(gym.Env):
                  sensor_noise: bool | None = None, control_noise: bool | None = None,
                  start_sampler: Callable[[np.random.Generator, Layout], tuple] | None = None,
                  dk_radius: float = 96.0, dp_offset: float | None = None,
-                 dp_depth: tuple[float, float] = (24.0, 72.0), dp_heading: float = 180.0,
-                 dock_tolerance: float = 30.0, pass_depth: float = 0.0, render_rays: bool = False,
-                 edge_jump: float = DOOR_EDGE_JUMP, sonar_origin: str = "body", collision: str = "cancel",
-                 edge_mark: str = "nearer"):
+                 dp_depth: tuple[float, float] = (24.0, DP_FAR), dp_heading: float = 180.0,
+                 dock_tolerance: float = 30.0, pass_depth: float = PASS_DEPTH, render_rays: bool = False,
+                 edge_jump: float = DOOR_EDGE_JUMP, sonar_origin: str = SONAR_ORIGIN, collision: str = COLLISION,
+                 edge_mark: str = EDGE_MARK):
         if task not in TASKS:
             raise ValueError(f"task must be one of {TASKS}, got {task!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:

@@ -13,14 +13,17 @@ from connrl.envs.robot.constants import (
     ACTION_NAMES,
     ACTION_TURN_DEG,
     BACK,
+    COLLISION,
     CONTROL_ERROR,
     DOOR_EDGE_JUMP,
+    EDGE_MARK,
     FRONT,
     LEFT,
     N_ACTIONS,
     N_RAYS,
     RIGHT,
     ROBOT_RADIUS,
+    SONAR_ORIGIN,
 )
 from connrl.envs.robot.geometry import _cast_rays, _scan, _time_of_impact
 from connrl.envs.robot.layout import Layout
@@ -78,8 +81,8 @@ class RobotSim:
 
     def __init__(self, layout: Layout | str = "default", rng: np.random.Generator | None = None, *,
                  sensor_noise: bool = True, control_noise: bool = True, edge_jump: float = DOOR_EDGE_JUMP,
-                 step_scale: float = 1.0, sonar_origin: str = "body", collision: str = "cancel",
-                 edge_mark: str = "nearer"):
+                 step_scale: float = 1.0, sonar_origin: str = SONAR_ORIGIN, collision: str = COLLISION,
+                 edge_mark: str = EDGE_MARK):
         if not 0 < edge_jump < math.inf:
             raise ValueError(f"edge_jump must be a finite number of inches > 0, got {edge_jump!r}")
         if not 0 < step_scale <= 1:

@@ -47,8 +47,8 @@ Starting State (5.4; overridable with ``start_sampler`` or ``reset(options={"sta
     uniformly random heading; position uniform over free space (at least 1 in from any surface)
     - DK: in the charger's room within ``dk_radius`` (96 in) of the light, with the light in sight;
     - DP: "near a door" (5.4), "in front of a door" (5.4.1, 6.5): a random door, a random one of its two
-      rooms, the centre within the doorway's span along the wall (+-``dp_offset``, default half the door
-      width, +-24 in for the 48-in doors) and 24..72 in (``dp_depth``) from the wall; any heading, or
+      rooms, the centre within +-``dp_offset`` along the wall of the door's centre (default 0.9 x half the
+      door width, +-22 in for the 49-in doors) and 24..52 in (``dp_depth``) from the wall; any heading, or
       within +-``dp_heading`` deg of facing through the door;
     - WFL / WFR: anywhere in the three rooms.
 
@@ -60,10 +60,10 @@ Arguments:
     task ("DK" | "DP" | "WFL" | "WFR"), layout (name or Layout, default "default"),
     binary_low (-0.5), max_steps (30), render_mode (None | "rgb_array" | "human"), noise (True; sets
     sensor_noise and control_noise unless given), sensor_noise, control_noise, start_sampler
-    (callable(rng, layout) -> (x, y, heading)), dk_radius (96), dp_offset (None = half the door width),
-    dp_depth ((24, 72)), dp_heading (180 = any), dock_tolerance (30 deg), pass_depth (0 in), render_rays (False),
-    edge_jump (44 in: the door-edge threshold), sonar_origin ("body" | "centre"), collision ("cancel" |
-    "partial"), edge_mark ("nearer" | "both") (the last three: issue 44's world family, R).
+    (callable(rng, layout) -> (x, y, heading)), dk_radius (96), dp_offset (None = 0.9 x half the door width),
+    dp_depth ((24, 52)), dp_heading (180 = any), dock_tolerance (30 deg), pass_depth (0 in), render_rays (False),
+    edge_jump (37 in: the door-edge threshold), sonar_origin ("centre" | "body"), collision ("partial" |
+    "cancel"), edge_mark ("nearer" | "both") (issue 44's world family, R).
 
 info:
     "pose" (x, y, heading deg) -- the true pose, which the agent's stuck detector dead-reckons with
@@ -80,13 +80,14 @@ world"):
       whole body 24 in past the doorway (two more moves after the jambs are cleared).
     - DP start region: the thesis says only "near a door" (5.2.2, 5.4), and wants the skill used where the
       robot is "in front of a door" (6.5; "just in front of a door way", 5.4.1; Ch. 6 uses DP between the
-      subgoals on either side of a door). We read "in front of" as the centre within the doorway's span
-      along the wall (+-half the door width) and 24..72 in out, any heading. An earlier version allowed
-      +-48 in along the wall: there the robot starts beside the door, behind a jamb, and must first manoeuvre
-      onto the door's axis (with the SPEC's 36-in doors only +-6 in of slack for the 24-in body).
-    - Door width (48 in) and the door-edge threshold (44 in) are calibrated: the threshold on the caption of
-      Fig. 5.3b, the width on the no-teaching DP curve of Fig. 5.4a (docs/RECONSTRUCTION.md, "Calibration of
-      door passing"). The SPEC's 36 / 24 in are ``Layout.with_door_width(36)`` and ``edge_jump=24``.
+      subgoals on either side of a door). We read "in front of" as the centre within 0.9 of the doorway's
+      half-span along the wall and 24..52 in out, any heading.
+    - The world's open details are issue 44's pick (docs/RECONSTRUCTION.md, "The robot world as a family"):
+      among the readings of the text that meet the thesis's no-teaching DP curve (2.5 at trial 280) and the
+      caption of Fig. 5.3b, the one nearest the earlier world: 49-in doors, a 37-in door-edge threshold,
+      the sonar measured from the robot's centre, a touching move stopped at the contact, the DP start
+      region above. The earlier world (48-in doors, 44-in edges, body-surface sonar, cancelled moves, starts
+      24..72 in out within the door's span) and the SPEC's (36-in doors, 24-in edges) are parameter settings.
     - The WF reinforcement reads the noise-free ranges so the reward depends on the true state; the
       inputs (including the parallelism and clearance units) use the noisy sonar, as the robot sees it.
     - The two parallelism units always come in (left, right) order for both WFL and WFR.
@@ -101,7 +102,7 @@ import math
 import numba as nb
 import numpy as np
 
-from connrl.envs.robot.constants import MOVE_BACKWARD, MOVE_FORWARD, ROBOT_RADIUS, SONAR_MAX
+from connrl.envs.robot.constants import DP_FAR, DP_LATERAL, MOVE_BACKWARD, MOVE_FORWARD, ROBOT_RADIUS, SONAR_MAX
 from connrl.envs.robot.layout import Layout
 
 TASKS = ("DK", "DP", "WFL", "WFR")
@@ -242,9 +243,9 @@ def sample_dk_start(rng: np.random.Generator, layout: Layout, radius: float = 96
 
 
 def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float | None = None,
-                    depth: tuple[float, float] = (24.0, 72.0), heading: float = 180.0):
+                    depth: tuple[float, float] = (24.0, DP_FAR), heading: float = 180.0):
     """In front of a door: random door and side, centre +-offset along the wall from the door centre
-    (None: half the door's width, i.e. within the opening's span), depth[0]..depth[1] from the wall.
+    (None: DP_LATERAL x half the door's width, within the opening's span), depth[0]..depth[1] from the wall.
     The heading is uniform within +-``heading`` deg of facing through the door (180: any heading)."""
     doors = list(layout.doors.values())
     if not doors:
@@ -261,7 +262,7 @@ def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float | No
         x0, y0, x1, y1 = d.segment
         u = np.array([x1 - x0, y1 - y0]) / d.width
         n = np.array([-u[1], u[0]]) * (1.0 if rng.random() < 0.5 else -1.0)
-        half = d.width / 2.0 if offset is None else offset
+        half = DP_LATERAL * d.width / 2.0 if offset is None else offset
         p = d.center + u * rng.uniform(-half, half) + n * rng.uniform(*depth)
         return (float(p[0]), float(p[1]), math.degrees(math.atan2(-n[1], -n[0])))
 
