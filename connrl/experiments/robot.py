@@ -40,6 +40,7 @@ from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
 from connrl.tasks.robot import SHIPPED_WORLD, TAUGHT_COUNTS, TAUGHT_ORDERS, evaluate, make_agent, make_env
 
+FRESH_DP_SEED = 6000  # issue 44's fresh seeds for the DP claims in the chosen world (docs/RECONSTRUCTION.md)
 MAX_TAUGHT = 200  # taught lessons an agent may ask for: the shipped ones, then fresh demonstrations
 THRESHOLDS = (2.5, 5.0)  # the two performance levels of the tables in 5.6
 
@@ -237,6 +238,10 @@ def _spec(name, title, section, base, variants, quantities, paths=0, description
 
 
 _DP_Q = (_q_reach(2.5), _q_reach(5.0), Q_FINAL, Q_MEAN)
+# The DP world before issue 44 (48-in doors, 44-in edges, body sonar, cancelled moves, starts 24-72 in out within
+# the door's span): the world robot-dp-calibration and robot-dp-geometry measured, kept so they still do.
+BEFORE_44 = {"door_width": 48.0, "edge_jump": 44.0, "edge_mark": "nearer", "sonar_origin": "body",
+             "collision": "cancel", "dp_far": 72.0, "dp_lateral": 1.0, "pass_depth": 0.0}
 SPEC_DP = "SPEC: 36-in doors, 24-in edges"  # the reconstruction before the calibration of issue 12
 _GEOMETRIES = ((SPEC_DP, {"door_width": 36.0, "edge_jump": 24.0}, (0, 3, 10)),
                ("36-in doors only", {"door_width": 36.0}, (0, 10)), ("24-in edges only", {"edge_jump": 24.0}, (0, 10)))
@@ -278,19 +283,21 @@ EXPERIMENTS = [
            Variant("DK single-layer", {"task": "DK", "lessons": 10, "lr": 0.04}),
            Variant("WFL single-layer", {"task": "WFL", "lessons": 5, "lr": 0.03})], _Q,
           description="compare with the multi-layer curves of robot-teaching-* (10/10/5 lessons)"),
-    _spec("robot-dp-calibration", "Calibration of the DP reconstruction on Fig. 5.4a's no-teaching curve: door width "
-          "(not a thesis figure; run on the development seeds 100-106)", "5.4.1, 5.6; R", {"task": "DP", "lessons": 0},
+    _spec("robot-dp-calibration", "Calibration of the DP reconstruction on Fig. 5.4a's no-teaching curve: door width, "
+          "in the world before issue 44 (not a thesis figure; run on the development seeds 100-106)", "5.4.1, 5.6; R",
+          {"task": "DP", "lessons": 0, **BEFORE_44},
           [Variant(f"{w:g}-in doors, no teaching", {"door_width": w}, {"trials_to_2.5": 280})
            for w in (36.0, 42.0, 48.0)],
           _DP_Q, description="criterion: the mean no-teaching curve at trial 280 closest to the thesis's 2.5 "
                              "(docs/RECONSTRUCTION.md, 'Calibration of door passing')", seed=100),
-    _spec("robot-dp-geometry", "The previous (SPEC) DP reconstruction and each calibrated change alone "
-          "(not a thesis figure)", "5.4.1, 5.6; R", {"task": "DP"},
+    _spec("robot-dp-geometry", "The SPEC DP reconstruction and each change of issue 12's calibration alone, in the "
+          "world before issue 44 (not a thesis figure)", "5.4.1, 5.6; R", {"task": "DP", **BEFORE_44},
           [Variant(f"{label}, {n} lessons", {**over, "lessons": n},
                    {"trials_to_2.5": {0: 280, 3: 20, 10: 10}[n], **({"trials_to_5": 65} if n == 10 else {})})
            for label, over, ns in _GEOMETRIES for n in ns], _DP_Q,
-          description="the calibrated default is 48-in doors with a 44-in door-edge jump (robot-teaching-dp); the SPEC "
-                      "reconstruction had 36 / 24; thesis numbers are its Fig. 5.4a / 5.6 values"),
+          description="issue 12's calibration gave 48-in doors with a 44-in door-edge jump (the world before issue 44, "
+                      "robot-dp-calibration); the SPEC reconstruction had 36 / 24; thesis numbers are its Fig. 5.4a / "
+                      "5.6 values"),
     _spec("robot-dp-replay-order", "Taught lessons replayed after the experienced ones, or shuffled in among them "
           "(not a thesis figure)", "5.3.5; R", {"task": "DP"},
           [Variant(f"{n} lessons, {order}", {"lessons": n, "taught_order": order},
@@ -301,13 +308,14 @@ EXPERIMENTS = [
           [Variant("10 lessons", {"lessons": 10}, {"trials_to_2.5": 10}), Variant("100 lessons", {"lessons": 100})],
           _DP_Q, description="the one change from robot-teaching-dp is the number of lessons; the first 10 of the 100 "
                              "are the shipped ones"),
-    _spec("robot-dp-fresh", "The calibrated DP predictions again, for fresh seeds (not a thesis figure; run on seeds "
-          "1000-1006, never used in development)", "5.6", {"task": "DP"},
+    _spec("robot-dp-fresh", "Ch. 5's DP claims in issue 44's world, for fresh seeds (not a thesis figure; run on seeds "
+          f"{FRESH_DP_SEED}-{FRESH_DP_SEED + 6}, never used in development)", "5.6", {"task": "DP"},
           [Variant("no teaching", {"lessons": 0}, {"trials_to_2.5": 280}),
            Variant("3 lessons", {"lessons": 3}, {"trials_to_2.5": 20}),
            Variant("10 lessons", {"lessons": 10}, {"trials_to_2.5": 10, "trials_to_5": 65}),
            Variant("10 lessons, lambda=0", {"lessons": 10, "lam": 0.0}, {"trials_to_5": 280}),
-           Variant("10 lessons, lambda=0.3", {"lessons": 10, "lam": 0.3}, {"trials_to_5": 140})], _DP_Q, seed=1000),
+           Variant("10 lessons, lambda=0.3", {"lessons": 10, "lam": 0.3}, {"trials_to_5": 140})], _DP_Q,
+          seed=FRESH_DP_SEED),
     _spec("robot-dk-geometry", "Sensitivity of DK to the reconstructed docking tolerance, multi- vs single-layer "
           "(not a thesis figure)", "5.4.1, 5.4.4; R", {"task": "DK"},
           [Variant(f"{tol:g} deg, {arch}, {n} lessons",

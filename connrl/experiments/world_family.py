@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from connrl.envs.robot import Layout, RobotSim
-from connrl.experiments.robot import RobotParams
+from connrl.experiments.robot import BEFORE_44, RobotParams
 from connrl.experiments.runner import Job, _execute, params_hash
 from connrl.experiments.spec import as_dict, qualified_name
 from connrl.experiments.store import load_record
@@ -50,7 +50,9 @@ SPACE = (Detail("door_width", 36.0, 72.0, 1.0), Detail("edge_jump", 24.0, 64.0, 
          Detail("edge_mark", choices=("nearer", "both")), Detail("sonar_origin", choices=("body", "centre")),
          Detail("collision", choices=("cancel", "partial")), Detail("dp_far", 48.0, 96.0, 1.0),
          Detail("dp_lateral", 0.5, 2.0, 0.05), Detail("pass_depth", 0.0, 24.0, 1.0))
-TODAY = {d.name: getattr(RobotParams(), d.name) for d in SPACE}
+# "today's world" of the protocol: the world before issue 44 (the pick is the accepted world nearest it, and it
+# is measured beside the family); the default world is now the pick (connrl.envs.robot.constants).
+TODAY = dict(BEFORE_44)
 SEARCH_SEEDS, RECHECK_SEEDS = tuple(range(100, 107)), tuple(range(5100, 5107))
 LEVEL, TARGET_T, T_LOW, T_HIGH, MAX_FAILING = 2.5, 280, 190, 300, 3
 BUDGET, STARTUP = 160, 24

@@ -21,10 +21,12 @@ from connrl.envs.robot import (
     side_clearance,
     wall_following_reward,
 )
+from tests.envs.robot_scenes import BODY_CANCEL
 
 
 def exact(task, **kw):
-    return RobotTaskEnv(task, noise=False, **kw)
+    """Noise-free, in the world the scenes' hand-drawn numbers are for (tests.envs.robot_scenes.BODY_CANCEL)."""
+    return RobotTaskEnv(task, noise=False, **(BODY_CANCEL | kw))
 
 
 @pytest.mark.parametrize("task", TASKS)
@@ -137,8 +139,8 @@ def test_dp_jamb_collision():
     # 5 in off the axis the body clears the jamb by 1 in and the robot gets through.
     env.reset(seed=0, options={"start": (109, 330, 270)})
     assert [env.step(MOVE_FORWARD)[1] for _ in range(3)] == [0, 0, 100]
-    # the calibrated 48-in door (12 in of slack per side): 8 in off the axis passes, 14 in off hits the jamb at x = 90
-    env = exact("DP")
+    # a 48-in door (12 in of slack per side): 8 in off the axis passes, 14 in off hits the jamb at x = 90
+    env = exact("DP", layout=Layout.load("default").with_door_width(48.0))
     env.reset(seed=0, options={"start": (106, 330, 270)})
     assert [env.step(MOVE_FORWARD)[1] for _ in range(3)] == [0, 0, 100]
     env.reset(seed=0, options={"start": (100, 330, 270)})  # 10 in from the jamb (90, 300), as above
@@ -225,9 +227,10 @@ def test_compiled_observation_matches_reference_encoding():
             assert np.allclose(obs[:24], encode_sonar(rd.sonar), atol=1e-6)
             if task in ("WFL", "WFR"):
                 for j, side in enumerate(("left", "right")):
-                    par = 0.5 * np.clip(side_alignment(rd.sonar, side) / 45, -1, 1)
+                    body = rd.sonar - 12.0  # the default sonar reads from the centre; 5.3.1 wants body distances
+                    par = 0.5 * np.clip(side_alignment(body, side) / 45, -1, 1)
                     assert obs[28 + j] == pytest.approx(par, abs=1e-6)
-                    c = side_clearance(rd.sonar, side)
+                    c = side_clearance(body, side)
                     assert obs[30 + 3 * j: 33 + 3 * j].tolist() == [0.5 if b else -0.5 for b in
                                                                      (c < 14, 14 <= c <= 32, c > 32)]
             else:

@@ -8,20 +8,20 @@ import pytest
 from connrl.envs.robot import MOVE_FORWARD, RobotSim, RobotTaskEnv
 from connrl.experiments.robot import RobotParams
 from connrl.tasks import robot
-from tests.envs.robot_scenes import box_layout
+from tests.envs.robot_scenes import BODY_CANCEL, box_layout
 
 DOORWAY = {"inner_walls": [[0, 100, 80, 100], [116, 100, 200, 100]],
            "doors": {"D": {"segment": [80, 100, 116, 100], "rooms": ["S", "N"]}}}
 
 
 def _sim(layout, pose, **kw):
-    sim = RobotSim(layout, np.random.default_rng(0), sensor_noise=False, control_noise=False, **kw)
+    sim = RobotSim(layout, np.random.default_rng(0), sensor_noise=False, control_noise=False, **(BODY_CANCEL | kw))
     sim.place(*pose)
     return sim
 
 
 def test_sonar_origin_centre_reads_the_radius_more_and_leaves_the_true_ranges():
-    body = _sim(box_layout(), (100, 150, 90)).sense()
+    body = _sim(box_layout(), (100, 150, 90), sonar_origin="body").sense()
     centre = _sim(box_layout(), (100, 150, 90), sonar_origin="centre").sense()
     assert body.sonar[0] == 38 and centre.sonar[0] == 50  # north wall 50 in from the centre
     assert centre.sonar[6] == 100 and centre.sonar[12] == 127  # west wall 100 in; behind 150 in, clipped
@@ -83,7 +83,7 @@ def test_pass_depth_reaches_the_environment():
 
 def test_changed_world_details_demonstrate_afresh_and_others_read_the_file():
     shipped = robot.taught_lessons("DP", 2)
-    changed = robot.taught_lessons("DP", 2, sonar_origin="centre")
+    changed = robot.taught_lessons("DP", 2, sonar_origin="body")
     assert not np.array_equal(shipped[0].inputs, changed[0].inputs)
     # DK does not see door edges: its lessons stay the file's when only the DP marking changes
     assert all(np.array_equal(a.inputs, b.inputs) for a, b in

@@ -12,9 +12,9 @@ def test_default_layout_matches_spec():
     L = Layout.load("default")
     assert L.size == (360.0, 420.0)
     assert L.rooms == {"A": (0, 0, 180, 300), "B": (180, 0, 360, 300), "C": (0, 300, 360, 420)}
-    # 48-in doors about the SPEC's centres x = 114 and 246 (calibrated, docs/RECONSTRUCTION.md)
-    assert L.doors["A"].segment == (90, 300, 138, 300) and L.doors["B"].segment == (222, 300, 270, 300)
-    assert all(d.width == 48 for d in L.doors.values())
+    # 49-in doors about the SPEC's centres x = 114 and 246 (issue 44's pick, docs/RECONSTRUCTION.md)
+    assert L.doors["A"].segment == (89.5, 300, 138.5, 300) and L.doors["B"].segment == (221.5, 300, 270.5, 300)
+    assert all(d.width == 49 for d in L.doors.values())
     assert set(L.obstacles) == {(72, 150, 120, 174), (132, 36, 168, 72), (252, 168, 300, 192)}
     assert L.charger == (0, 0, 18, 18) and L.light == (9, 9)
     for name, loc in L.locations.items():

@@ -20,7 +20,7 @@ from connrl.envs.robot import (
     RobotSim,
     collision_side,
 )
-from tests.envs.robot_scenes import box_layout, exact_sim
+from tests.envs.robot_scenes import BODY_CANCEL, box_layout, exact_sim
 
 
 def test_place_rejects_overlap():
@@ -46,7 +46,7 @@ def test_sonar_noise_bounds_and_dropouts():
     L = Layout.from_dict({"name": "small", "size": [100, 100], "rooms": {"R": [0, 0, 100, 100]},
                           "walls": [[0, 0, 100, 0], [100, 0, 100, 100], [100, 100, 0, 100], [0, 100, 0, 0]],
                           "doors": {}, "obstacles": [], "charger": {"box": [82, 82, 100, 100]}})
-    sim = RobotSim(L, np.random.default_rng(5), control_noise=False)
+    sim = RobotSim(L, np.random.default_rng(5), control_noise=False, **BODY_CANCEL)
     sim.place(50, 40, 90)
     true = sim.true_ranges()
     n, drop_scans = 4000, 0
@@ -78,7 +78,8 @@ def test_door_edge_bits_on_hand_built_doorway():
     # The threshold (R, 44 in by default) decides which jumps count: above the grazing 45-in jump only the jambs'
     # 105-in jumps are left; at 106 in none.
     for jump, bits in ((24.0, [3, 4, 20, 21]), (46.0, [3, 21]), (106.0, [])):
-        sim = RobotSim(L, np.random.default_rng(0), sensor_noise=False, control_noise=False, edge_jump=jump)
+        sim = RobotSim(L, np.random.default_rng(0), sensor_noise=False, control_noise=False, edge_jump=jump,
+                       **BODY_CANCEL)
         sim.place(98, 124, 270)
         assert np.flatnonzero(sim.sense().door_edge).tolist() == bits, jump
     with pytest.raises(ValueError, match="edge_jump"):
@@ -88,7 +89,7 @@ def test_door_edge_bits_on_hand_built_doorway():
 def test_dropout_fakes_door_edges():
     # Facing a wall 12 in away, rays 22..2 read 12..16 in: no edges among them, unless a dropout (127)
     # hits one of them, which then marks both its neighbours (5.2.1: faulty readings look like doors).
-    sim = RobotSim(box_layout(), np.random.default_rng(2), control_noise=False)
+    sim = RobotSim(box_layout(), np.random.default_rng(2), control_noise=False, **BODY_CANCEL)
     sim.place(100, 176, 90)
     hits = 0
     for _ in range(400):

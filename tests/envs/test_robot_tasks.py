@@ -106,7 +106,9 @@ def test_dp_start_heading_faces_the_door():
         through = 90.0 if y < 300 else -90.0  # north from A/B, south from C
         assert abs((h - through + 180.0) % 360.0 - 180.0) <= 45.0 + 1e-9
         assert 0.0 <= h < 360.0
-    # any heading (the default) keeps the draws of the generator before dp_heading existed (commit c29cf40)
+    # any heading (the default) keeps the draws of the generator before dp_heading existed (commit c29cf40), in the
+    # start region of then (within the door's span, 24-72 in out)
     spec = Layout.load("default").with_door_width(36.0)
-    assert RobotTaskEnv("DP", layout=spec).sample_task(np.random.default_rng(3)) == pytest.approx(
+    env = RobotTaskEnv("DP", layout=spec, dp_offset=18.0, dp_depth=(24.0, 72.0))
+    assert env.sample_task(np.random.default_rng(3)) == pytest.approx(
         (256.8458807474303, 351.94377773108965, 33.88631120654371), abs=1e-12)

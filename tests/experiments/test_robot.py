@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from connrl.experiments.robot import EXPERIMENTS, RobotParams, first_reaching, run_robot
+from connrl.experiments.robot import BEFORE_44, EXPERIMENTS, RobotParams, first_reaching, run_robot
 from connrl.experiments.spec import as_dict
 
 TINY = RobotParams(trials=4, test_every=2, test_tasks=3, lessons_per_trial=3)
@@ -49,11 +49,11 @@ def test_geometry_studies_vary_only_the_geometry():
     # each variant is the thesis experiment's variant with only the geometry changed
     for n, label in ((0, "no teaching"), (3, "3 lessons"), (10, "10 lessons")):
         assert _variant_params("robot-dp-geometry", f"SPEC: 36-in doors, 24-in edges, {n} lessons") == \
-            {**_variant_params("robot-teaching-dp", label), "door_width": 36.0, "edge_jump": 24.0}
+            {**_variant_params("robot-teaching-dp", label), **BEFORE_44, "door_width": 36.0, "edge_jump": 24.0}
     assert _variant_params("robot-dp-fresh", "10 lessons, lambda=0.3") == \
         _variant_params("robot-lambda-dp", "lambda=0.3")
     assert _variant_params("robot-dp-calibration", "48-in doors, no teaching") == \
-        _variant_params("robot-teaching-dp", "no teaching")
+        {**_variant_params("robot-teaching-dp", "no teaching"), **BEFORE_44}
     assert _variant_params("robot-dk-geometry", "30 deg, multi-layer, 10 lessons") == \
         _variant_params("robot-teaching-dk", "10 lessons")
     assert _variant_params("robot-dk-geometry", "30 deg, single-layer, 10 lessons") == \
@@ -93,8 +93,12 @@ def test_defaults_are_the_shipped_world():
     from connrl.tasks.robot import SHIPPED_WORLD
 
     p = RobotParams()
-    assert p.door_width == SHIPPED_WORLD["door_width"] == Layout.load("default").doors["B"].width == 48.0
-    assert p.edge_jump == SHIPPED_WORLD["edge_jump"] == DOOR_EDGE_JUMP == RobotTaskEnv("DP").sim.edge_jump == 44.0
+    assert p.door_width == SHIPPED_WORLD["door_width"] == Layout.load("default").doors["B"].width == 49.0
+    assert p.edge_jump == SHIPPED_WORLD["edge_jump"] == DOOR_EDGE_JUMP == RobotTaskEnv("DP").sim.edge_jump == 37.0
+    sim = RobotTaskEnv("DP").sim  # issue 44's pick (docs/RECONSTRUCTION.md, "The robot world as a family")
+    assert (p.sonar_origin, p.collision, p.edge_mark) == ("centre", "partial", "nearer")
+    assert (sim.sonar_radius, sim.partial_moves, sim.edge_both) == (0.0, True, False)
+    assert (p.dp_far, p.dp_lateral, p.pass_depth) == (52.0, 0.9, 0.0) == (RobotTaskEnv("DP")._dp_depth[1], 0.9, 0.0)
 
 
 def test_copy_run_stops_at_full_agreement_and_the_teacher_passes():

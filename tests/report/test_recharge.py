@@ -97,5 +97,5 @@ def test_chapter_6_section_holds_every_experiment_the_claims_and_the_paths(tmp_p
     for name in ("recharge-flat", "recharge-behaviours", "recharge-long-delay", "recharge-together"):
         assert f"### {name}" in md
     assert "### The claims of 6.6 and 6.7 beside ours" in md and "Quantities we tuned" not in md  # page top
-    assert "| ours, Exp. 1 | 497 (10 recharging lessons) |" in md  # the shipped lessons' teaching steps
+    assert "| ours, Exp. 1 | 501 (10 recharging lessons) |" in md  # the shipped lessons' teaching steps
     assert (tmp_path / "docs" / "figures" / "recharge-behaviours-paths.png").exists()

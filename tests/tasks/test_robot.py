@@ -10,6 +10,7 @@ import pytest
 
 from connrl.agents.teaching import TeachingConfig, TeachingQCON
 from connrl.core.lesson_files import load_lessons
+from connrl.envs.robot import Layout, RobotTaskEnv
 from connrl.experiments.robot import RobotParams, run_robot
 from connrl.tasks import robot
 from connrl.tasks.robot import binary_columns, make_agent, make_taught_lessons, taught_lessons
@@ -54,8 +55,10 @@ def test_other_geometry_gets_its_own_taught_lessons():
     shipped = robot.taught_lessons("DP", 3)
     for a, b in zip(wide, again, strict=True):  # deterministic
         np.testing.assert_array_equal(a.inputs, b.inputs)
-    # the teacher demonstrated in the SPEC's 36-in layout with 24-in edges: its first lesson is what it does there
-    env = robot.make_env(RobotParams(door_width=36.0, edge_jump=24.0))
+    # the teacher demonstrated in the SPEC's 36-in layout with 24-in edges, from starts 24-72 in out (LESSON_FAR) within
+    # 0.9 of the door's half-span: its first lesson is what it does there
+    env = RobotTaskEnv("DP", layout=Layout.load("default").with_door_width(36.0), edge_jump=24.0,
+                       dp_offset=0.9 * 18.0, dp_depth=(24.0, 72.0))
     assert env.layout.doors["A"].width == 36.0 and env.unwrapped.sim.edge_jump == 24.0
     direct = make_taught_lessons("DP", n=1, seed=0, env=env)[0]
     np.testing.assert_array_equal(wide[0].inputs, direct.inputs)

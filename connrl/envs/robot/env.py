@@ -126,9 +126,7 @@ class RobotTaskEnv(gym.Env):
     def _observe(self, rd: Reading) -> np.ndarray:
         out = np.empty(self.observation_space.shape[0], dtype=np.float32)
         if self.task in ("WFL", "WFR"):
-            # the side features are body clearances (5.3.1): a centre-origin sonar reads the radius more
-            body = rd.sonar - (ROBOT_RADIUS - self.sim.sonar_radius) if self.sim.sonar_radius == 0.0 else rd.sonar
-            _side_features(body, ROBOT_RADIUS, self._feat)
+            _side_features(rd.body_sonar(), ROBOT_RADIUS, self._feat)  # body clearances (5.3.1)
             _fill_obs(1, rd.sonar, rd.light, rd.collision, self.binary_low, self.binary_high, self._feat, out)
         else:
             bits = rd.light if self.task == "DK" else rd.door_edge

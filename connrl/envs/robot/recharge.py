@@ -104,7 +104,7 @@ def task_observations(rd: Reading, low: float = -0.5) -> dict[str, np.ndarray]:
     dk, dp, wf = np.empty(52, np.float32), np.empty(52, np.float32), np.empty(36, np.float32)
     _fill_obs(0, rd.sonar, rd.light, rd.collision, low, high, feat, dk)
     _fill_obs(0, rd.sonar, rd.door_edge, rd.collision, low, high, feat, dp)
-    _side_features(rd.sonar, ROBOT_RADIUS, feat)
+    _side_features(rd.body_sonar(), ROBOT_RADIUS, feat)  # body clearances (5.3.1)
     _fill_obs(1, rd.sonar, rd.light, rd.collision, low, high, feat, wf)
     return {"DK": dk, "DP": dp, "WFL": wf, "WFR": wf.copy()}
 

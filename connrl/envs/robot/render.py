@@ -59,7 +59,7 @@ def draw_robot(ax, pose, *, colour="#c0392b", reading: Reading | None = None, ra
     if rays and reading is not None:
         for k in range(N_RAYS):
             a = h + math.radians(RAY_STEP_DEG * k)
-            r = ROBOT_RADIUS + float(reading.sonar[k])
+            r = reading.sonar_radius + float(reading.sonar[k])
             ca, sa = math.cos(a), math.sin(a)
             x0, y0 = x + ROBOT_RADIUS * ca, y + ROBOT_RADIUS * sa
             lit = reading.light[k]

@@ -56,6 +56,11 @@ class Reading(NamedTuple):
     collision: np.ndarray  # (4,) uint8 (front, back, left, right)
     compass: float  # heading, degrees in [0, 360)
     room: str | None
+    sonar_radius: float = ROBOT_RADIUS  # the sonar reads from this far off the centre (the body's radius, or 0)
+
+    def body_sonar(self) -> np.ndarray:
+        """The sonar readings as distances from the body surface (5.3.1's clearances), whatever their origin."""
+        return self.sonar if self.sonar_radius == ROBOT_RADIUS else self.sonar - (ROBOT_RADIUS - self.sonar_radius)
 
 
 def wrap_deg(a: float) -> float:
@@ -172,7 +177,8 @@ class RobotSim:
         _scan(self.x, self.y, self.heading, self._segs, self._kinds, self._light[0], self._light[1],
               ROBOT_RADIUS, self.sonar_radius, u, self.sensor_noise, self.edge_jump, self.edge_both, ranges, sonar,
               light, door)
-        return Reading(sonar, ranges, light, door, self.last_collision.copy(), self.heading, self.room)
+        return Reading(sonar, ranges, light, door, self.last_collision.copy(), self.heading, self.room,
+                       self.sonar_radius)
 
     def true_ranges(self) -> np.ndarray:
         """Noise-free body distance along each ray, not clipped at 127 (does not consume randomness)."""
