@@ -324,7 +324,7 @@ def _add_experiment_commands(sub) -> None:
     s.add_argument("--runs", type=_run_count, default=None, help="runs per variant (overrides the profile)")
     s.add_argument("--seed", type=_seed, default=None,
                    help="base seed; run i uses seed+i (default: the experiment's own first seed, as `connrl reproduce` "
-                        "uses: 0, but 100 for robot-dp-calibration, 1000 for robot-dp-fresh, 2000 for "
+                        "uses: 0, but 100 for robot-dp-calibration, 6000 for robot-dp-fresh, 2000 for "
                         "survival-study1-fresh and survival-study2-fresh)")
     s.add_argument("--out", default="runs", help="output directory (default ./runs)")
     s.add_argument("--workers", type=_positive_int, default=None, help="worker processes (default: all cores)")

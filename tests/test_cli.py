@@ -167,7 +167,7 @@ def test_reproduce_runs_a_chapter_then_the_results_page(tmp_path, capsys):
     from connrl.experiments.registry import CHAPTERS, SPEC_MODULES, by_chapter
     assert set(CHAPTERS) == set(SPEC_MODULES)  # every experiment belongs to a chapter
     assert sorted(s.name for s in by_chapter([4, 5, 6, 7, 8])) == sorted(all_experiments())
-    assert {s.name: s.seed for s in by_chapter([5]) if s.seed} == {"robot-dp-calibration": 100, "robot-dp-fresh": 1000,
+    assert {s.name: s.seed for s in by_chapter([5]) if s.seed} == {"robot-dp-calibration": 100, "robot-dp-fresh": 6000,
                                                                         "robot-teaching-dk-fresh": 4000}
     assert {s.name: s.full_runs for s in by_chapter([4, 5, 6, 7, 8]) if s.full_runs} == {"pole-hidden": 18}
     assert cli.main(["reproduce", "--chapters", "8", "--profile", "tiny", "--out", str(tmp_path), "--workers", "1",

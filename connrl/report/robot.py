@@ -10,7 +10,7 @@ import numpy as np
 
 from connrl.envs.robot import Layout, render_figure_5_3, render_paths
 from connrl.experiments.robot import EXPERIMENTS as SKILLS
-from connrl.experiments.robot import FRESH_DK_SEED, SPEC_DP, THRESHOLDS, first_reaching, quantity_name
+from connrl.experiments.robot import FRESH_DK_SEED, FRESH_DP_SEED, SPEC_DP, THRESHOLDS, first_reaching, quantity_name
 from connrl.experiments.robot_bounds import EXPERIMENTS as BOUNDS
 from connrl.experiments.robot_noise import EXPERIMENTS as NOISE
 from connrl.experiments.robot_noise import TASK_LESSONS, THESIS
@@ -321,7 +321,7 @@ def _fresh_speedups(curves, summaries: dict) -> list[str]:
     """5.6's speedup tables again from ``robot-dp-fresh`` (seeds never used in development), as re-checks."""
     if "robot-dp-fresh" not in summaries:
         return []
-    return _speedup_tables(curves, FRESH_DP, recheck_tag([summaries["robot-dp-fresh"]], 1000, 7))
+    return _speedup_tables(curves, FRESH_DP, recheck_tag([summaries["robot-dp-fresh"]], FRESH_DP_SEED, 7))
 
 
 def speedup_bound(base: float | None, n: float | None, last_trial: float) -> tuple[float | None, bool]:

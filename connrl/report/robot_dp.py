@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from connrl.experiments.robot import SPEC_DP, RobotParams, first_reaching
+from connrl.experiments.robot import FRESH_DP_SEED, SPEC_DP, RobotParams, first_reaching
 from connrl.experiments.spec import ExperimentSpec
 from connrl.report import checks, verdicts
 from connrl.report.page import fixed
@@ -206,7 +206,7 @@ def _fresh(curves, seeds, summary: dict | None = None) -> list[str]:
     lam = [fresh["10 lessons, lambda=0"], fresh["10 lessons, lambda=0.3"], fresh["10 lessons"]]
     means = [float(np.mean(curves[k][1])) for k in lam]
     teach = [float(np.mean(curves[fresh[v]][1])) for v in ("no teaching", "3 lessons", "10 lessons")]
-    run = _seeds(seeds, "robot-dp-fresh", 1000, "never used in development")
+    run = _seeds(seeds, "robot-dp-fresh", FRESH_DP_SEED, "never used in development")
     text = (f"**Fresh seeds** (`robot-dp-fresh`, {run}): mean-curve trials to 2.5 without teaching / 3 / 10 lessons "
             "(thesis 280 / 20 / 10): " + " / ".join(
                 _reach(curves, fresh[v], 2.5) for v in ("no teaching", "3 lessons", "10 lessons")) +
