@@ -96,7 +96,7 @@ NOTES_DIR = Path(__file__).resolve().parents[2] / "docs" / "notes"
 SECTIONS = ("connrl.report.pole", "connrl.report.survival", "connrl.report.hidden_state", "connrl.report.robot",
             "connrl.report.world_family", "connrl.report.td_depth", "connrl.report.recharge",
             "connrl.report.complexity",
-            "connrl.report.integration")
+            "connrl.report.integration", "connrl.report.before_after")
 
 
 def note(name: str) -> str:
