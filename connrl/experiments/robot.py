@@ -18,9 +18,12 @@ Taught lessons (3.7, 5.4) come from the scripted teachers of ``connrl.envs.robot
 ``connrl make-lessons robot`` rewrites ``connrl/data/lessons/robot-{dp,dk,wfl}.json``
 deterministically; 3 (DP, DK) or 2 (WFL) taught lessons are the first ones of the file.
 
-The DP world is calibrated (48-in doors, 44-in door-edge threshold; docs/RECONSTRUCTION.md, "Calibration of door
-passing"): ``robot-dp-calibration`` is the fit, ``robot-dp-geometry`` undoes each change alone,
-``robot-dp-replay-order``, ``robot-dp-lesson-use`` and ``robot-dp-fresh`` measure what it predicts, and
+The DP world is issue 44's pick among the readings of the text that meet the no-teaching DP curve (49-in doors,
+37-in door edges, centre sonar, moves stopped at the contact; docs/RECONSTRUCTION.md, "The robot world as a family";
+``connrl world-family``). Issue 12's calibration (48-in doors, 44-in door-edge threshold; "Calibration of door
+passing") gave the world before it: ``robot-dp-calibration`` is that fit, ``robot-dp-geometry`` undoes each change
+alone (both in that world); ``robot-dp-replay-order``, ``robot-dp-lesson-use`` and ``robot-dp-fresh`` measure the
+default world, and
 ``connrl.experiments.robot_bounds`` holds the copy bound. The earlier diagnosis of the SPEC geometry, and of
 single-layer docking, is docs/notes/robot-dp-gap.md.
 """

@@ -196,7 +196,7 @@ _PANELS = {  # experiments drawn as small multiples: panel title -> [(line label
     "robot-dp-geometry": {
         **{label: [(f"{n} lessons", f"{label}, {n} lessons") for n in ns]
            for label, ns in ((SPEC_DP, (0, 3, 10)), ("36-in doors only", (0, 10)), ("24-in edges only", (0, 10)))},
-        "calibrated: 48-in doors, 44-in edges (robot-teaching-dp)": [
+        "issue 44's world (robot-teaching-dp)": [
             (f"{n} lessons", ("robot-teaching-dp", v)) for n, v in ((0, "no teaching"), (3, "3 lessons"),
                                                                       (10, "10 lessons"))]},
     "robot-dk-geometry": {f"dock within {t} deg": [(f"{a}, {n} lessons", f"{t} deg, {a}, {n} lessons")

@@ -178,9 +178,10 @@ def _changes(curves, seeds) -> list[str]:
     geo = {label: [("robot-dp-geometry", f"{label}, {n} lessons") for n in (0, 10)]
            for label in (SPEC_DP, "36-in doors only", "24-in edges only")}
     if all(k in curves for ks in geo.values() for k in ks) and all(k in curves for k in TEACH):
-        rows = {**geo, "calibrated (48-in doors, 44-in edges)": [TEACH[0], TEACH[2]]}
-        out += [f"**Each calibrated change alone** (`robot-dp-geometry`, seeds {seeds['robot-dp-geometry']}; "
-                "calibrated = robot-teaching-dp): mean-curve trials to 2.5 with 10 lessons / without teaching, and "
+        rows = {**geo, "issue 44's world (robot-teaching-dp)": [TEACH[0], TEACH[2]]}
+        out += [f"**Each change of issue 12's calibration alone** (`robot-dp-geometry`, seeds "
+                f"{seeds['robot-dp-geometry']}, in the world before issue 44; beside it, today's world): mean-curve "
+                "trials to 2.5 with 10 lessons / without teaching, and "
                 "final performance with 10 lessons: " + "; ".join(
                     f"{label}: {_reach(curves, ks[1], 2.5)} / {_reach(curves, ks[0], 2.5)}, "
                     f"{float(np.mean(curves[ks[1]][1][-3:])):.2f}" for label, ks in rows.items()) + ".", ""]
