@@ -87,7 +87,7 @@ class RobotParams:
     test_tasks: int = 50  # fixed test tasks per run (5.4)
     paths: int = 0  # greedy solution paths recorded at the end of the run (Figs. 5.5-5.7)
     linear_output: bool = False  # single-layer nets only: linear output unit (7.4's linear OAON; diagnostic)
-    door_width: float = SHIPPED_WORLD["door_width"]  # doorway width, in: the layout's 48 (R, calibrated; SPEC 36)
+    door_width: float = SHIPPED_WORLD["door_width"]  # doorway width, in: the layout's 49 (R, issue 44; SPEC 36)
     dp_heading: float = 180.0  # DP starts face within +-this many deg of the door (180 = any heading, 5.4)
     dock_tolerance: float = 30.0  # DK: a head-on charger contact within this many deg docks (R; robot-dk-geometry)
     dp_far: float = DP_FAR  # DP starts lie 24..dp_far in from the door's wall (R)

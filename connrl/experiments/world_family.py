@@ -85,14 +85,18 @@ def distance(world: dict) -> float:
 
 
 def score(curves: list[list[float]], reached: list) -> dict:
-    """T (first trial of the mean curve at LEVEL), F (runs never at LEVEL), the loss and the verdict."""
-    mean = np.mean(np.asarray(curves, dtype=float), axis=0)
-    xs = np.arange(len(mean)) * 10
+    """T (first trial of the mean curve at LEVEL), F (runs never at LEVEL), the loss and the verdict. A diverged run
+    (no curve, no ``reached``) counts as failing and stays out of the mean curve."""
+    n = max((len(c) for c in curves), default=0)
+    whole = [c for c in curves if n and len(c) == n]
+    mean = np.mean(np.asarray(whole, dtype=float), axis=0) if whole else np.zeros(0)
     hit = np.nonzero(mean >= LEVEL)[0]
-    t = int(xs[hit[0]]) if hit.size else None
+    t = int(hit[0] * 10) if hit.size else None
     failing = sum(r is None for r in reached)
     extra = 0.1 * max(0, failing - 1)
-    loss = (abs(math.log(t / TARGET_T)) if t else math.log(T_HIGH / TARGET_T) + (LEVEL - mean.max()) / LEVEL) + extra
+    shortfall = max(0.0, (LEVEL - float(mean.max())) / LEVEL) if whole else 1.0
+    # |ln(T/280)| as declared; a world at 2.5 before any learning (T = 0) is scored as at trial 10, not as never
+    loss = (abs(math.log(max(t, 10) / TARGET_T)) if t is not None else math.log(T_HIGH / TARGET_T) + shortfall) + extra
     return {"T": t, "F": failing, "loss": round(float(loss), 4), "mean_curve": [round(float(v), 4) for v in mean],
             "accepted": t is not None and T_LOW <= t <= T_HIGH and failing <= MAX_FAILING}
 
@@ -110,6 +114,7 @@ def _jobs(out: Path, world: dict, seeds, label: str, trials: int, extra: dict | 
 def run_jobs(jobs: list[Job], workers: int, executor: str, address: str | None, show: bool) -> dict[str, dict]:
     """The records of ``jobs`` by path: stored ones reused (a damaged one is redone), the rest run."""
     done, todo = {}, []
+    jobs = list({j.path: j for j in jobs}.values())  # two proposals of one batch may be the same world
     for job in jobs:
         rec, _damage = load_record(job.path, job)
         (done.__setitem__(job.path, rec) if rec is not None else todo.append(job))
@@ -161,34 +166,39 @@ def _study(done: list[dict], seed: int):
 def search(out: Path, budget: int = BUDGET, trials: int = 300, seed: int = 0, workers: int = 2,
            executor: str = "process", address: str | None = None, show: bool = True, log=print) -> list[dict]:
     """Stage 1: the TPE search, resumed from ``out/search.json``; returns every world's row. ``trials``: per run
-    (300, the protocol's; fewer only for a smoke test)."""
+    (300, the protocol's; fewer only for a smoke test). Worlds are asked for in batches of the worker count (at
+    least 2) fixed when the search starts and kept in the log, so a resume on another machine asks the same worlds."""
     path = out / "search.json"
-    log_doc = read_json(path) if path.exists() else {"trials": trials, "worlds": []}
-    if log_doc["trials"] != trials:
-        raise ValueError(f"{path} is a search with {log_doc['trials']} trials per run, not {trials}: resume it with "
+    log_doc = read_json(path) if path.exists() else {"trials": trials, "batch": max(2, workers), "worlds": []}
+    if _trials(log_doc) != trials:
+        raise ValueError(f"{path} is a search with {_trials(log_doc)} trials per run, not {trials}: resume it with "
                          f"the same --trials or use another --out")
-    done = log_doc["worlds"]
+    done, batch_size = log_doc["worlds"], log_doc.get("batch", 2)  # logs before the key: batches of 2
     run = {"workers": workers, "executor": executor, "address": address, "show": show}
     while len(done) < budget:
         study, dists = _study(done, seed)
-        batch = [study.ask(dists) for _ in range(min(max(2, workers), budget - len(done)))]
+        batch = [study.ask(dists) for _ in range(min(batch_size, budget - len(done)))]
         worlds = [{d.name: _plain(t.params[d.name]) for d in SPACE} for t in batch]
         for row in evaluate_worlds(out, worlds, SEARCH_SEEDS, trials, **run):
             row["number"] = len(done)
             done.append(row)
             log(_line(row))
-        _write(out, "search", done, trials)
+        _write(out, "search", done, trials, batch_size)
     return done
+
+
+def _trials(log_doc: dict) -> int:
+    return log_doc.get("trials", 300)  # logs written before --trials existed are the protocol's 300
 
 
 def recheck(out: Path, **run) -> list[dict]:
     """Stage 2: the accepted worlds on seeds 5100-5106."""
     first = read_json(out / "search.json")
     accepted = [r for r in first["worlds"] if r["accepted"]]
-    rows = evaluate_worlds(out, [r["world"] for r in accepted], RECHECK_SEEDS, first["trials"], **run)
-    for row, first in zip(rows, accepted, strict=True):
-        row["number"] = first["number"]
-    _write(out, "recheck", rows, first["trials"])
+    rows = evaluate_worlds(out, [r["world"] for r in accepted], RECHECK_SEEDS, _trials(first), **run)
+    for row, src in zip(rows, accepted, strict=True):
+        row["number"] = src["number"]
+    _write(out, "recheck", rows, _trials(first))
     return rows
 
 
@@ -201,7 +211,7 @@ LAMBDAS = (("10 lessons, lambda=0", {"lessons": 10, "lam": 0.0}),
 def predict(out: Path, **run) -> dict:
     """Stage 3: teaching, lambda and copy-bound predictions for the worlds accepted twice and today's; the pick."""
     again = read_json(out / "recheck.json")
-    twice, trials = [r for r in again["worlds"] if r["accepted"]], again["trials"]
+    twice, trials = [r for r in again["worlds"] if r["accepted"]], _trials(again)
     worlds = [{"number": "today", "world": dict(TODAY)}] + [{"number": r["number"], "world": r["world"]} for r in twice]
     near = sorted(twice, key=lambda r: (distance(r["world"]), r["loss"]))[:LAMBDA_WORLDS]
     with_lambda = {"today"} | {r["number"] for r in near}
@@ -226,7 +236,7 @@ def predict(out: Path, **run) -> dict:
 def _case(rs: list[dict], copy: bool) -> dict:
     if copy:
         return {"performance": float(np.mean([r["metrics"]["performance"] for r in rs]))}
-    mean = np.mean([r["curve_y"] for r in rs], axis=0)
+    mean = np.mean([r["curve_y"] for r in rs if r["curve_y"]], axis=0)  # a diverged run has no curve
     out = {"mean_curve": [round(float(v), 4) for v in mean]}
     for level in (2.5, 5.0):
         hit = np.nonzero(mean >= level)[0]
@@ -253,10 +263,10 @@ def _line(row: dict) -> str:
 COLUMNS = ("number", *(d.name for d in SPACE), "caption_L3", "caption_L4", "caption_ok", "T", "F", "loss", "accepted")
 
 
-def _write(out: Path, stage: str, rows: list[dict], trials: int) -> None:
+def _write(out: Path, stage: str, rows: list[dict], trials: int, batch: int | None = None) -> None:
     """``stage``.json (the log the next stage and the report read) and ``stage``.csv (one row a world)."""
-    atomic_write_text(out / f"{stage}.json", strict_json({"stage": stage, "trials": trials, "worlds": rows},
-                                                         indent=1))
+    doc = {"stage": stage, "trials": trials} | ({"batch": batch} if batch else {}) | {"worlds": rows}
+    atomic_write_text(out / f"{stage}.json", strict_json(doc, indent=1))
     buf = io.StringIO()
     writer = csv.DictWriter(buf, COLUMNS, extrasaction="ignore")
     writer.writeheader()

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from connrl.experiments import world_family as wf
+from connrl.experiments.store import DamagedFile
 from connrl.storage import read_json
 
 EXPERIMENTS = ()  # not an experiment of the registry: its own command and files
@@ -16,8 +17,17 @@ THESIS = {"3 lessons": 20, "10 lessons": 10, "10 lessons, lambda=0": 280, "10 le
 
 
 def _load(folder: Path, name: str):
+    """A stage's log, or None when it is absent or damaged (said on stderr: the page leaves the section out)."""
+    from connrl.report.page import warn
+
     p = folder / f"{name}.json"
-    return read_json(p) if p.exists() else None
+    if not p.exists():
+        return None
+    try:
+        return read_json(p)
+    except (DamagedFile, OSError) as exc:
+        warn(f"{p}: {exc}; left out of the page")
+        return None
 
 
 def _t(v) -> str:
@@ -91,7 +101,7 @@ def _coverage(search: list[dict]) -> list[str]:
     return lines
 
 
-def _predictions(pred: dict, recheck: dict) -> list[str]:
+def _predictions(pred: dict) -> list[str]:
     cases = ["3 lessons", "10 lessons", "10 lessons, lambda=0", "10 lessons, lambda=0.3"]
     head = ("| world | distance from the world before | T 2.5, 3 lessons | T 2.5, 10 lessons | 10 lessons: test at "
             "trial 10 | copy of 10 lessons | T 5, λ=0 | T 5, λ=0.3 | T 5, λ=0.7 |")
@@ -218,7 +228,7 @@ def results_section(out: Path, doc: Path) -> str:
         lines += ["Predictions on seeds 5100-5106, 7 runs each, full profile (trials until the mean curve reaches the "
                   "level; copy: reinforcement/step of a supervised copy of the 10 lessons; λ rows with 10 lessons, "
                   f"for the world before issue 44 and the {wf.LAMBDA_WORLDS} accepted worlds nearest it; λ=0.7 is the "
-                  "10-lesson row):", "", *_predictions(pred, recheck), ""]
+                  "10-lesson row):", "", *_predictions(pred), ""]
     lines += ["<details><summary>Every world of the search</summary>", "", "| world | " + HEAD +
               " | four-edge share L3, L4 | T | F | loss |", "|---|---|---|---|---|---|"]
     for r in rows:

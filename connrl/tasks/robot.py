@@ -192,12 +192,12 @@ def make_taught_lessons(task: str, n: int | None = None, seed: int = 0, max_trie
     """Demonstrations by the scripted teacher of ``task`` from start poses drawn with ``seed``.
 
     DP and DK keep only demonstrations that reach the goal (the thesis's "positive examples", 5.4.1);
-    WFL keeps every 30-step demonstration. Deterministic given ``seed``. ``env`` (default: the task on
-    the default layout) sets the geometry the teacher demonstrates in. ``spread`` (DP): the k-th lesson's
-    heading is set by ``spread_heading`` instead of drawn.
+    WFL keeps every 30-step demonstration. Deterministic given ``seed``. ``env`` (default: ``lesson_env`` in the
+    shipped world, the recipe of the lesson files) sets the geometry the teacher demonstrates in. ``spread`` (DP): the
+    k-th lesson's heading is set by ``spread_heading`` instead of drawn.
     """
     n = TAUGHT_COUNTS[task] if n is None else n
-    env = RobotTaskEnv(task) if env is None else env
+    env = lesson_env(task, SHIPPED_WORLD) if env is None else env
     rng = np.random.default_rng(seed)
     out: list[Lesson] = []
     for i in range(max_tries):
@@ -224,7 +224,7 @@ def write_taught_lessons(seed: int = 0) -> list[Path]:
     """Regenerate connrl/data/lessons/robot-{dp,dk,wfl}.json (``connrl make-lessons robot``)."""
     paths = []
     for task in TAUGHT_COUNTS:
-        lessons = make_taught_lessons(task, seed=seed, env=lesson_env(task, SHIPPED_WORLD))
+        lessons = make_taught_lessons(task, seed=seed)
         p = lesson_path(task)
         save_lessons(p, lessons, env_id=f"connrl/Robot-{task}-v0", env_kwargs={},
                      source=f"connrl.tasks.robot.make_taught_lessons({task!r}, n={len(lessons)}, "

@@ -1,5 +1,5 @@
 """Issue 44's open details of the robot world, on hand-built scenes: sonar origin, collision model, door-edge
-marking, DP start spread and success depth; and the search's scoring rules on hand-made curves."""
+marking, DP start spread and success depth (the search itself: tests/experiments/test_world_family.py)."""
 
 
 import numpy as np

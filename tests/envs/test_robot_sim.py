@@ -75,7 +75,7 @@ def test_door_edge_bits_on_hand_built_doorway():
     # Door jambs: 127 -> 22 marks rays 3 and 21 (the nearer reading). The wall seen at a grazing
     # angle (36 -> 81) also jumps >= 24 and marks 4 and 20: "door edge readings are unreliable" (5.2.1).
     assert np.flatnonzero(rd.door_edge).tolist() == [3, 4, 20, 21]
-    # The threshold (R, 44 in by default) decides which jumps count: above the grazing 45-in jump only the jambs'
+    # The threshold (R, 37 in by default) decides which jumps count: above the grazing 45-in jump only the jambs'
     # 105-in jumps are left; at 106 in none.
     for jump, bits in ((24.0, [3, 4, 20, 21]), (46.0, [3, 21]), (106.0, [])):
         sim = RobotSim(L, np.random.default_rng(0), sensor_noise=False, control_noise=False, edge_jump=jump,

@@ -34,7 +34,7 @@ def test_distance_by_hand():
     assert wf.distance(w) == pytest.approx(9 / 36 + 1 + 0.75 / 1.5)
 
 
-def test_caption_filter_on_the_shipped_world_and_the_spec_threshold():
+def test_caption_filter_on_the_world_before_issue_44_and_the_spec_threshold():
     l3, l4 = wf.caption_shares(dict(wf.TODAY))
     assert l3 > 0.8 and l4 > 0.8  # docs/RECONSTRUCTION.md step 1: 44 in shows four edges in ~90 % of scans
     l3, l4 = wf.caption_shares(dict(wf.TODAY) | {"edge_jump": 24.0})
@@ -66,3 +66,29 @@ def test_command_end_to_end_on_a_smoke_length_resumes_and_reports(tmp_path, caps
     text = report.results_section(results, tmp_path / "docs" / "RESULTS.md")
     assert "## The robot world as a family" in text and "4 worlds" in text
     assert (tmp_path / "docs" / "figures" / "world-family.png").exists()
+
+
+def test_score_edge_cases_by_hand():
+    fast, flat = [3.0] * 31, [0.0] * 31
+    s = wf.score([fast] * 7, [0] * 7)  # at 2.5 before learning: T = 0, scored as trial 10, never accepted
+    assert s["T"] == 0 and not s["accepted"] and s["loss"] == pytest.approx(abs(math.log(10 / 280)), abs=1e-4)
+    ramp = [min(3.0, 0.01 * 10 * i) for i in range(31)]
+    s = wf.score([ramp, []], [250, None])  # a diverged run: no curve, failing, left out of the mean
+    assert s["T"] == 250 and s["F"] == 1 and len(s["mean_curve"]) == 31
+    s = wf.score([[], []], [None, None])
+    assert s["T"] is None and s["F"] == 2 and s["mean_curve"] == []
+    assert wf.score([flat, [9.0] * 31], [None, 0])["T"] == 0  # the shortfall term never goes below zero
+
+
+def test_recheck_keeps_world_numbers_and_old_logs_resume(tmp_path):
+    out = tmp_path / "family"
+    out.mkdir()
+    world = dict(wf.TODAY)
+    row = {"number": 7, "world": world, "caption_ok": True, "T": 200, "F": 0, "loss": 0.3, "accepted": True}
+    (out / "search.json").write_text(wf.strict_json({"stage": "search", "trials": 10, "worlds": [row]}))
+    rows = wf.recheck(out, workers=1, executor="process", address=None, show=False)
+    assert [r["number"] for r in rows] == [7] and wf.read_json(out / "recheck.json")["trials"] == 10
+    old = tmp_path / "old"  # a log written before it kept "trials" and "batch": the protocol's 300, batches of 2
+    old.mkdir()
+    (old / "search.json").write_text(wf.strict_json({"stage": "search", "worlds": [row]}))
+    assert wf.search(old, budget=1, workers=1, show=False, log=lambda line: None) == [row]

@@ -2,7 +2,7 @@
 
 Description:
     A disc robot (radius 12 in) in a three-room office (Fig. 5.3): rooms A (south-west) and B
-    (south-east) open through two 48-in doorways onto room C (a strip along the north wall). A battery
+    (south-east) open through two 49-in doorways onto room C (a strip along the north wall). A battery
     charger with a light on top sits in A's south-west corner. This module holds the world only:
     the :class:`Layout` (plain JSON data under ``connrl/data/layouts/``), the robot's motion with
     control error and collision handling, its sensors (sonar, light, door-edge, collision, compass,
@@ -18,16 +18,18 @@ Action Space:
 
 Sensors (``RobotSim.sense`` -> :class:`Reading`):
     - sonar: 24 readings, ray ``k`` points at ``heading + 15k`` deg (robot-centred: ray 0 ahead,
-      ray 6 left, ray 12 behind, ray 18 right). A reading is the distance from the robot's body
-      (disc edge) to the first surface along the ray, times U(0.9, 1.1), rounded to 1 in, clipped to
-      0..127. With probability 1/4 per scan one random reading is replaced by 127 (5.2.1).
+      ray 6 left, ray 12 behind, ray 18 right). A reading is the distance from the robot's centre
+      (``sonar_origin="centre"``; ``"body"``: from the disc edge) to the first surface along the ray, times
+      U(0.9, 1.1), rounded to 1 in, clipped to 0..127. With probability 1/4 per scan one random reading is
+      replaced by 127 (5.2.1). ``Reading.body_sonar`` gives body distances whatever the origin.
     - light: 24 bits; bit ``k`` is on when the light lies within +-7.5 deg of ray ``k``, within 120 in
       of the robot's centre, and no wall or obstacle blocks the line of sight (the charger itself
       does not: the light sits on top of it).
     - door edge: 24 bits computed from the (noisy) sonar scan; when two neighbouring readings differ
-      by ``edge_jump`` (44 in) or more, the bit of the *nearer* reading is set (that is where the edge is).
-    - collision: 4 bits in the order (front, back, left, right); set after a move that was
-      cancelled, on the side where the body touched: front |angle| <= 45 deg, left 45..135,
+      by ``edge_jump`` (37 in) or more, the bit of the *nearer* reading is set (that is where the edge is;
+      ``edge_mark="both"`` sets both).
+    - collision: 4 bits in the order (front, back, left, right); set after a move that touched a surface,
+      on the side where the body touched: front |angle| <= 45 deg, left 45..135,
       back >= 135, right -135..-45 (angle of the contact point relative to the heading).
     - compass (heading, degrees) and the current room (the room rectangle holding the centre).
 
@@ -35,8 +37,8 @@ Dynamics:
     A turn changes the heading by the nominal angle times U(0.92, 1.08); a move translates the
     centre by the nominal length times U(0.92, 1.08) along the heading (8% control error, 5.2.1).
     Turning never collides (a disc turning in place sweeps nothing). A move whose swept disc would
-    touch any wall, obstacle or the charger box is cancelled: the robot stays where it was and the
-    collision bit of the side of first contact is set.
+    touch any wall, obstacle or the charger box stops at the contact (``collision="partial"``; ``"cancel"``:
+    the robot stays where it was), and the collision bit of the side of first contact is set.
 
 Randomness:
     All noise comes from the ``numpy.random.Generator`` handed to :class:`RobotSim`. Every action
@@ -46,10 +48,11 @@ Randomness:
 Differences from the thesis:
     - The geometry, the noise model and the door-edge/light rules are reconstructions (R; see
       docs/RECONSTRUCTION.md, "HEROINE robot world"): the thesis's Fig. 5.3 is lost. Walls have zero thickness.
-    - Sonar distances are measured from the body surface (disc edge), not from the centre, so that a
-      reading of 0 means contact and the wall-following clearance (14-32 in "between its body and
-      obstacles", 5.3.1) can be read straight off the sonar; the thesis does not say which.
-    - A colliding move is cancelled entirely (the robot does not creep up to the obstacle).
+    - The thesis does not say where sonar distances are measured from, what a colliding move does, how wide
+      the doors are or what jump marks a door edge. The defaults (centre sonar, moves stopped at the contact,
+      49-in doors, 37-in edges) are issue 44's pick among the readings that meet the thesis's no-teaching door
+      passing curve (docs/RECONSTRUCTION.md, "The robot world as a family"); the world before it (body sonar,
+      cancelled moves, 48-in doors, 44-in edges) is a parameter setting.
     - Light bits are noise-free; the thesis's ~10% sensing error is applied to the sonar only.
     - The changed layout of 8.4 (``changed.json``) is our reconstruction of the lost Fig. 8.2.
 """

@@ -176,6 +176,8 @@ class RobotTaskEnv(gym.Env):
                        and abs(m.contact_angle) <= self.dock_tolerance)
             reward = R_SUCCESS if success else (R_COLLISION if m.collided else 0.0)
         elif self.task == "DP":
+            # a move that touches a jamb scores the collision even if it ends in the other room (moves stopped at
+            # the contact can); the pass is then scored on the next step
             success = not m.collided and self._passed_door(rd.room)
             reward = R_SUCCESS if success else (R_COLLISION if m.collided else 0.0)
         else:

@@ -251,7 +251,8 @@ def sample_dp_start(rng: np.random.Generator, layout: Layout, offset: float | No
     if not doors:
         raise ValueError(f"layout {layout.name!r} has no doors; DP needs at least one")
     if offset is not None and not offset >= 0:
-        raise ValueError(f"dp_offset must be None (half the door width) or >= 0 inches, got {offset!r}")
+        raise ValueError(f"dp_offset must be None ({DP_LATERAL:g} x half the door width) or >= 0 inches, "
+                         f"got {offset!r}")
     if not 0 <= depth[0] <= depth[1]:
         raise ValueError(f"dp_depth must be (min, max) inches with 0 <= min <= max, got {depth!r}")
     if not 0 <= heading <= 180:

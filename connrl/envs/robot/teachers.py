@@ -54,7 +54,7 @@ def teach_dp(env, start, seed: int | None = None) -> list[tuple]:
 
     Go to a point 40 in in front of the door, then drive through while keeping the centre within 3 in
     of the door's axis (a one-step look-ahead on the lateral offset; the body clears the door jambs
-    for offsets under half the door width minus the 12-in radius: 12 in for the 48-in doors). Returns the
+    for offsets under half the door width minus the 12-in radius: 12.5 in for the 49-in doors). Returns the
     lesson as (obs, action, reward, next_obs, terminated, truncated) tuples.
     """
     u = env.unwrapped
