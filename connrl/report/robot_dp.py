@@ -65,12 +65,15 @@ def _calibration(curves, seeds) -> list[str]:
     bound = (" That is the widest width allowed and none reaches 2.5, so the pick sits at the bound and the claim "
              "itself stays unmet." if pick == max(WIDTHS) and at280[pick] < 2.5 else "")
     run = _seeds(seeds, "robot-dp-calibration", 100, "the development seeds")
-    return [f"**Calibration** (`robot-dp-calibration`, {run}): the criterion is the mean no-teaching curve at trial "
+    return [f"**Calibration of issue 12** (`robot-dp-calibration`, {run}, in the world before issue 44): the "
+            "criterion is the mean no-teaching curve at trial "
             "280, where the thesis's reaches 2.5 "
             "(Fig. 5.4a, 5.6), among door widths the text's \"narrow\" allows (at most twice the 24-in body). At "
             "trial 280: " + "; ".join(f"{w}-in doors {at280[w]:.2f}" for w in WIDTHS) + f". The criterion picks "
-            f"{pick} in; the default is {RobotParams.door_width:g} in.{bound} The door-edge threshold was fixed "
-            "beforehand from the text alone (Fig. 5.3b, `python scripts/dp_calibration/edge_jump.py`).", ""]
+            f"{pick} in, the width of the world before issue 44.{bound} The door-edge threshold was fixed "
+            "beforehand from the text alone (Fig. 5.3b, `python scripts/dp_calibration/edge_jump.py`). Today's "
+            f"world ({RobotParams.door_width:g}-in doors, a {RobotParams.edge_jump:g}-in threshold and the rest) is "
+            "issue 44's pick: section \"The robot world as a family\".", ""]
 
 
 def _margin(per_run) -> float | None:

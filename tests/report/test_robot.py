@@ -24,8 +24,8 @@ def test_geometry_sections_draw_panels_and_notes(tmp_path):
                  "robot-dp-replay-order", "robot-dp-fresh", "robot-dk-geometry", "robot-dp-lesson-use"):
         run_tiny(name, tmp_path)
     md = robot.results_section(tmp_path, tmp_path / "docs" / "RESULTS.md")
-    for head in ("**Calibration**", "**Copy bound**", "**Each change of issue 12's calibration alone**", "**Replay order**",
-                 "**Fresh seeds**", "**Docking tolerance**"):
+    for head in ("**Calibration of issue 12**", "**Copy bound**", "**Each change of issue 12's calibration alone**",
+                 "**Replay order**", "**Fresh seeds**", "**Docking tolerance**"):
         assert head in md, head
     assert "Changing one thing, 10 to 100 taught lessons" in md
     assert "| SPEC: 36-in doors, 24-in edges, 10 lessons |" in md and "| copy 10 lessons |" in md
