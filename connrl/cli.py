@@ -78,6 +78,15 @@ def cmd_reproduce(args) -> int:
         raise SystemExit(f"connrl: --chapters takes a comma-separated list of {', '.join(map(str, known))}, got "
                          f"{args.chapters!r}")
     specs = by_chapter(chapters)
+    if args.only is not None:  # a subset of those chapters' experiments, by name
+        names = [n.strip() for n in args.only.split(",") if n.strip()]
+        known = {s.name for s in specs}
+        unknown = [n for n in names if n not in known]
+        if not names or unknown:
+            raise SystemExit(f"connrl: --only takes a comma-separated list of experiments of chapters "
+                             f"{','.join(map(str, chapters))} (see `connrl list`), got {args.only!r}"
+                             + (f": unknown {', '.join(unknown)}" if unknown else ""))
+        specs = [s for s in specs if s.name in names]
     _check_executor(args)
     for spec in specs:  # every profile is checked before the first run
         try:
@@ -336,6 +345,8 @@ def _add_experiment_commands(sub) -> None:
                        description="`connrl run` each experiment of the chosen chapters (on the seeds its stored "
                        "results use), resuming what is stored, then write the results page.")
     s.add_argument("--chapters", default="4,5,6,7,8", help="comma-separated chapters (default 4,5,6,7,8)")
+    s.add_argument("--only", default=None, metavar="NAME,...", help="only these experiments of the chapters (the "
+                   "page is still written from everything stored in --out)")
     s.add_argument("--profile", choices=PROFILES, default="quick", help="tiny, quick (default) or full")
     s.add_argument("--out", default="runs", help="output directory (default ./runs)")
     s.add_argument("--doc", default=None, help="results page to write (default OUT/RESULTS.md)")

@@ -177,3 +177,13 @@ def test_reproduce_runs_a_chapter_then_the_results_page(tmp_path, capsys):
     assert "## Chapter 8" in (tmp_path / "RESULTS.md").read_text()
     with pytest.raises(SystemExit, match="--chapters takes a comma-separated list of 4, 5, 6, 7, 8, got '3'"):
         cli.main(["reproduce", "--chapters", "3"])
+    capsys.readouterr()
+    assert cli.main(["reproduce", "--only", "pole-full", "--profile", "tiny", "--out", str(tmp_path), "--workers",
+                     "1", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "[1/1] connrl run pole-full" in out and "1 experiments" in out
+    assert "## Chapter 8" in (tmp_path / "RESULTS.md").read_text()  # the page keeps what was stored before
+    with pytest.raises(SystemExit, match="--only takes .* got 'pole-ful': unknown pole-ful"):
+        cli.main(["reproduce", "--only", "pole-ful"])
+    with pytest.raises(SystemExit, match="unknown integration"):
+        cli.main(["reproduce", "--chapters", "5", "--only", "integration"])
