@@ -3,7 +3,6 @@ world's open details)."""
 
 from __future__ import annotations
 
-import contextlib
 import importlib.util
 import os
 from pathlib import Path
@@ -29,9 +28,12 @@ def cmd_world_family(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     run = {"workers": args.workers or os.cpu_count() or 1, "executor": args.executor, "address": args.address,
            "show": not args.quiet}
-    with one_writer(out, "--out"), _one_line(ValueError):
+    with one_writer(out, "--out"):
         if args.stage in ("search", "all"):
-            rows = wf.search(out, budget=args.budget, trials=args.trials, **run)
+            try:
+                rows = wf.search(out, budget=args.budget, trials=args.trials, **run)
+            except ValueError as exc:  # a log of another run length
+                raise SystemExit(f"connrl: {exc}") from None
             print(f"search: {sum(r['accepted'] for r in rows)} of {len(rows)} worlds accepted ({out / 'search.csv'})")
         if args.stage in ("recheck", "all"):
             rows = wf.recheck(out, **run)
@@ -42,14 +44,6 @@ def cmd_world_family(args) -> int:
             print(f"predict: {len(doc['worlds'])} worlds measured, pick: world {doc['pick']} "
                   f"({out / 'predictions.json'})")
     return 0
-
-
-@contextlib.contextmanager
-def _one_line(*kinds):
-    try:
-        yield
-    except kinds as exc:
-        raise SystemExit(f"connrl: {exc}") from None
 
 
 def add_world_family_command(sub, executor_options, check_executor) -> None:

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from connrl.envs.robot import Layout, RobotSim
-from connrl.experiments.robot import BEFORE_44, RobotParams
+from connrl.experiments.robot import BEFORE_44, RobotParams, first_reaching
 from connrl.experiments.runner import Job, _execute, params_hash
 from connrl.experiments.spec import as_dict, qualified_name
 from connrl.experiments.store import load_record
@@ -90,8 +90,7 @@ def score(curves: list[list[float]], reached: list) -> dict:
     n = max((len(c) for c in curves), default=0)
     whole = [c for c in curves if n and len(c) == n]
     mean = np.mean(np.asarray(whole, dtype=float), axis=0) if whole else np.zeros(0)
-    hit = np.nonzero(mean >= LEVEL)[0]
-    t = int(hit[0] * 10) if hit.size else None
+    t = _reach(mean, LEVEL)
     failing = sum(r is None for r in reached)
     extra = 0.1 * max(0, failing - 1)
     shortfall = max(0.0, (LEVEL - float(mean.max())) / LEVEL) if whole else 1.0
@@ -99,6 +98,11 @@ def score(curves: list[list[float]], reached: list) -> dict:
     loss = (abs(math.log(max(t, 10) / TARGET_T)) if t is not None else math.log(T_HIGH / TARGET_T) + shortfall) + extra
     return {"T": t, "F": failing, "loss": round(float(loss), 4), "mean_curve": [round(float(v), 4) for v in mean],
             "accepted": t is not None and T_LOW <= t <= T_HIGH and failing <= MAX_FAILING}
+
+
+def _reach(mean, level: float) -> int | None:
+    """First test trial (a test every 10 trials, from trial 0) at which the mean curve reaches ``level``."""
+    return first_reaching(range(0, 10 * len(mean), 10), mean, level)
 
 
 def _jobs(out: Path, world: dict, seeds, label: str, trials: int, extra: dict | None = None,
@@ -117,7 +121,10 @@ def run_jobs(jobs: list[Job], workers: int, executor: str, address: str | None, 
     jobs = list({j.path: j for j in jobs}.values())  # two proposals of one batch may be the same world
     for job in jobs:
         rec, _damage = load_record(job.path, job)
-        (done.__setitem__(job.path, rec) if rec is not None else todo.append(job))
+        if rec is None:
+            todo.append(job)
+        else:
+            done[job.path] = rec
     if todo:
         _execute(todo, min(workers, len(todo)), show, "world-family", executor, address)  # writes the records
         for job in todo:
@@ -130,19 +137,19 @@ def run_jobs(jobs: list[Job], workers: int, executor: str, address: str | None, 
 
 def evaluate_worlds(out: Path, worlds: list[dict], seeds, trials: int, **run) -> list[dict]:
     """The no-teaching target for each world (the caption filter first)."""
-    rows, jobs = [], []
-    for w in worlds:
+    rows, jobs = [], {}
+    for i, w in enumerate(worlds):
         l3, l4 = caption_shares(w)
         ok = min(l3, l4) >= CAPTION_SHARE
         rows.append({"world": w, "caption_L3": l3, "caption_L4": l4, "caption_ok": ok})
         if ok:
-            jobs += _jobs(out, w, seeds, "no teaching", trials)
-    recs = run_jobs(jobs, **run) if jobs else {}
-    for row in rows:
-        if not row["caption_ok"]:
+            jobs[i] = _jobs(out, w, seeds, "no teaching", trials)
+    recs = run_jobs([j for js in jobs.values() for j in js], **run) if jobs else {}
+    for i, row in enumerate(rows):
+        if i not in jobs:
             row |= {"T": None, "F": None, "loss": REJECTED_LOSS, "accepted": False, "mean_curve": []}
             continue
-        rs = [recs[j.path] for j in _jobs(out, row["world"], seeds, "no teaching", trials)]
+        rs = [recs[j.path] for j in jobs[i]]
         row |= score([r["curve_y"] for r in rs], [r["metrics"].get(f"trials_to_{LEVEL:g}") for r in rs])
     return rows
 
@@ -239,10 +246,8 @@ def _case(rs: list[dict], copy: bool) -> dict:
     mean = np.mean([r["curve_y"] for r in rs if r["curve_y"]], axis=0)  # a diverged run has no curve
     out = {"mean_curve": [round(float(v), 4) for v in mean]}
     for level in (2.5, 5.0):
-        hit = np.nonzero(mean >= level)[0]
-        per_run = [r["metrics"].get(f"trials_to_{level:g}") for r in rs]
-        out[f"T{level:g}"] = int(hit[0] * 10) if hit.size else None
-        out[f"runs_to_{level:g}"] = per_run
+        out[f"T{level:g}"] = _reach(mean, level)
+        out[f"runs_to_{level:g}"] = [r["metrics"].get(f"trials_to_{level:g}") for r in rs]
     return out
 
 

@@ -22,6 +22,20 @@ def _cell(q: dict | None, runs: int) -> str:
     return text
 
 
+def _rows(name: str, before: dict | None, after: dict | None) -> list[str]:
+    """One table row per (variant, quantity) of either summary."""
+    bv, av = (before or {}).get("variants", {}), (after or {}).get("variants", {})
+    rows = []
+    for label in dict.fromkeys([*av, *bv]):
+        b, a = bv.get(label, {}), av.get(label, {})
+        bq, aq = b.get("quantities", {}), a.get("quantities", {})
+        for q in dict.fromkeys([*aq, *bq]):
+            thesis = (aq.get(q) or bq.get(q) or {}).get("thesis")
+            rows.append(f"| {name} | {label} | {q} | {'' if thesis is None else thesis} | "
+                        f"{_cell(bq.get(q), len(b.get('seeds', [])))} | {_cell(aq.get(q), len(a.get('seeds', [])))} |")
+    return rows
+
+
 def results_section(out: Path, doc: Path) -> str:
     before_dir = out.parent / BEFORE
     if not before_dir.is_dir():
@@ -33,21 +47,8 @@ def results_section(out: Path, doc: Path) -> str:
              "the level. The pre-issue-44 experiments `robot-dp-calibration` and `robot-dp-geometry` pin that world "
              "and should not move; `robot-dp-fresh` moved to the fresh seeds 6000-6006.", ""]
     for chapter in (5, 6, 8):
-        rows = []
-        for spec in by_chapter([chapter]):
-            before, after = load_summary(before_dir, spec.name), load_summary(out, spec.name)
-            if before is None and after is None:
-                continue
-            labels = list(dict.fromkeys([*(after or {}).get("variants", {}), *(before or {}).get("variants", {})]))
-            for label in labels:
-                b = (before or {}).get("variants", {}).get(label, {}).get("quantities", {})
-                a = (after or {}).get("variants", {}).get(label, {}).get("quantities", {})
-                nb = len((before or {}).get("variants", {}).get(label, {}).get("seeds", []))
-                na = len((after or {}).get("variants", {}).get(label, {}).get("seeds", []))
-                for name in dict.fromkeys([*a, *b]):
-                    thesis = (a.get(name) or b.get(name) or {}).get("thesis")
-                    rows.append(f"| {spec.name} | {label} | {name} | {'' if thesis is None else thesis} | "
-                                f"{_cell(b.get(name), nb)} | {_cell(a.get(name), na)} |")
+        rows = [row for spec in by_chapter([chapter])
+                for row in _rows(spec.name, load_summary(before_dir, spec.name), load_summary(out, spec.name))]
         if rows:
             lines += [f"<details><summary>Chapter {chapter}: {len(rows)} rows</summary>", "",
                       "| experiment | variant | quantity | thesis | before | after |", "|---|---|---|---|---|---|",

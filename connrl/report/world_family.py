@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from connrl.experiments import world_family as wf
+from connrl.experiments.robot import first_reaching
 from connrl.experiments.store import DamagedFile
 from connrl.storage import read_json
 
@@ -146,12 +147,9 @@ def _predictions(pred: dict) -> list[str]:
 
 def _mean_reach(runs: list[list[dict]], level: float):
     """First test trial at which the mean curve over runs reaches ``level`` (None if never)."""
-    if not runs:
-        return None
     n = min(len(r) for r in runs)
     mean = np.mean([[row["performance"] for row in r[:n]] for r in runs], axis=0)
-    hit = np.nonzero(mean >= level)[0]
-    return int(runs[0][hit[0]]["trials"]) if hit.size else None
+    return first_reaching([row["trials"] for row in runs[0][:n]], mean, level)
 
 
 def _goals(out: Path) -> list[str]:
@@ -170,10 +168,10 @@ def _goals(out: Path) -> list[str]:
             t = _mean_reach(runs[label], 2.5)
             rows.append(f"| DP, {label}: the mean curve reaches 2.5 | within {goal} trials | {_t(t)} ({seeds}) | "
                         f"{'yes' if t is not None and t <= goal else 'no'} |")
-        alone = [r for r in runs["no teaching"] if any(row["performance"] >= 2.5 for row in r)]
-        n = len(runs["no teaching"])
-        rows.append(f"| DP, no teaching: runs reaching 2.5 within 300 trials | most | {len(alone)} of {n} ({seeds}) | "
-                    f"{'yes' if n and 2 * len(alone) > n else 'no'} |")
+        alone = dp["variants"]["no teaching"]["quantities"]["trials_to_2.5"]["runs_reaching"]
+        n = len(dp["variants"]["no teaching"]["seeds"])
+        rows.append(f"| DP, no teaching: runs reaching 2.5 within 300 trials | most | {alone} of {n} ({seeds}) | "
+                    f"{'yes' if 2 * alone > n else 'no'} |")
     ch6 = load_summary(out, "recharge-behaviours-fresh")
     runs = run_rows(specs["recharge-behaviours-fresh"], ch6, out, EXP3) if ch6 is not None else []
     if runs:
@@ -200,7 +198,8 @@ def results_section(out: Path, doc: Path) -> str:
     pred = _load(folder, "predictions")
     ran = [r for r in rows if r["caption_ok"]]
     accepted = [r for r in rows if r["accepted"]]
-    twice = [r for r in (recheck or {"worlds": []})["worlds"] if r["accepted"]]
+    rechecked = recheck["worlds"] if recheck else []
+    twice = [r for r in rechecked if r["accepted"]]
     lines = ["## The robot world as a family (issue 44)", "",
              f"Generated from `connrl world-family --out {folder}` (the protocol of docs/RECONSTRUCTION.md, "
              "\"The robot world as a family\", committed before the search ran): Optuna TPE over the DP world's open "
@@ -215,7 +214,7 @@ def results_section(out: Path, doc: Path) -> str:
              f"{'none' if not pred or pred['pick'] is None else 'world ' + str(pred['pick'])}.", "",
              _plot(rows, pred, doc), "", *_goals(out), "What the search covered:", "", *_coverage(rows), ""]
     if accepted:
-        again = {r["number"]: r for r in (recheck or {"worlds": []})["worlds"]}
+        again = {r["number"]: r for r in rechecked}
         lines += [f"Accepted worlds ({HEAD}):", "", "| world | " + HEAD + " | T, F (100-106) | T, F (5100-5106) | "
                   "distance from the world before |", "|---|---|---|---|---|"]
         for r in sorted(accepted, key=lambda r: wf.distance(r["world"])):

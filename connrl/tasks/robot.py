@@ -233,9 +233,9 @@ def binary_columns(task: str) -> np.ndarray:
 def _demonstrated(task: str, n: int, world: tuple) -> tuple[Lesson, ...]:
     """The shipped lessons' recipe (seed 0, the default start region with any heading, 30 steps) in another world
     or for more lessons than the file has; cached per process (callers copy the inputs before changing them)."""
-    spread = dict(world)["spread"]
-    return tuple(make_taught_lessons(task, n, seed=0, env=lesson_env(task, dict(world)), max_tries=max(200, 20 * n),
-                                     spread=spread))
+    w = dict(world)
+    return tuple(make_taught_lessons(task, n, seed=0, env=lesson_env(task, w), max_tries=max(200, 20 * n),
+                                     spread=w["spread"]))
 
 
 def lesson_env(task: str, world: dict) -> RobotTaskEnv:
@@ -259,7 +259,6 @@ def taught_lessons(task: str, n: int, binary_low: float = -0.5, **world) -> list
         raise TypeError(f"taught_lessons: unknown world detail(s) {sorted(unknown)}; known: {sorted(SHIPPED_WORLD)}")
     full = {**SHIPPED_WORLD, **world}
     full = {k: (type(SHIPPED_WORLD[k])(v) if k in _TASK_WORLD[task] else SHIPPED_WORLD[k]) for k, v in full.items()}
-    full["spread"] = full["spread"] and task == "DP"
     if full != SHIPPED_WORLD or n > TAUGHT_COUNTS[task]:
         lessons = _demonstrated(task, n, tuple(full.items()))
     else:
