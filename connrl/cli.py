@@ -99,15 +99,45 @@ def cmd_reproduce(args) -> int:
         raise SystemExit(f"connrl: --doc {doc} is a folder; it must name the results page's file (e.g. RESULTS.md)")
     _writable(doc.parent)  # before the runs: a page that cannot be written must not cost an hour of compute
     start = time.time()
-    for k, spec in enumerate(specs, 1):
-        runs = spec.full_runs if args.profile == "full" else None
-        print(f"[{k}/{len(specs)}] connrl run {spec.name} --profile {args.profile} --seed {spec.seed}"
-              + (f" --runs {runs}" if runs else ""), flush=True)
-        code = _run_and_report(spec, args, profile=args.profile, runs=runs, seed=spec.seed)
-        if code:
-            return code
+    code = _run_pool(specs, args)
+    if code:
+        return code
     print(f"results: {write_results(Path(args.out), doc)}; chapters {', '.join(map(str, chapters))}, "
           f"{len(specs)} experiments, {time.time() - start:.0f} s")
+    return 0
+
+
+def _run_pool(specs, args) -> int:
+    """Every experiment's runs as one pool, longest first; each experiment's plot and table as soon as it is done."""
+    from connrl.experiments.runner import Batch, ExecutorError, run_experiments
+    from connrl.report.plots import plot_experiment
+
+    batches = [Batch(s, args.profile, s.full_runs if args.profile == "full" else None, s.seed) for s in specs]
+    done = []
+
+    def on_done(outcome) -> None:
+        spec = next(b.spec for b in batches if b.spec.name == outcome.summary["experiment"])
+        done.append(spec.name)
+        runs = f" --runs {spec.full_runs}" if args.profile == "full" and spec.full_runs else ""
+        print(f"[{len(done)}/{len(batches)}] {spec.name} (alone: connrl run {spec.name} --profile {args.profile} "
+              f"--seed {spec.seed}{runs}): {outcome.ran} run(s) executed, {outcome.reused} reused", flush=True)
+        try:
+            plot_experiment(spec, outcome.records, Path(args.out) / spec.name)
+        except OSError as exc:
+            raise SystemExit(f"connrl: the runs are saved, but the plot could not be written: {exc}") from None
+        _print_summary(outcome.summary)
+
+    try:
+        run_experiments(batches, out=Path(args.out), workers=args.workers, show_progress=not args.quiet,
+                        on_damaged=_damaged, executor=args.executor, address=args.address, title="thesis",
+                        on_done=on_done)
+    except KeyboardInterrupt:
+        print("\ninterrupted: finished runs are saved; run the same command again to resume.", file=sys.stderr)
+        return 130
+    except OSError as exc:  # raised before any run by prepare_outputs (or a lock held by another command)
+        raise SystemExit(f"connrl: {exc.strerror or exc}") from None
+    except ExecutorError as exc:
+        raise SystemExit(f"connrl: {exc}") from None
     return 0
 
 

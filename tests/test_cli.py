@@ -181,7 +181,7 @@ def test_reproduce_runs_a_chapter_then_the_results_page(tmp_path, capsys):
     assert cli.main(["reproduce", "--only", "pole-full", "--profile", "tiny", "--out", str(tmp_path), "--workers",
                      "1", "--quiet"]) == 0
     out = capsys.readouterr().out
-    assert "[1/1] connrl run pole-full" in out and "1 experiments" in out
+    assert "[1/1] pole-full (alone: connrl run pole-full --profile tiny --seed 0)" in out and "1 experiments" in out
     assert "## Chapter 8" in (tmp_path / "RESULTS.md").read_text()  # the page keeps what was stored before
     with pytest.raises(SystemExit, match="--only takes .* got 'pole-ful': unknown pole-ful"):
         cli.main(["reproduce", "--only", "pole-ful"])

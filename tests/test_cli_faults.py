@@ -506,7 +506,7 @@ def test_a_ray_address_that_does_not_answer_is_refused_before_any_run(address, s
 def test_reproduce_refuses_a_doc_it_cannot_write_before_any_run(tmp_path, monkeypatch):
     import connrl.experiments.runner as runner
 
-    monkeypatch.setattr(runner, "run_experiment", lambda *a, **k: pytest.fail("a run started"))
+    monkeypatch.setattr(runner, "run_experiments", lambda *a, **k: pytest.fail("a run started"))
     (tmp_path / "page").mkdir()
     with pytest.raises(SystemExit) as exc:
         cli.main(["reproduce", "--chapters", "4", "--profile", "tiny", "--out", str(tmp_path / "out"),

@@ -14,24 +14,32 @@ same jobs elsewhere.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import multiprocessing as mp
 import os
 import queue
 import re
-import threading
 import time
-from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
 
 import numpy as np
 from numba.core import event as numba_event
 
 from connrl.core.divergence import Diverged
+from connrl.experiments import executors
+from connrl.experiments.executors import (  # noqa: F401 (the runner's API, as before they had a module of their own)
+    EXECUTORS,
+    Executor,
+    ProcessExecutor,
+    Progress,
+    RayExecutor,
+    SerialExecutor,
+    check_executor,
+)
 from connrl.experiments.guards import ExecutorError, check_ray_cluster, check_reachable, run_lock  # noqa: F401
 from connrl.experiments.spec import ExperimentSpec, RunResult, as_dict, load_callable, qualified_name
 from connrl.experiments.store import (
@@ -92,35 +100,6 @@ def make_jobs(spec: ExperimentSpec, profile: str, runs: int | None, seed: int, o
     return jobs
 
 
-# ------------------------------------------------------------------------------------------- executors
-
-class Executor(Protocol):
-    """Runs ``fn(job)`` for every job, yields ``(job, result)`` as each finishes, calls ``tick()`` often."""
-
-    def map_unordered(self, fn: Callable, jobs: list[Job],
-                      tick: Callable[[], None]) -> Iterator[tuple[Job, Any]]: ...
-
-
-_progress_queue = None
-_progress_tick: Callable[[], None] | None = None
-
-
-def _init_worker(q, tick=None, parent: int | None = None):
-    global _progress_queue, _progress_tick
-    _progress_queue, _progress_tick = q, tick
-    if parent is not None:
-        threading.Thread(target=_exit_with_parent, args=(parent,), daemon=True).start()
-
-
-def _exit_with_parent(parent: int) -> None:
-    """A worker whose parent died (e.g. SIGKILL, which runs no cleanup) exits instead of running on: the
-    parent is gone when this process has been handed to another (init or a subreaper)."""
-    while True:
-        time.sleep(0.5)
-        if os.getppid() != parent:
-            os._exit(1)
-
-
 def execute_job(job: Job) -> dict:
     """Run one job in this process and write its records; returns the metadata record."""
     record, rows = run_job(job)
@@ -138,13 +117,14 @@ def run_job(job: Job) -> tuple[dict, list[dict]]:
 
     def progress(done, total):
         now = time.monotonic()
-        if _progress_queue is not None and (now - last[0] > 0.2 or done >= total):
+        q = executors._progress_queue
+        if q is not None and (now - last[0] > 0.2 or done >= total):
             last[0] = now
-            _progress_queue.put((job.path, done, total))
-            if _progress_tick is not None:
-                _progress_tick()
+            q.put((job.path, done, total))
+            if executors._progress_tick is not None:
+                executors._progress_tick()
 
-    t0 = time.perf_counter()
+    started, t0, cpu0 = time.time(), time.perf_counter(), time.process_time()
     diverged = None
     with numba_event.install_recorder("numba:compile") as compiles:
         try:
@@ -153,6 +133,7 @@ def run_job(job: Job) -> tuple[dict, list[dict]]:
             result, diverged = RunResult([], [], {}), {"trial": exc.trial, "reason": exc.reason}
     compile_s = compile_seconds(compiles.buffer)
     wall = time.perf_counter() - t0 - compile_s
+    cpu = time.process_time() - cpu0 - compile_s  # compiling is CPU-bound: its seconds come off both
     record = {
         "experiment": job.experiment,
         "variant": job.variant,
@@ -165,6 +146,9 @@ def run_job(job: Job) -> tuple[dict, list[dict]]:
         "environment": environment_info(),
         "wall_time_s": wall,  # without the Numba compiling the run triggered (the first run of a process pays it)
         "compile_time_s": compile_s,
+        "cpu_time_s": max(cpu, 0.0),
+        "started_at": started,  # Unix time at the worker: when the run began (the pool's timing, `connrl timing`)
+        "pid": os.getpid(),
         "diverged": diverged,
     }
     return record, result.rows
@@ -183,115 +167,6 @@ def compile_seconds(events) -> float:
             if depth == 0:
                 total += t - start
     return total
-
-
-class SerialExecutor:
-    """Runs jobs one after another in this process (used with --workers 1 and in tests)."""
-
-    def __init__(self, progress_queue=None):
-        self.q = progress_queue
-
-    def map_unordered(self, fn, jobs, tick):
-        _init_worker(self.q, tick)
-        try:
-            for job in jobs:
-                yield job, fn(job)
-        finally:
-            _init_worker(None)
-
-
-class ProcessExecutor:
-    """Independent runs in worker processes (default: one per core)."""
-
-    def __init__(self, workers: int, progress_queue=None):
-        self.workers = workers
-        self.q = progress_queue
-
-    def map_unordered(self, fn, jobs, tick):
-        ctx = mp.get_context("spawn")  # fresh interpreters: no inherited state, same on every OS
-        pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_init_worker,
-                                   initargs=(self.q, None, os.getpid()))
-        pending: dict[Future, Job] = {}
-        it = iter(jobs)
-        try:
-            for job in it:
-                pending[pool.submit(fn, job)] = job
-                if len(pending) >= 2 * self.workers:
-                    break
-            while pending:
-                done, _ = wait(pending, timeout=0.25, return_when=FIRST_COMPLETED)
-                tick()
-                for fut in done:
-                    job = pending.pop(fut)
-                    yield job, fut.result()
-                    nxt = next(it, None)
-                    if nxt is not None:
-                        pending[pool.submit(fn, nxt)] = nxt
-        except BaseException:
-            # Ctrl-C (or any error): stop the runs in flight instead of finishing them; what finished is saved
-            procs = list(getattr(pool, "_processes", {}).values())  # no public handle on the workers
-            for proc in procs:
-                proc.terminate()
-            for proc in procs:  # a worker that does not go within 5 s is killed: shutdown below waits for them all
-                proc.join(timeout=5)
-                if proc.is_alive():
-                    proc.kill()
-            raise
-        finally:
-            for fut in pending:
-                fut.cancel()
-            pool.shutdown(wait=True, cancel_futures=True)
-
-
-class RayExecutor:
-    """Runs as Ray tasks (``--executor ray``): on a local Ray instance started here, or on the cluster at ``address``
-    (``ray start --head`` on one machine, ``ray start --address=HEAD:6379`` on the others; ``--address HEAD:6379``
-    here). ``fn(job)`` runs as a task and its result comes back here (``_execute`` gives it ``run_job``, which writes
-    nothing, and writes the records itself, so the cluster needs no shared disk)."""
-
-    def __init__(self, workers: int, address: str | None = None):
-        self.workers, self.address = workers, address
-
-    def map_unordered(self, fn, jobs, tick):
-        import ray
-
-        started = not ray.is_initialized()
-        if started and self.address:
-            check_ray_cluster(self.address)  # answers, and takes this driver's token if it wants one
-        if started:  # "local": a fresh instance here, whatever RAY_ADDRESS says; else the cluster at address
-            try:
-                ray.init(address=self.address or "local", num_cpus=None if self.address else self.workers,
-                         include_dashboard=False, log_to_driver=False, configure_logging=False)
-            except Exception as exc:  # unreachable address, a cluster refusing num_cpus, ...: one line
-                raise ExecutorError(f"cannot start or reach Ray at {self.address or 'a local instance'}: "
-                                    f"{type(exc).__name__}: {exc}") from None
-        task = ray.remote(num_cpus=1)(fn)
-        pending = {task.remote(job): job for job in jobs}
-        try:
-            while pending:
-                done, _ = ray.wait(list(pending), num_returns=1, timeout=0.25)
-                tick()
-                for ref in done:
-                    job = pending.pop(ref)
-                    yield job, ray.get(ref)
-        except BaseException:
-            for ref in pending:  # Ctrl-C or an error: stop the runs in flight; what finished is saved
-                ray.cancel(ref, force=True)
-            raise
-        finally:
-            if started:
-                ray.shutdown()
-
-
-EXECUTORS = ("process", "ray")
-def check_executor(executor: str) -> None:
-    """Refuse an unknown executor, or Ray when it is not installed, in one line before any run."""
-    if executor not in EXECUTORS:
-        raise ValueError(f"unknown executor {executor!r}; available: {', '.join(EXECUTORS)}")
-    if executor == "ray":
-        import importlib.util
-        if importlib.util.find_spec("ray") is None:
-            raise ValueError("--executor ray needs Ray: pip install -e \".[ray]\" (or pip install ray)")
 
 
 # ---------------------------------------------------------------------------------------------- summary
@@ -363,40 +238,88 @@ def run_experiment(spec: ExperimentSpec, *, profile: str = "quick", runs: int | 
     """Run what is not stored yet and write summary.json; ``on_damaged(path, reason)`` hears of each damaged
     run record, which is redone. ``executor``: worker processes here ("process") or Ray tasks ("ray", on the cluster
     at ``address`` or a local instance)."""
+    return run_experiments([Batch(spec, profile, runs, seed)], out=out, workers=workers, show_progress=show_progress,
+                           on_damaged=on_damaged, executor=executor, address=address, title=spec.name)[0]
+
+
+@dataclass(frozen=True)
+class Batch:
+    """One experiment's share of a pool: ``connrl run SPEC --profile PROFILE --runs RUNS --seed SEED``."""
+
+    spec: ExperimentSpec
+    profile: str
+    runs: int | None
+    seed: int
+
+
+def run_experiments(batches: list[Batch], *, out: Path | str = "runs", workers: int | None = None,
+                    show_progress: bool = True, on_damaged: Callable[[Path, str], None] = lambda path, reason: None,
+                    executor: str = "process", address: str | None = None, title: str = "runs",
+                    on_done: Callable[[RunOutcome], None] = lambda outcome: None) -> list[RunOutcome]:
+    """Many experiments' runs as one pool, longest first (by ``connrl.experiments.timing``'s expected times), so no
+    core waits on one experiment's last run while another's could start. Each experiment's summary.json is written
+    (and ``on_done`` hears of it) as soon as its last run ends."""
+    from connrl.experiments.timing import expected_seconds
+
     check_executor(executor)
     out = Path(out)
-    jobs = make_jobs(spec, profile, runs, seed, out)
-    prepare_outputs(out / spec.name, jobs)
-    with run_lock(out / spec.name):
-        remove_stale_temporaries(out / spec.name)
-        records, todo = [], []
-        for job in jobs:
-            rec, damage = load_record(job.path, job)
-            if damage:
-                on_damaged(Path(job.path).with_suffix(".json"), damage)
-            (records.append(rec) if rec is not None else todo.append(job))
-        reused = len(records)
-        workers = workers or os.cpu_count() or 1
+    plans = [(b, make_jobs(b.spec, b.profile, b.runs, b.seed, out)) for b in batches]
+    for b, jobs in plans:
+        prepare_outputs(out / b.spec.name, jobs)
+    with contextlib.ExitStack() as locks:
+        records: dict[str, list[dict]] = {}
+        todo: list[Job] = []
+        for b, jobs in plans:
+            locks.enter_context(run_lock(out / b.spec.name))
+            remove_stale_temporaries(out / b.spec.name)
+            records[b.spec.name] = []
+            for job in jobs:
+                rec, damage = load_record(job.path, job)
+                if damage:
+                    on_damaged(Path(job.path).with_suffix(".json"), damage)
+                (records[b.spec.name].append(rec) if rec is not None else todo.append(job))
+        left = {b.spec.name: len(jobs) - len(records[b.spec.name]) for b, jobs in plans}
+        reused = {name: len(recs) for name, recs in records.items()}
+        outcomes: dict[str, RunOutcome] = {}
         t0 = time.perf_counter()
-        if todo:
-            records.extend(_execute(todo, min(workers, len(todo)), show_progress, spec.name, executor, address))
-        wall = time.perf_counter() - t0
-        summary = summarize(spec, profile, seed, records, wall)
-        summary_path = out / spec.name / "summary.json"
-        atomic_write_text(summary_path, strict_json(summary, indent=1, default=json_default))
-    return RunOutcome(summary, summary_path, records, len(todo), reused)
+
+        def finish(b: Batch) -> None:
+            recs = records[b.spec.name]
+            summary = summarize(b.spec, b.profile, b.seed, recs, time.perf_counter() - t0)
+            summary_path = out / b.spec.name / "summary.json"
+            atomic_write_text(summary_path, strict_json(summary, indent=1, default=json_default))
+            outcomes[b.spec.name] = RunOutcome(summary, summary_path, recs, left_at_start[b.spec.name],
+                                               reused[b.spec.name])
+            on_done(outcomes[b.spec.name])
+
+        left_at_start = dict(left)
+        for b, _ in plans:
+            if left[b.spec.name] == 0:
+                finish(b)
+        expected, calibrated = expected_seconds(todo)
+        todo.sort(key=lambda j: -expected[j.path])  # stable: equal times keep the experiments' order
+        workers = min(workers or os.cpu_count() or 1, max(len(todo), 1))
+        by_name = {b.spec.name: b for b in batches}
+        for job, rec in execute(todo, workers, show_progress, title, executor, address, expected, calibrated):
+            records[job.experiment].append(rec)
+            left[job.experiment] -= 1
+            if left[job.experiment] == 0:
+                finish(by_name[job.experiment])
+    return [outcomes[b.spec.name] for b in batches]
 
 
-def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind: str = "process",
-             address: str | None = None) -> list[dict]:
+def execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind: str = "process",
+            address: str | None = None, expected: dict[str, float] | None = None,
+            calibrated: bool = True) -> Iterator[tuple[Job, dict]]:
+    """Run ``jobs`` (in the order given) and yield ``(job, record)`` as each finishes, its records written.
+    ``expected`` (seconds by job path) drives the display's ETA."""
     # a plain queue handed to the workers when they start (no manager process that could outlive us); Ray's tasks
     # report no progress, only their end
     q = None if kind == "ray" or not show_progress else (
         mp.get_context("spawn").Queue() if workers > 1 else queue.SimpleQueue())
-    executor: Executor = (RayExecutor(workers, address) if kind == "ray" else
-                          ProcessExecutor(workers, q) if workers > 1 else SerialExecutor(q))
-    results = []
-    display = _Progress(jobs, title) if show_progress else None
+    pool: Executor = (RayExecutor(workers, address) if kind == "ray" else
+                      ProcessExecutor(workers, q) if workers > 1 else SerialExecutor(q))
+    display = Progress(jobs, title, expected, workers, calibrated) if show_progress else None
 
     def tick():
         if display:
@@ -405,57 +328,22 @@ def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kin
     try:
         if display:
             display.start()
-        for job, rec in executor.map_unordered(run_job if kind == "ray" else execute_job, jobs, tick):
+        for job, rec in pool.map_unordered(run_job if kind == "ray" else execute_job, jobs, tick):
             if kind == "ray":  # the task ran elsewhere: its records are written here
                 rec, rows = rec
                 write_run_records(Path(job.path), rec, rows)
-            results.append(rec)
             tick()
             if display:
-                display.finish(job)
+                display.finish(job, rec.get("wall_time_s"))
+            yield job, rec
     finally:
         if display:
             display.stop()
-    return results
 
 
-class _Progress:
-    """A rich live display: one bar for the experiment, one per run in flight."""
-
-    def __init__(self, jobs: Iterable[Job], title: str):
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-        self.jobs = {j.path: j for j in jobs}
-        self.progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                                 TimeElapsedColumn(), transient=False)
-        self.total = self.progress.add_task(f"{title}: runs", total=len(self.jobs))
-        self.tasks: dict[str, int] = {}
-
-    def start(self):
-        self.progress.start()
-
-    def stop(self):
-        self.progress.stop()
-
-    def drain(self, q):
-        if q is None:
-            return
-        while True:
-            try:
-                path, done, total = q.get_nowait()
-            except (queue.Empty, EOFError, OSError):
-                return
-            if path not in self.jobs:
-                continue
-            if path not in self.tasks:
-                j = self.jobs[path]
-                self.tasks[path] = self.progress.add_task(f"  {j.variant} seed {j.seed}", total=total)
-            self.progress.update(self.tasks[path], completed=done, total=total)
-
-    def finish(self, job: Job):
-        self.progress.advance(self.total)
-        if job.path in self.tasks:
-            self.progress.remove_task(self.tasks.pop(job.path))
+def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind: str = "process",
+             address: str | None = None) -> list[dict]:
+    return [rec for _, rec in execute(jobs, workers, show_progress, title, kind, address)]
 
 
 def prepare_outputs(folder: Path, jobs: list[Job]) -> None:

@@ -1,0 +1,163 @@
+"""Time the whole thesis: `connrl reproduce` into a fresh --out, then where the time went, per experiment and per
+chapter, and where the cores sat idle; optionally profile the most expensive experiments' longest runs.
+
+    python benchmarks/thesis_time.py --out /tmp/thesis-full --profile full --write docs/PERFORMANCE.md --top 5
+    python benchmarks/thesis_time.py --out results/thesis --from-records --write-times   # the ETA table
+
+`--from-records` skips the run and reads what is stored (the pool's idle time is then unknown: the runs may come from
+several commands). `--write-times` writes connrl/data/run_times.json (each variant's mean run time: the order runs start
+in and the ETA of `connrl reproduce`). `--top N` runs the longest run of each of the N most expensive experiments again
+under cProfile, in this process, and splits its time into environment steps, action selection, learning (replay,
+updates, models) and the rest (bookkeeping).
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import json
+import os
+import pstats
+import re
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from connrl.experiments.registry import CHAPTERS, all_experiments, by_chapter
+from connrl.experiments.runner import make_jobs, run_job, stored_runs
+from connrl.experiments.timing import RUN_TIMES, per_experiment, pool_usage, run_times_table
+
+# cProfile's own-time of each function, by where it lives (the first pattern that matches the "file:function")
+CATEGORIES = [
+    ("environment", r"connrl/envs/|gymnasium/|survival_models\.py:\d+\(predict|cup\.py"),
+    ("action selection", r"exploration\.py|\((values|_mlp_values|_rotated_values|_forward_all|outputs|act|choose|"
+                         r"q_values|applicable|select\w*)\)"),
+    ("learning", r"replay|returns\.py|\((update|_update\w*|_bptt|_forward_sequence|train\w*|_momentum_step|learn|"
+                 r"_rotated_update|_train|_single_layer\w*|relaxation_q|policy_mask|batch_targets)\)"),
+]
+
+
+def categorise(stats: pstats.Stats) -> dict[str, float]:
+    out = {name: 0.0 for name, _ in CATEGORIES} | {"bookkeeping": 0.0}
+    for (file, _, func), (_, _, tottime, _, _) in stats.stats.items():
+        where = f"{file}:0({func})"
+        name = next((n for n, pat in CATEGORIES if re.search(pat, where)), "bookkeeping")
+        out[name] += tottime
+    return out
+
+
+def profile_run(spec, record: dict) -> dict[str, float]:
+    jobs = make_jobs(spec, "full", spec.full_runs, spec.seed, Path("/nonexistent"))
+    job = next(j for j in jobs if j.variant == record["variant"] and j.seed == record["seed"])
+    prof = cProfile.Profile()
+    prof.enable()
+    run_job(job)
+    prof.disable()
+    return categorise(pstats.Stats(prof))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", required=True, help="the reproduce's output folder (fresh, unless --from-records)")
+    ap.add_argument("--profile", default="full")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--from-records", action="store_true", help="read stored runs; run nothing")
+    ap.add_argument("--write", type=Path, default=None, help="paste the table into this Markdown file's block")
+    ap.add_argument("--write-times", action="store_true", help=f"write {RUN_TIMES.relative_to(Path.cwd())}")
+    ap.add_argument("--top", type=int, default=0, help="profile the longest run of the N most expensive experiments")
+    args = ap.parse_args()
+    out = Path(args.out)
+    wall = cpu = start = end = None
+    if not args.from_records:
+        if out.exists() and any(out.iterdir()):
+            raise SystemExit(f"thesis_time: --out {out} is not empty; give a fresh folder (or --from-records)")
+        cmd = [sys.executable, "-m", "connrl.cli", "reproduce", "--profile", args.profile, "--out", str(out),
+               "--workers", str(args.workers), "--quiet"]
+        start = time.time()
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        end = time.time()
+        wall = end - start
+        use = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = use.ru_utime + use.ru_stime
+    chapter_of: dict[str, int] = {}
+    specs = all_experiments()
+    records, order = [], []
+    for chapter in sorted(set(CHAPTERS.values())):
+        for spec in by_chapter([chapter]):
+            chapter_of[spec.name] = chapter
+            summary, recs = stored_runs(spec, out)
+            if summary is not None and summary["profile"] == args.profile:
+                records += recs
+                order.append(spec.name)
+    if args.write_times:
+        table = run_times_table(records, args.profile, f"python benchmarks/thesis_time.py --out {out} "
+                                f"{'--from-records ' if args.from_records else ''}--write-times")
+        RUN_TIMES.write_text(json.dumps(table, indent=1) + "\n")
+    lines = report(records, order, chapter_of, args, wall, cpu, start, end)
+    if args.top:
+        lines += profile_top(records, specs, args.top)
+    text = "\n".join(lines)
+    print(text)
+    if args.write:
+        doc = args.write.read_text()
+        block = f"<!-- thesis_time:begin -->\n{text}\n<!-- thesis_time:end -->"
+        pattern = r"<!-- thesis_time:begin -->.*?<!-- thesis_time:end -->"
+        doc = re.sub(pattern, lambda _: block, doc, flags=re.S) if re.search(pattern, doc, re.S) else (
+            doc + "\n" + block + "\n")
+        args.write.write_text(doc)
+
+
+def report(records, order, chapter_of, args, wall, cpu, start, end) -> list[str]:
+    per = per_experiment(records)
+    total = sum(e["run_s"] for e in per.values())
+    how = (f"`python benchmarks/thesis_time.py --out {args.out} --profile {args.profile}"
+           + (" --from-records`" if args.from_records else f" --workers {args.workers}`"))
+    lines = [f"Measured {time.strftime('%Y-%m-%d')} by {how} on {os.cpu_count()} cores: "
+             f"{len(records)} runs of {len(order)} experiments at the {args.profile} profile."]
+    if wall is not None:
+        use = pool_usage(records, args.workers, start, end)
+        lines += ["", f"- `connrl reproduce --profile {args.profile}`: **{wall / 60:.1f} min** wall, "
+                  f"{cpu / 60:.1f} min CPU in all processes; the runs themselves {total / 60:.1f} min "
+                  f"({use['utilisation']:.0%} of {args.workers} cores' time).",
+                  f"- Idle: {use['idle_s'] / 60:.1f} core-min in all; before the first run {use['head_s']:.0f} s; "
+                  f"the pool's tail (fewer than {args.workers} runs left in flight) {use['tail_s']:.0f} s, "
+                  f"{use['tail_idle_s']:.0f} core-s idle; the rest is the gaps between runs (starting, writing, "
+                  "the page)."]
+    lines += ["", "| chapter | experiment | runs | run time (min) | CPU (min) | share | longest run (s) | "
+              "span in the pool (min) |", "|---|---|---|---|---|---|---|---|"]
+    for name in sorted(order, key=lambda n: (chapter_of[n], -per.get(n, {}).get("run_s", 0))):
+        e = per.get(name)
+        if e is None:
+            continue
+        span = f"{(e['last'] - e['first']) / 60:.1f}" if wall is not None else "–"
+        lines.append(f"| {chapter_of[name]} | {name} | {e['runs']} | {e['run_s'] / 60:.2f} | {e['cpu_s'] / 60:.2f} | "
+                     f"{e['run_s'] / total:.1%} | {e['longest_s']:.1f} | {span} |")
+    lines += ["", "| chapter | runs | run time (min) | over the cores (min) |", "|---|---|---|---|"]
+    for chapter in sorted(set(chapter_of[n] for n in order)):
+        es = [per[n] for n in order if chapter_of[n] == chapter and n in per]
+        s = sum(e["run_s"] for e in es)
+        lines.append(f"| {chapter} | {sum(e['runs'] for e in es)} | {s / 60:.1f} | {s / 60 / args.workers:.1f} |")
+    lines.append(f"| all | {len(records)} | {total / 60:.1f} | {total / 60 / args.workers:.1f} |")
+    return lines
+
+
+def profile_top(records, specs, n) -> list[str]:
+    per = per_experiment(records)
+    top = sorted(per, key=lambda k: -per[k]["run_s"])[:n]
+    lines = ["", f"The {n} most expensive experiments, each one's longest run again under cProfile (own time of every "
+             "function, by kind; cProfile slows Python calls more than compiled kernels, so the Python shares are "
+             "upper bounds):", "", "| experiment | run | environment | action selection | learning | bookkeeping |",
+             "|---|---|---|---|---|---|"]
+    for name in top:
+        rec = max((r for r in records if r["experiment"] == name), key=lambda r: r["wall_time_s"])
+        shares = profile_run(specs[name], rec)
+        s = sum(shares.values()) or 1.0
+        lines.append(f"| {name} | {rec['variant']}, seed {rec['seed']} | "
+                     + " | ".join(f"{v / s:.0%}" for v in shares.values()) + " |")
+    return lines
+
+
+if __name__ == "__main__":
+    main()
