@@ -140,12 +140,13 @@ class WindowQ(QCON):
 def replay_recurrent_q(net: RecurrentOAON, lesson: Lesson, params: ReplayParams, weights: np.ndarray | None = None,
                        allowed: np.ndarray | None = None, fast: bool = True) -> int:
     """Replay one lesson into a recurrent Q-net: one batch BPTT step; returns the experiences used. ``weights`` and
-    ``allowed`` as ``batch_targets``'s (Ch. 8's choice over behaviours). Without them the whole lesson is one
-    compiled call (``RecurrentOAON.replay_q_lesson``, the same arithmetic) unless ``fast`` is False."""
-    if fast and weights is None and allowed is None:
+    ``allowed`` as ``batch_targets``'s (Ch. 8's choice over behaviours). The whole lesson is one compiled call
+    (``RecurrentOAON.replay_q_lesson``, the same arithmetic) unless ``fast`` is False: then the readable composition
+    below."""
+    if fast:
         return net.replay_q_lesson(lesson.inputs, lesson.actions, lesson.rewards, lesson.terminated,
                                    gamma=params.gamma, lam=params.lam, temperature=params.temperature,
-                                   p_threshold=params.p_threshold, clip=params.clip)
+                                   p_threshold=params.p_threshold, clip=params.clip, weights=weights, allowed=allowed)
     acts_ext = np.append(lesson.actions, 0)  # the action at x_n does not affect the outputs at x_n
     ys, _ = net.forward_sequence(lesson.inputs, acts_ext)
     targets, policy = batch_targets(ys[:, :, 0], lesson.actions, lesson.rewards, lesson.terminated, params,

@@ -212,13 +212,49 @@ def _momentum_step(w, d, g, lr, momentum):
 
 
 @numba.njit(cache=True)
+def _policy_weights(ys, actions, temperature, p_threshold, bweights, weights):
+    """The non-policy test (3.5.1) at every step, into ``weights`` (1 replayed, 0 not): the taken action's probability
+    by Eq. 3.6, or by Eq. 6.6 with each step's W (``bweights`` (n, A); 0 rows: none), against P_t; greedy ties share
+    the mass at T = 0. ``connrl.core.replay.policy_mask``'s arithmetic (its sums run left to right, as NumPy's do
+    over fewer than 8 choices)."""
+    n_a = ys.shape[1]
+    has_w = bweights.shape[0] > 0
+    for t in range(actions.shape[0]):
+        m, found = 0.0, False
+        for b in range(n_a):
+            if (not has_w or bweights[t, b] > 0.0) and (not found or ys[t, b, 0] > m):
+                m, found = ys[t, b, 0], True
+        a = actions[t]
+        if temperature == 0.0:
+            ties = 0
+            for b in range(n_a):
+                ties += (not has_w or bweights[t, b] > 0.0) and ys[t, b, 0] == m
+            p = 1.0 / ties if ((not has_w or bweights[t, a] > 0.0) and ys[t, a, 0] == m) else 0.0
+        else:
+            z, ea = 0.0, 0.0
+            for b in range(n_a):
+                e = 0.0
+                if not has_w:
+                    e = math.exp((ys[t, b, 0] - m) / temperature)
+                elif bweights[t, b] > 0.0:
+                    e = bweights[t, b] * math.exp((ys[t, b, 0] - m) / temperature)
+                z += e
+                if b == a:
+                    ea = e
+            p = ea / z
+        weights[t] = 1.0 if p >= p_threshold else 0.0
+
+
+@numba.njit(cache=True)
 def _replay_q_lesson(w1, w2, d1, d2, g1, g2, xs, actions, rewards, terminated, gamma, lam, temperature,
-                     p_threshold, clip, has_clip, feedback, decay, scale, lr, momentum):
+                     p_threshold, clip, has_clip, feedback, decay, scale, lr, momentum, bweights, allowed):
     """Batch replay of one lesson into a recurrent Q-net, whole (7.5; Fig. 5.1(a) in batch mode): every net's values
-    along the lesson from c_0 = 0, the non-policy test (3.5.1), the lambda-returns from those fixed values (Eq.
-    5.5), then one BPTT + momentum step on the policy steps. The same arithmetic as ``connrl.agents.memory``'s
-    ``replay_recurrent_q`` composes from ``batch_targets`` and ``train_sequence``; returns the steps replayed.
-    ``xs`` (n+1, I) holds the lesson's inputs, the last one the state after the last action."""
+    along the lesson from c_0 = 0, the non-policy test (3.5.1, with Eq. 6.6's W per step in ``bweights`` (n, A)), the
+    lambda-returns from those fixed values (Eq. 5.5; each state's max over its ``allowed`` (n+1, A) choices, all where
+    none is), then one BPTT + momentum step on the policy steps. 0-row ``bweights`` / ``allowed``: none. The same
+    arithmetic as ``connrl.agents.memory``'s ``replay_recurrent_q`` composes from ``batch_targets`` and
+    ``train_sequence``; returns the steps replayed. ``xs`` (n+1, I) holds the lesson's inputs, the last one the state
+    after the last action."""
     n = actions.shape[0]
     n_a = w1.shape[0]
     acts = np.zeros(n + 1, dtype=np.int64)  # the action at x_n does not affect the outputs at x_n
@@ -227,31 +263,21 @@ def _replay_q_lesson(w1, w2, d1, d2, g1, g2, xs, actions, rewards, terminated, g
     cs = np.empty((n + 2, w1.shape[2] - xs.shape[1] - 1))  # the contexts of n + 1 steps and the one after
     _forward_sequence(w1, w2, xs, acts, feedback, scale, ys, cs)
     weights = np.ones(n)
-    if p_threshold > 0.0:  # Eq. 3.6's probability of the taken action, greedy ties shared at T = 0
-        for t in range(n):
-            m = ys[t, 0, 0]
-            for b in range(1, n_a):
-                m = max(m, ys[t, b, 0])
-            qa = ys[t, actions[t], 0]
-            if temperature == 0.0:
-                ties = 0
-                for b in range(n_a):
-                    ties += ys[t, b, 0] == m
-                p = 1.0 / ties if qa == m else 0.0
-            else:
-                z = 0.0
-                for b in range(n_a):
-                    z += math.exp((ys[t, b, 0] - m) / temperature)
-                p = math.exp((qa - m) / temperature) / z
-            weights[t] = 1.0 if p >= p_threshold else 0.0
+    if p_threshold > 0.0:
+        _policy_weights(ys, actions, temperature, p_threshold, bweights, weights)
     targets = np.empty((n, 1))
     e_next = 0.0
     for t in range(n - 1, -1, -1):
         u = 0.0
         if not (t == n - 1 and terminated):
-            u = ys[t + 1, 0, 0]
-            for b in range(1, n_a):
-                u = max(u, ys[t + 1, b, 0])
+            some = False
+            if allowed.shape[0] > 0:
+                for b in range(n_a):
+                    some = some or allowed[t + 1, b]
+            found = False
+            for b in range(n_a):
+                if (not some or allowed[t + 1, b]) and (not found or ys[t + 1, b, 0] > u):
+                    u, found = ys[t + 1, b, 0], True
         lam_t = lam if (t < n - 1 and weights[t + 1] > 0.0) else 0.0  # a non-policy next action cuts lambda
         e = rewards[t] + gamma * ((1.0 - lam_t) * u + lam_t * e_next)
         if has_clip and e > clip:
@@ -295,6 +321,23 @@ def _check_sequence(xs, actions, targets, weights, n_inputs, n_actions, n_output
         if weights.shape != (n_t,) or not np.all(weights >= 0):
             raise ValueError(f"weights must be (T={n_t},) and >= 0 (0 = step not trained), got {weights}")
     return xs, actions, targets, weights
+
+
+def _check_choices(weights, allowed, n: int, n_a: int) -> tuple[np.ndarray, np.ndarray]:
+    """``weights`` (n, A) >= 0, no row all 0, and ``allowed`` (n+1, A) as the kernel takes them (0 rows for none);
+    the same refusals as ``connrl.core.replay``'s."""
+    if weights is None:
+        w = np.zeros((0, n_a))
+    else:
+        w = np.ascontiguousarray(weights, dtype=np.float64)
+        if w.shape != (n, n_a) or (w < 0).any() or not (w > 0).any(axis=1).all():
+            raise ValueError(f"weights must be (n, actions) = {(n, n_a)}, >= 0, not all 0 in a row")
+    if allowed is None:
+        return w, np.zeros((0, n_a), dtype=np.bool_)
+    ok = np.ascontiguousarray(allowed, dtype=np.bool_)
+    if ok.shape != (n + 1, n_a):
+        raise ValueError(f"allowed must be (n+1, actions) = {(n + 1, n_a)}, got {ok.shape}")
+    return w, ok
 
 
 def gradients(
@@ -442,9 +485,11 @@ class RecurrentOAON:
 
     def replay_q_lesson(self, xs: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool, *,
                         gamma: float, lam: float, temperature: float, p_threshold: float,
-                        clip: float | None = None) -> int:
+                        clip: float | None = None, weights: np.ndarray | None = None,
+                        allowed: np.ndarray | None = None) -> int:
         """Batch replay of one lesson (inputs ``xs`` (n+1, I), n actions and rewards) in one compiled call: the fast
-        path of ``connrl.agents.memory.replay_recurrent_q`` (tests/agents/test_memory.py holds them equal)."""
+        path of ``connrl.agents.memory.replay_recurrent_q`` (tests/agents/test_memory.py holds them equal).
+        ``weights`` (n, A) and ``allowed`` (n+1, A) as ``connrl.core.replay.batch_targets``'s."""
         c = self.config
         if c.n_outputs != 1:
             raise ValueError(f"replay_q_lesson is for Q-nets (n_outputs=1); this net has {c.n_outputs}")
@@ -455,11 +500,12 @@ class RecurrentOAON:
         rewards = np.ascontiguousarray(rewards, dtype=np.float64)
         if rewards.shape != actions.shape:
             raise ValueError(f"rewards must have shape {actions.shape}, got {rewards.shape}")
+        w, ok = _check_choices(weights, allowed, len(actions), self.n_nets)
         self._fresh = False
         return int(_replay_q_lesson(self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, xs, actions, rewards,
                                     bool(terminated), float(gamma), float(lam), float(temperature),
                                     float(p_threshold), 0.0 if clip is None else float(clip), clip is not None,
-                                    c.feedback, c.decay, self.scale, self.lr, c.momentum))
+                                    c.feedback, c.decay, self.scale, self.lr, c.momentum, w, ok))
 
     # -- plain-format persistence (NPZ, no pickle)
     def state_dict(self) -> dict[str, np.ndarray]:

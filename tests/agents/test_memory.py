@@ -170,6 +170,39 @@ def test_compiled_recurrent_replay_equals_the_composed_reference(params, share_o
                              p_threshold=0.1)
 
 
+@pytest.mark.parametrize("params", [
+    ReplayParams(gamma=0.9, lam=0.8, temperature=0.05, p_threshold=0.01, batch=True),
+    ReplayParams(gamma=0.9, lam=0.7, temperature=0.2, p_threshold=0.3, batch=True, clip=0.5),  # many cut
+    ReplayParams(gamma=0.95, lam=0.9, temperature=0.0, p_threshold=0.6, batch=True),  # greedy among the allowed
+])
+def test_compiled_recurrent_replay_with_weights_and_allowed_choices_equals_the_reference(params):
+    """Ch. 8's replay over behaviours (Eq. 6.6's W per step, each state's max over its applicable behaviours): the one
+    kernel against batch_targets + train_sequence, bit for bit, over lessons in a row."""
+    rng = np.random.default_rng(11)
+    cfg = RecurrentNetConfig(4, 7, 3, 1, lr=0.3, momentum=0.9)
+    fast, ref = (RecurrentOAON(cfg, 4, np.random.default_rng(3)) for _ in range(2))
+    used = steps = 0
+    for k in range(8):
+        n = int(rng.integers(1, 14))
+        lesson = Lesson(rng.choice([-0.5, 0.5], (n + 1, 4)), rng.integers(0, 4, n),
+                        rng.choice([0.0, 0.0, 1.0, -1.0], n), bool(k % 2))
+        w = rng.choice([0.0, 1.0, 1.0, 100.0], (n, 4))
+        w[np.arange(n), lesson.actions] = rng.choice([1.0, 100.0], n)  # the taken choice was allowed
+        ok = rng.random((n + 1, 4)) < 0.6
+        ok[rng.random(n + 1) < 0.2] = False  # a state with none allowed: the max is over all
+        u_fast = replay_recurrent_q(fast, lesson, params, w, ok)
+        u_ref = replay_recurrent_q(ref, lesson, params, w, ok, fast=False)
+        assert u_fast == u_ref
+        used, steps = used + u_ref, steps + n
+        for name in ("w1", "w2", "d1", "d2"):
+            np.testing.assert_array_equal(getattr(fast, name), getattr(ref, name))
+    assert 0 < used < steps  # some steps are cut by the test, some replayed
+    with pytest.raises(ValueError, match="weights must be"):
+        replay_recurrent_q(fast, lesson, params, np.zeros((n, 4)), ok)
+    with pytest.raises(ValueError, match="allowed must be"):
+        replay_recurrent_q(fast, lesson, params, w, ok[:-1])
+
+
 def test_recurrent_q_acts_on_the_contexts_replay_reconstructs():
     agent = recurrent_q_agent(seed=3)
     env = CupCollectionEnv()

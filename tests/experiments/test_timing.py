@@ -75,7 +75,7 @@ def test_one_pool_starts_the_longest_runs_first_and_gives_each_experiment_its_ow
     assert done == ["pole-full", "td-depth"]  # the longer experiment's runs went first, and it finished first
     starts = sorted((r["started_at"], r["experiment"]) for o in outcomes for r in o.records)
     assert [e for _, e in starts][0] == "pole-full"
-    for spec, outcome in zip(specs, outcomes):
+    for spec, outcome in zip(specs, outcomes, strict=True):
         alone = run_experiment(spec, profile="tiny", seed=0, out=tmp_path / "alone", workers=1, show_progress=False)
         assert json.dumps(outcome.summary["variants"]) == json.dumps(alone.summary["variants"])
         assert (outcome.ran, outcome.reused) == (len(alone.records), 0)
