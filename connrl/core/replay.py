@@ -211,7 +211,7 @@ def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "
     if repair not in REPAIRS:
         raise ValueError(f"repair must be one of {REPAIRS}, got {repair!r}")
     _check_step_arrays(lesson, weights, allowed, discounts)
-    check_lesson_fits(lesson, q.n_nets, q.config.n_inputs)
+    check_lesson_fits(lesson, q.n_actions, q.config.n_inputs)
     return fn(q, lesson, params, REPAIRS.index(repair), weights, allowed, discounts)
 
 
@@ -280,11 +280,13 @@ def replay_ahc(v_net, policy_net, lesson: Lesson, params: ReplayParams) -> int:
     return used
 
 
-def _register_oaon() -> None:
-    from connrl.core.replay_kernel import replay_oaon
+def _register_compiled() -> None:
+    from connrl.core.replay_kernel import replay_oaon, replay_rotated
     from connrl.nets.mlp import OAON
+    from connrl.nets.rotated import RotatedNet
 
     register_fast_path(OAON, replay_oaon)
+    register_fast_path(RotatedNet, replay_rotated)
 
 
-_register_oaon()
+_register_compiled()

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from connrl.nets.kernels import _replay_q_kernel
+from connrl.nets.kernels import _replay_q_kernel, _replay_rotated_kernel
 from connrl.nets.mlp import OAON
+from connrl.nets.rotated import RotatedNet
 
 
 def replay_oaon(net: OAON, lesson, params, repair: int = 0, weights=None, allowed=None, discounts=None) -> int:
@@ -31,3 +32,23 @@ def replay_oaon(net: OAON, lesson, params, repair: int = 0, weights=None, allowe
                                 float(params.p_threshold), 0.0 if params.clip is None else float(params.clip),
                                 params.clip is not None, net.scale, net.lr, net.config.momentum, int(repair),
                                 net.config.linear_output, w, m))
+
+
+def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=None, allowed=None, discounts=None) -> int:
+    """Compiled incremental backward replay of one lesson into a rotated net (4.2.4): the registered fast path of
+    ``connrl.core.replay.replay_q`` for Ch. 4's nets, bit for bit the reference loop's (tests/core/test_replay.py).
+    The 5.4.3 repairs and Ch. 6's per-step weights and allowed choices, which Ch. 4 does not use, take the reference
+    loop."""
+    if repair or weights is not None or allowed is not None:
+        from connrl.core.replay import REPAIRS, replay_q_reference
+
+        return replay_q_reference(net, lesson, params, REPAIRS[repair], weights, allowed, discounts)
+    n, o = len(lesson), net.net
+    d = np.full(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
+    return int(_replay_rotated_kernel(o.w1, o.w2, o.d1, o.d2, o._h, net._xr, np.empty(net.n_actions), net.perms,
+                                      np.ascontiguousarray(lesson.inputs, dtype=np.float64),
+                                      np.ascontiguousarray(lesson.actions, dtype=np.int64),
+                                      np.ascontiguousarray(lesson.rewards, dtype=np.float64), bool(lesson.terminated),
+                                      d, float(params.lam), float(params.temperature), float(params.p_threshold),
+                                      0.0 if params.clip is None else float(params.clip), params.clip is not None,
+                                      o.scale, o.lr, net.config.momentum))

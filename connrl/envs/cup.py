@@ -176,7 +176,8 @@ class CupCollectionEnv(gym.Env):
     def step(self, action):
         if self._done:
             raise RuntimeError("episode is over (terminated or truncated); call reset() before step()")
-        if not self.action_space.contains(action):
+        # a plain int in range needs no Gymnasium check (it costs more than the step itself)
+        if not (action.__class__ is int and 0 <= action < 3) and not self.action_space.contains(action):
             raise ValueError(f"action must be 0 (left), 1 (right) or 2 (pick-up), got {action!r}")
         failed = self.control_error > 0.0 and self.np_random.random() < self.control_error
         if failed:  # the action has no effect at all (7.5.3)

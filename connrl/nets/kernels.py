@@ -18,6 +18,9 @@ import math
 
 import numba
 import numpy as np
+from llvmlite import ir
+from numba.core import cgutils, types
+from numba.extending import intrinsic
 
 # ------------------------------------------------------------------------------- one net: forward and update
 
@@ -111,17 +114,90 @@ def _perceptron_update(w2, d2, a, x, target, is_error, scale, lr, momentum, line
 
 # ---------------------------------------------------------------------- one net on rotated inputs (4.2.4)
 
-@numba.njit(cache=True, fastmath=True)
-def _rotated_values(w1, w2, x, perms, scale, q):
-    """q[a] = scale * net(x[perms[a]]) for every rotation a (one hidden layer, symmetric sigmoids)."""
+@intrinsic
+def _dot_in_lanes(typingctx, w, x, n, start):
+    """``start + sum_i w[i] x[i]`` over the first ``n`` entries of two float64 arrays, summed as LLVM's AVX-512 loop
+    sums it under fastmath: four 8-lane accumulators of fused multiply-adds over blocks of 32 (``start`` in lane 0),
+    added (0 + 1) + (2 + 3) and then lane halves (4, 2, 1); one 8-lane accumulator over the blocks of 8 left (the
+    sum so far in lane 0), added the same way; fused multiply-adds over the last few. Written here in vector IR,
+    it is that order on every CPU, without the gathers a permuted read forced (issue 45: ``_rotated_values`` kept
+    its numbers bit for bit and got faster)."""
+    sig = types.float64(w, x, types.int64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        d, i64 = ir.DoubleType(), ir.IntType(64)
+        v8 = ir.VectorType(d, 8)
+        fma8 = cgutils.get_or_insert_function(builder.module, ir.FunctionType(v8, [v8, v8, v8]), "llvm.fma.v8f64")
+        fma1 = cgutils.get_or_insert_function(builder.module, ir.FunctionType(d, [d, d, d]), "llvm.fma.f64")
+        wp = context.make_array(signature.args[0])(context, builder, args[0]).data
+        xp = context.make_array(signature.args[1])(context, builder, args[1]).data
+        n, start = args[2], args[3]
+        zero8 = ir.Constant(v8, [0.0] * 8)
+        s = cgutils.alloca_once_value(builder, start)
+        i = cgutils.alloca_once_value(builder, ir.Constant(i64, 0))
+
+        def load8(ptr, k):
+            return builder.load(builder.bitcast(builder.gep(ptr, [k]), v8.as_pointer()), align=8)
+
+        def halves(v):  # lanes 0-3 + 4-7, then 0-1 + 2-3, then 0 + 1
+            v4 = builder.fadd(builder.shuffle_vector(v, v, ir.Constant(ir.VectorType(ir.IntType(32), 4), [0, 1, 2, 3])),
+                              builder.shuffle_vector(v, v, ir.Constant(ir.VectorType(ir.IntType(32), 4), [4, 5, 6, 7])))
+            v2 = builder.fadd(builder.shuffle_vector(v4, v4, ir.Constant(ir.VectorType(ir.IntType(32), 2), [0, 1])),
+                              builder.shuffle_vector(v4, v4, ir.Constant(ir.VectorType(ir.IntType(32), 2), [2, 3])))
+            return builder.fadd(builder.extract_element(v2, ir.Constant(i64, 0)),
+                                builder.extract_element(v2, ir.Constant(i64, 1)))
+
+        def lanes(count, stop, step):  # accumulate blocks of `step` from i up to stop into `count` vectors
+            accs = [cgutils.alloca_once_value(builder, zero8) for _ in range(count)]
+            builder.store(builder.insert_element(zero8, builder.load(s), ir.Constant(i64, 0)), accs[0])
+            with cgutils.for_range_slice(builder, builder.load(i), stop, ir.Constant(i64, step)) as (k, _):
+                for c, acc in enumerate(accs):
+                    kc = builder.add(k, ir.Constant(i64, 8 * c))
+                    builder.store(builder.call(fma8, [load8(xp, kc), load8(wp, kc), builder.load(acc)]), acc)
+            builder.store(stop, i)
+            vals = [builder.load(acc) for acc in accs]
+            while len(vals) > 1:
+                vals = [builder.fadd(vals[k], vals[k + 1]) for k in range(0, len(vals), 2)]
+            builder.store(halves(vals[0]), s)
+
+        with builder.if_then(builder.icmp_signed(">=", n, ir.Constant(i64, 32))):
+            lanes(4, builder.and_(n, ir.Constant(i64, ~31)), 32)
+        rest = builder.and_(builder.sub(n, builder.load(i)), ir.Constant(i64, ~7))
+        with builder.if_then(builder.icmp_signed(">", rest, ir.Constant(i64, 0))):
+            lanes(1, builder.add(builder.load(i), rest), 8)
+        with cgutils.for_range_slice(builder, builder.load(i), n, ir.Constant(i64, 1)) as (k, _):
+            xk = builder.load(builder.gep(xp, [k]))
+            builder.store(builder.call(fma1, [xk, builder.load(builder.gep(wp, [k])), builder.load(s)]), s)
+        return builder.load(s)
+
+    return sig, codegen
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """``a * b + c`` rounded once (what fastmath's contraction made of ``c += a * b``)."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        d = ir.DoubleType()
+        return builder.call(builder.module.declare_intrinsic("llvm.fma", [d], ir.FunctionType(d, [d, d, d])), args)
+
+    return sig, codegen
+
+
+@numba.njit(cache=True)
+def _rotated_values(w1, w2, x, perms, scale, q, xr):
+    """q[a] = scale * net(x[perms[a]]) for every rotation a (one hidden layer, symmetric sigmoids); ``xr`` (I,) is
+    scratch. The arithmetic is the fastmath loop's this replaced (a gathered read of x per input; see
+    ``_dot_in_lanes``), bit for bit: tests/nets/test_rotated.py holds it to a plain copy of that loop."""
     n_h, n_in = w1.shape[1], w1.shape[2] - 1
     for a in range(perms.shape[0]):
+        for i in range(n_in):
+            xr[i] = x[perms[a, i]]
         out = w2[0, n_h]
         for j in range(n_h):
-            s = w1[0, j, n_in]
-            for i in range(n_in):
-                s += w1[0, j, i] * x[perms[a, i]]
-            out += w2[0, j] * (1.0 / (1.0 + math.exp(-s)) - 0.5)
+            s = _dot_in_lanes(w1[0, j], xr, n_in, w1[0, j, n_in])
+            out = _fma(w2[0, j], 1.0 / (1.0 + math.exp(-s)) - 0.5, out)
         q[a] = scale * (1.0 / (1.0 + math.exp(-out)) - 0.5)
 
 
@@ -278,5 +354,61 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
                         found, best = True, q[i]
                 if found and best > qa:
                     _update_any(w1, w2, d1, d2, a, inputs[t], h, best, scale, lr, momentum, linear)
+        e_next = e
+    return used
+
+
+# ------------------------------------------ whole-lesson backward replay into a rotated net (4.2.4, Fig. 5.1a)
+
+@numba.njit(cache=True)
+def _boltzmann_probability(q, a, temperature):
+    """Eq. 3.6 probability of action a (greedy, ties shared, at T = 0), in ``boltzmann_probabilities``'s order of
+    operations (no fastmath: (q - max) / T, exp, a left-to-right sum, one division)."""
+    m = q[0]
+    for k in range(1, q.size):
+        m = max(m, q[k])
+    if temperature == 0.0:
+        ties = 0
+        for k in range(q.size):
+            ties += q[k] == m
+        return 1.0 / ties if q[a] == m else 0.0
+    s, pa = 0.0, 0.0
+    for k in range(q.size):
+        e = math.exp((q[k] - m) / temperature)
+        s += e
+        if k == a:
+            pa = e
+    return pa / s
+
+
+@numba.njit(cache=True)
+def _replay_rotated_kernel(w1, w2, d1, d2, h, xr, q, perms, inputs, actions, rewards, terminated, discounts, lam,
+                           temperature, p_threshold, clip, has_clip, scale, lr, momentum):
+    """Fig. 5.1(a) in incremental mode over a whole lesson into a rotated net: ``replay_q_reference``'s loop step
+    for step (its TD arithmetic compiled without fastmath, so the targets are Python's to the bit; the net's own
+    kernels are those ``RotatedNet`` calls)."""
+    n = actions.shape[0]
+    used = 0
+    e_next = 0.0
+    next_policy = False
+    for t in range(n - 1, -1, -1):
+        u = 0.0
+        if not (t == n - 1 and terminated):
+            _rotated_values(w1, w2, inputs[t + 1], perms, scale, q, xr)
+            u = q[0]
+            for k in range(1, q.size):
+                u = max(u, q[k])
+        lam_t = lam if (t < n - 1 and next_policy) else 0.0
+        e = rewards[t] + discounts[t] * ((1.0 - lam_t) * u + lam_t * e_next)
+        if has_clip and e > clip:
+            e = clip
+        a = actions[t]
+        next_policy = True
+        if p_threshold > 0.0:
+            _rotated_values(w1, w2, inputs[t], perms, scale, q, xr)
+            next_policy = _boltzmann_probability(q, a, temperature) >= p_threshold
+        if next_policy:
+            _rotated_update(w1, w2, d1, d2, inputs[t], perms[a], xr, h, e, False, scale, lr, momentum)
+            used += 1
         e_next = e
     return used

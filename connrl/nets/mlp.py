@@ -91,6 +91,7 @@ class OAON:
             raise ValueError(f"n_nets must be >= 1, got {n_nets}")
         self.config = config
         self.n_nets = n_nets
+        self.n_actions = n_nets  # as a Q-function (connrl.core.replay.QFunction): one net per action
         c = config
         self.scale = 2.0 * c.value_range
         lo, hi = -c.init_range, c.init_range

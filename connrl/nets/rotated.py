@@ -51,7 +51,7 @@ class RotatedNet:
     def values(self, x: np.ndarray) -> np.ndarray:
         q = np.empty(self.n_actions)
         _rotated_values(self.net.w1, self.net.w2, np.ascontiguousarray(x, dtype=np.float64), self.perms,
-                        self.net.scale, q)
+                        self.net.scale, q, self._xr)
         return q
 
     def value(self, x: np.ndarray, a: int) -> float:

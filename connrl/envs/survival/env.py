@@ -98,7 +98,8 @@ class SurvivalEnv(gym.Env):
     def step(self, action):
         if self._done:
             raise RuntimeError("the play has ended (or reset() was never called); call reset() first")
-        if not self.action_space.contains(action):
+        # a plain int in range needs no Gymnasium check (it costs more than the step itself)
+        if not (action.__class__ is int and 0 <= action < 4) and not self.action_space.contains(action):
             raise ValueError(
                 f"action must be an int in 0..3 ({ACTION_NAMES[self.action_representation]}), got {action!r}"
             )

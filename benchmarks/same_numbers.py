@@ -1,0 +1,70 @@
+"""Run a sample of stored runs again and compare every number they stored, bit for bit: a speed-up must not move
+the thesis's numbers (issue 45).
+
+    python benchmarks/same_numbers.py --out results/thesis --per-experiment 1 [--only NAME,...] [--workers 2]
+
+For each experiment stored in --out (at the profile its summary names), the first run of each of its first
+--per-experiment variants (in the spec's order) is run again into a scratch folder, and its metrics, curve and
+extra results (the .json) and its rows (the .csv) are compared with the stored ones. Prints one line per run;
+exits 1 if any number moved.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from connrl.experiments.registry import all_experiments
+from connrl.experiments.runner import execute, make_jobs
+from connrl.experiments.store import load_summary
+
+COMPARED = ("metrics", "curve_x", "curve_y", "extra", "diverged")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default="results/thesis")
+    ap.add_argument("--per-experiment", type=int, default=1, help="variants per experiment (default 1)")
+    ap.add_argument("--only", default=None, help="comma-separated experiments (default: all stored)")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    args = ap.parse_args()
+    specs = all_experiments()
+    names = args.only.split(",") if args.only else sorted(specs)
+    unknown = [n for n in names if n not in specs]
+    if unknown:
+        raise SystemExit(f"same_numbers: unknown experiment(s) {', '.join(unknown)}")
+    scratch = Path(tempfile.mkdtemp(prefix="same-numbers-"))
+    todo, stored = [], {}
+    for name in names:
+        p = Path(args.out) / name / "summary.json"
+        if not p.exists():
+            continue
+        s = load_summary(p, name)
+        spec = specs[name]
+        mine = make_jobs(spec, s["profile"], s["runs_per_variant"], s["base_seed"], Path(args.out))
+        theirs = make_jobs(spec, s["profile"], s["runs_per_variant"], s["base_seed"], scratch)
+        labels = [v.label for v in spec.variants][: args.per_experiment]
+        for a, b in zip(mine, theirs, strict=True):
+            if a.variant in labels and a.seed == s["base_seed"]:
+                stored[b.path] = a.path
+                todo.append(b)
+    moved = 0
+    for job, _ in execute(todo, min(args.workers, max(len(todo), 1)), False, "same numbers"):
+        old, rec = (json.loads(Path(p).with_suffix(".json").read_text()) for p in (stored[job.path], job.path))
+        diff = [k for k in COMPARED if json.dumps(old.get(k), sort_keys=True) != json.dumps(rec.get(k), sort_keys=True)]
+        if Path(stored[job.path]).with_suffix(".csv").read_text() != Path(job.path).with_suffix(".csv").read_text():
+            diff.append("the CSV rows")
+        moved += bool(diff)
+        print(f"{'MOVED' if diff else 'same '} {job.experiment}: {job.variant} seed {job.seed} "
+              f"({rec['wall_time_s']:.1f} s now, {old['wall_time_s']:.1f} s stored)"
+              + (f": {', '.join(diff)} differ" if diff else ""), flush=True)
+    print(f"{len(todo) - moved} of {len(todo)} runs gave the stored numbers bit for bit")
+    return 1 if moved else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
