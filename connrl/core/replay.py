@@ -193,6 +193,8 @@ def _check_step_arrays(lesson: Lesson, weights, allowed, discounts) -> None:
 # type of Q-function -> compiled whole-lesson replay ``fn(q, lesson, params, repair_index, weights, allowed,
 # discounts) -> used``
 FAST_PATHS: dict[type, Callable[..., int]] = {}
+# (type of V-net, type of policy net) -> compiled whole-lesson Fig. 5.1(b) ``fn(v_net, policy_net, lesson, params)``
+AHC_FAST_PATHS: dict[tuple[type, type], Callable[..., int]] = {}
 
 
 def register_fast_path(q_type: type, fn: Callable[..., int]) -> None:
@@ -243,8 +245,19 @@ def ahc_batch_targets(v_values: np.ndarray, merits: np.ndarray, actions: np.ndar
     return lambda_returns(rewards, u, params.gamma, lams, params.clip), policy
 
 
-def replay_ahc(v_net, policy_net, lesson: Lesson, params: ReplayParams) -> int:
-    """Fig. 5.1(b): replay a lesson backward into a V-net (one output) and a policy net (one per action).
+def replay_ahc(v_net, policy_net, lesson: Lesson, params: ReplayParams, fast: bool = True) -> int:
+    """Fig. 5.1(b): the registered compiled path for the nets' types in incremental mode
+    (``AHC_FAST_PATHS``), else the reference loop ``replay_ahc_reference``."""
+    fn = AHC_FAST_PATHS.get((type(v_net), type(policy_net))) if fast and not params.batch else None
+    if fn is None:
+        return replay_ahc_reference(v_net, policy_net, lesson, params)
+    check_lesson_fits(lesson, policy_net.n_actions, policy_net.config.n_inputs)
+    return fn(v_net, policy_net, lesson, params)
+
+
+def replay_ahc_reference(v_net, policy_net, lesson: Lesson, params: ReplayParams) -> int:
+    """Fig. 5.1(b), the plain loop: replay a lesson backward into a V-net (one output) and a policy net (one per
+    action).
 
     Non-policy actions are judged by the Boltzmann probabilities of the policy net's merits (3.5.1). Each replayed
     experience moves V(x_t) toward its target e_t and the taken action's merit by the same error, e_t - V(x_t) with
@@ -281,12 +294,13 @@ def replay_ahc(v_net, policy_net, lesson: Lesson, params: ReplayParams) -> int:
 
 
 def _register_compiled() -> None:
-    from connrl.core.replay_kernel import replay_oaon, replay_rotated
+    from connrl.core.replay_kernel import replay_ahc_rotated, replay_oaon, replay_rotated
     from connrl.nets.mlp import OAON
     from connrl.nets.rotated import RotatedNet
 
     register_fast_path(OAON, replay_oaon)
     register_fast_path(RotatedNet, replay_rotated)
+    AHC_FAST_PATHS[(OAON, RotatedNet)] = replay_ahc_rotated
 
 
 _register_compiled()

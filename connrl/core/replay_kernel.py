@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from connrl.nets.kernels import _replay_q_kernel, _replay_rotated_kernel
+from connrl.nets.kernels import _replay_ahc_rotated_kernel, _replay_q_kernel, _replay_rotated_kernel
 from connrl.nets.mlp import OAON
 from connrl.nets.rotated import RotatedNet
 
@@ -52,3 +52,20 @@ def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=Non
                                       d, float(params.lam), float(params.temperature), float(params.p_threshold),
                                       0.0 if params.clip is None else float(params.clip), params.clip is not None,
                                       o.scale, o.lr, net.config.momentum))
+
+
+def replay_ahc_rotated(v_net: OAON, policy: RotatedNet, lesson, params) -> int:
+    """Compiled incremental Fig. 5.1(b) into Ch. 4's AHCON nets (a V-net with a hidden layer, a rotated policy net):
+    the registered fast path of ``connrl.core.replay.replay_ahc``, bit for bit the reference loop's."""
+    if v_net.config.n_hidden == 0 or v_net.n_nets != 1:
+        from connrl.core.replay import replay_ahc_reference
+
+        return replay_ahc_reference(v_net, policy, lesson, params)
+    p = policy.net
+    return int(_replay_ahc_rotated_kernel(
+        v_net.w1, v_net.w2, v_net.d1, v_net.d2, v_net._h, v_net.scale, v_net.lr, v_net.config.momentum,
+        p.w1, p.w2, p.d1, p.d2, p._h, policy._xr, np.empty(policy.n_actions), policy.perms, p.scale, p.lr,
+        policy.config.momentum, np.ascontiguousarray(lesson.inputs, dtype=np.float64),
+        np.ascontiguousarray(lesson.actions, dtype=np.int64), np.ascontiguousarray(lesson.rewards, dtype=np.float64),
+        bool(lesson.terminated), float(params.gamma), float(params.lam), float(params.temperature),
+        float(params.p_threshold), 0.0 if params.clip is None else float(params.clip), params.clip is not None))

@@ -412,3 +412,35 @@ def _replay_rotated_kernel(w1, w2, d1, d2, h, xr, q, perms, inputs, actions, rew
             used += 1
         e_next = e
     return used
+
+
+@numba.njit(cache=True)
+def _replay_ahc_rotated_kernel(vw1, vw2, vd1, vd2, vh, v_scale, v_lr, v_momentum, pw1, pw2, pd1, pd2, ph, xr, q,
+                               perms, p_scale, p_lr, p_momentum, inputs, actions, rewards, terminated, gamma, lam,
+                               temperature, p_threshold, clip, has_clip):
+    """Fig. 5.1(b) in incremental mode over a whole lesson: a V-net (one hidden layer) and a rotated policy net,
+    ``replay_ahc_reference``'s loop step for step (TD arithmetic without fastmath: Python's to the bit)."""
+    n = actions.shape[0]
+    used = 0
+    e_next = 0.0
+    next_policy = False
+    for t in range(n - 1, -1, -1):
+        u = 0.0
+        if not (t == n - 1 and terminated):
+            u = v_scale * _mlp_forward(vw1, vw2, 0, inputs[t + 1], vh)
+        lam_t = lam if (t < n - 1 and next_policy) else 0.0
+        e = rewards[t] + gamma * ((1.0 - lam_t) * u + lam_t * e_next)
+        if has_clip and e > clip:
+            e = clip
+        a = actions[t]
+        next_policy = True
+        if p_threshold > 0.0:
+            _rotated_values(pw1, pw2, inputs[t], perms, p_scale, q, xr)
+            next_policy = _boltzmann_probability(q, a, temperature) >= p_threshold
+        if next_policy:
+            v_before = _mlp_update(vw1, vw2, vd1, vd2, 0, inputs[t], vh, e, False, v_scale, v_lr, v_momentum)
+            _rotated_update(pw1, pw2, pd1, pd2, inputs[t], perms[a], xr, ph, e - v_before, True, p_scale, p_lr,
+                            p_momentum)
+            used += 1
+        e_next = e
+    return used
