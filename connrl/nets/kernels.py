@@ -382,6 +382,22 @@ def _boltzmann_probability(q, a, temperature):
 
 
 @numba.njit(cache=True)
+def _lambda_target(reward, discount, lam_t, u, e_next, clip, has_clip):
+    """Eq. 5.5 / Fig. 5.1 step 4 as ``connrl.core.returns.td_lambda_target`` computes it, truncated at ``clip``."""
+    e = reward + discount * ((1.0 - lam_t) * u + lam_t * e_next)
+    return clip if has_clip and e > clip else e
+
+
+@numba.njit(cache=True)
+def _rotated_policy_test(w1, w2, x, perms, scale, q, xr, a, temperature, p_threshold):
+    """3.5.1: is ``a`` a policy action at x (always, with P_t = 0)?"""
+    if p_threshold <= 0.0:
+        return True
+    _rotated_values(w1, w2, x, perms, scale, q, xr)
+    return _boltzmann_probability(q, a, temperature) >= p_threshold
+
+
+@numba.njit(cache=True)
 def _replay_rotated_kernel(w1, w2, d1, d2, h, xr, q, perms, inputs, actions, rewards, terminated, discounts, lam,
                            temperature, p_threshold, clip, has_clip, scale, lr, momentum):
     """Fig. 5.1(a) in incremental mode over a whole lesson into a rotated net: ``replay_q_reference``'s loop step
@@ -398,15 +414,10 @@ def _replay_rotated_kernel(w1, w2, d1, d2, h, xr, q, perms, inputs, actions, rew
             u = q[0]
             for k in range(1, q.size):
                 u = max(u, q[k])
-        lam_t = lam if (t < n - 1 and next_policy) else 0.0
-        e = rewards[t] + discounts[t] * ((1.0 - lam_t) * u + lam_t * e_next)
-        if has_clip and e > clip:
-            e = clip
+        e = _lambda_target(rewards[t], discounts[t], lam if (t < n - 1 and next_policy) else 0.0, u, e_next, clip,
+                           has_clip)
         a = actions[t]
-        next_policy = True
-        if p_threshold > 0.0:
-            _rotated_values(w1, w2, inputs[t], perms, scale, q, xr)
-            next_policy = _boltzmann_probability(q, a, temperature) >= p_threshold
+        next_policy = _rotated_policy_test(w1, w2, inputs[t], perms, scale, q, xr, a, temperature, p_threshold)
         if next_policy:
             _rotated_update(w1, w2, d1, d2, inputs[t], perms[a], xr, h, e, False, scale, lr, momentum)
             used += 1
@@ -428,15 +439,9 @@ def _replay_ahc_rotated_kernel(vw1, vw2, vd1, vd2, vh, v_scale, v_lr, v_momentum
         u = 0.0
         if not (t == n - 1 and terminated):
             u = v_scale * _mlp_forward(vw1, vw2, 0, inputs[t + 1], vh)
-        lam_t = lam if (t < n - 1 and next_policy) else 0.0
-        e = rewards[t] + gamma * ((1.0 - lam_t) * u + lam_t * e_next)
-        if has_clip and e > clip:
-            e = clip
+        e = _lambda_target(rewards[t], gamma, lam if (t < n - 1 and next_policy) else 0.0, u, e_next, clip, has_clip)
         a = actions[t]
-        next_policy = True
-        if p_threshold > 0.0:
-            _rotated_values(pw1, pw2, inputs[t], perms, p_scale, q, xr)
-            next_policy = _boltzmann_probability(q, a, temperature) >= p_threshold
+        next_policy = _rotated_policy_test(pw1, pw2, inputs[t], perms, p_scale, q, xr, a, temperature, p_threshold)
         if next_policy:
             v_before = _mlp_update(vw1, vw2, vd1, vd2, 0, inputs[t], vh, e, False, v_scale, v_lr, v_momentum)
             _rotated_update(pw1, pw2, pd1, pd2, inputs[t], perms[a], xr, ph, e - v_before, True, p_scale, p_lr,
