@@ -48,6 +48,7 @@ from connrl.envs.survival.world import REWARD_FOOD
 from connrl.nets import NetConfig
 from connrl.nets.rotated import RotatedNet
 from connrl.tasks.survival_models import LearnedModelConfig, LearnedSurvivalModel, PerfectSurvivalModel
+from connrl.tasks.survival_play import greedy_play  # a test play, compiled where it can be
 
 SURVIVAL_ENV_ID = "connrl/Survival-v0"
 LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
@@ -270,7 +271,7 @@ def test_plays(env: SurvivalEnv, agent, layouts: list[int]) -> dict:
     test point sees the same enemy random streams (common random numbers)."""
     food, outcomes = [], {"all_food": 0, "killed": 0, "starved": 0}
     for k in layouts:
-        stats = run_trial(env, agent, trial=0, learning=False, seed=k, options={"layout_seed": k})
+        stats = greedy_play(env, agent, k)
         food.append(stats.info["food_eaten"])
         outcomes[stats.info["outcome"]] = outcomes.get(stats.info["outcome"], 0) + 1
     return {"food": float(np.mean(food)), "food_per_env": food, **outcomes}
@@ -290,7 +291,8 @@ def evaluate(agent, representation: str, seed: int, n_envs: int, progress=lambda
                 example.append(_frame(env))
             env.reset(seed=k, options={"layout_seed": k})
             example.append(_frame(env))
-        stats = run_trial(env, agent, trial=0, learning=False, seed=k, options={"layout_seed": k}, on_step=record)
+        stats = (run_trial(env, agent, trial=0, learning=False, seed=k, options={"layout_seed": k}, on_step=record)
+                 if record else greedy_play(env, agent, k))
         food[stats.info["food_eaten"]] += 1
         outcomes[stats.info["outcome"]] += 1
         if i % 200 == 0:
