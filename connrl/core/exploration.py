@@ -62,10 +62,14 @@ def persistence_weights(applicable: np.ndarray, was_applicable: np.ndarray | Non
 
 def boltzmann_select(merits: np.ndarray, temperature: float, rng: np.random.Generator) -> tuple[int, np.ndarray]:
     """Draw an action from Eq. 3.4/3.6; returns (action, probabilities)."""
-    p = boltzmann_probabilities(merits, temperature)
-    if temperature == 0:
+    if temperature <= 0:
+        p = boltzmann_probabilities(merits, temperature)
         return int(np.argmax(p)), p  # deterministic at test: first of equal maxima
-    a = int(np.searchsorted(np.cumsum(p), rng.random() * 1.0, side="right"))
+    # Eq. 3.4 as boltzmann_probabilities computes it, with fewer calls: this runs at every training step
+    m = merits if type(merits) is np.ndarray and merits.dtype == np.float64 else np.asarray(merits, dtype=np.float64)
+    p = np.exp((m - m.max()) / temperature)
+    p /= p.sum()
+    a = int(p.cumsum().searchsorted(rng.random() * 1.0, side="right"))
     return min(a, p.size - 1), p
 
 

@@ -83,3 +83,19 @@ def test_persistence_weights_follow_experiment_3():
     before = np.array([False, False, True, True])
     assert pw(app, before, 2, False).tolist() == [0, 1, 1, 1]  # DP became applicable: a significant change
     assert pw(np.array([False, False, True, True]), app, 1, False).tolist() == [0, 0, 1, 1]  # active DP inapplicable
+
+
+def test_boltzmann_select_draws_by_the_inverse_distribution_of_boltzmann_probabilities():
+    """Its lean path (it runs at every training step) gives exactly Eq. 3.4's distribution and the inverse-CDF draw
+    from it, with one uniform from the generator."""
+    rng = np.random.default_rng(4)
+    for _ in range(3000):
+        merits = rng.normal(size=int(rng.integers(2, 7))) * rng.choice([0.01, 1.0, 100.0])
+        t = float(rng.choice([0.02, 0.5, 3.0]))
+        seed = int(rng.integers(1 << 30))
+        a, p = boltzmann_select(merits, t, np.random.default_rng(seed))
+        ref_p = boltzmann_probabilities(merits, t)
+        u = np.random.default_rng(seed).random()
+        np.testing.assert_array_equal(p, ref_p)
+        assert a == min(int(np.searchsorted(np.cumsum(ref_p), u, side="right")), len(merits) - 1)
+        assert boltzmann_select(list(merits), t, np.random.default_rng(seed))[0] == a  # any sequence of numbers
