@@ -1,0 +1,128 @@
+"""Issue 45's hot paths, before and after, timed in one run: each line times the code as it was (kept as the
+reference the tests hold the new code to) and the code as it is, on the same inputs, and gives the ratio.
+
+    python benchmarks/bench_speedups.py [--repeat 3]
+
+- rotated values (Ch. 4): the fastmath loop with a gathered read per input (tests/nets/test_rotated_kernel.py keeps
+  it) against ``_rotated_values`` (vector lanes over a permuted copy);
+- a rotated Q-net's and AHCON's lesson replay (Ch. 4): the plain loops ``replay_q_reference`` /
+  ``replay_ahc_reference`` against the registered compiled paths;
+- a greedy test play (Ch. 4): ``run_trial`` against ``connrl.tasks.survival_play.greedy_play``;
+- Ch. 8's recurrent replay over behaviours (weights and allowed choices): ``batch_targets`` + ``train_sequence``
+  against the one kernel;
+- Boltzmann selection at T > 0: ``boltzmann_probabilities`` + cumsum + searchsorted against ``boltzmann_select``.
+Each time is the best of --repeat rounds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from connrl.agents.memory import replay_recurrent_q
+from connrl.core.exploration import boltzmann_probabilities, boltzmann_select
+from connrl.core.lessons import Lesson
+from connrl.core.replay import ReplayParams, replay_ahc, replay_ahc_reference, replay_q, replay_q_reference
+from connrl.core.rollout import run_trial
+from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv
+from connrl.nets import OAON, NetConfig
+from connrl.nets.kernels import _rotated_values
+from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
+from connrl.nets.rotated import RotatedNet
+from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
+from connrl.tasks.survival_play import greedy_play
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "nets"))
+from test_rotated_kernel import _gathered_fastmath  # noqa: E402  (the kernel as it was)
+
+PERMS = np.ascontiguousarray(ROTATION_PERMUTATIONS[list(ACTION_ROTATION)])
+
+
+def best_of(fn, repeat: int, calls: int) -> float:
+    """Seconds per call, the best of ``repeat`` rounds of ``calls`` calls."""
+    fn()
+    best = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(calls):
+            fn()
+        best = min(best, (time.perf_counter() - t0) / calls)
+    return best
+
+
+def rows(repeat: int) -> list[tuple[str, float, float]]:
+    rng = np.random.default_rng(0)
+    n_in = PERMS.shape[1]
+    out = []
+    # rotated values
+    w1, w2 = rng.uniform(-0.1, 0.1, (1, 30, n_in + 1)), rng.uniform(-0.1, 0.1, (1, 31))
+    x, q, xr = rng.choice([-0.5, 0.5], n_in), np.empty(4), np.empty(n_in)
+    out.append(("rotated values, 145-30-1 x 4 rotations (Ch. 4)",
+                best_of(lambda: _gathered_fastmath(w1, w2, x, PERMS, 1.0, q), repeat, 20000),
+                best_of(lambda: _rotated_values(w1, w2, x, PERMS, 1.0, q, xr), repeat, 20000)))
+    # lesson replay into Ch. 4's nets
+    lesson = Lesson(rng.choice([-0.5, 0.5], (101, n_in)), rng.integers(0, 4, 100), rng.choice([0.0, 0.4], 100), True)
+    params = ReplayParams(gamma=0.9, lam=0.0, temperature=0.05, p_threshold=0.01)
+    net = RotatedNet(NetConfig(n_in, 30, lr=0.1), PERMS, np.random.default_rng(1))
+    nets = [copy.deepcopy(net) for _ in range(2)]
+    out.append(("QCON replay of a 100-step lesson, rotated net (Ch. 4)",
+                best_of(lambda: replay_q_reference(nets[0], lesson, params), repeat, 20),
+                best_of(lambda: replay_q(nets[1], lesson, params), repeat, 20)))
+    v = OAON(NetConfig(n_in, 30, lr=0.1), 1, np.random.default_rng(2))
+    pairs = [(copy.deepcopy(v), copy.deepcopy(net)) for _ in range(2)]
+    out.append(("AHCON replay of a 100-step lesson, rotated policy net (Ch. 4)",
+                best_of(lambda: replay_ahc_reference(*pairs[0], lesson, params), repeat, 20),
+                best_of(lambda: replay_ahc(*pairs[1], lesson, params), repeat, 20)))
+    # greedy test plays
+    env = SurvivalEnv("global")
+    agent = make_survival_agent(SurvivalAgentParams("QCON"), env, np.random.default_rng(3))
+    for k in range(20):
+        run_trial(env, agent, trial=k, learning=True, seed=k, options={"layout_seed": k})
+    seeds = range(1000, 1020)
+    out.append(("20 greedy test plays, QCON (Ch. 4)",
+                best_of(lambda: [run_trial(env, agent, trial=0, learning=False, seed=k, options={"layout_seed": k})
+                                 for k in seeds], repeat, 1),
+                best_of(lambda: [greedy_play(env, agent, k) for k in seeds], repeat, 1)))
+    # Ch. 8's recurrent replay over behaviours
+    cfg = RecurrentNetConfig(16, 12, 8, 1, lr=0.05)
+    rnets = [RecurrentOAON(cfg, 4, np.random.default_rng(4)) for _ in range(2)]
+    n = 60
+    rl = Lesson(rng.choice([-0.5, 0.5], (n + 1, 16)), rng.integers(0, 4, n), rng.choice([0.0, 1.0], n), True)
+    w = rng.choice([1.0, 100.0], (n, 4))
+    ok = rng.random((n + 1, 4)) < 0.7
+    rp = ReplayParams(gamma=0.9, lam=0.8, temperature=0.05, p_threshold=0.01, batch=True)
+    out.append(("recurrent replay of a 60-step lesson over 4 behaviours (Ch. 8)",
+                best_of(lambda: replay_recurrent_q(rnets[0], rl, rp, w, ok, fast=False), repeat, 300),
+                best_of(lambda: replay_recurrent_q(rnets[1], rl, rp, w, ok), repeat, 300)))
+    # Boltzmann selection
+    merits, g = rng.normal(size=4), np.random.default_rng(5)
+
+    def plain():
+        p = boltzmann_probabilities(merits, 0.05)
+        return min(int(np.searchsorted(np.cumsum(p), g.random() * 1.0, side="right")), p.size - 1), p
+
+    out.append(("Boltzmann selection of 4 actions at T = 0.05 (every training step)",
+                best_of(plain, repeat, 50000), best_of(lambda: boltzmann_select(merits, 0.05, g), repeat, 50000)))
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    print(f"{'hot path':<66}{'before':>12}{'after':>12}{'ratio':>8}")
+    for label, before, after in rows(args.repeat):
+        print(f"{label:<66}{_fmt(before):>12}{_fmt(after):>12}{before / after:>7.1f}x")
+
+
+def _fmt(seconds: float) -> str:
+    return f"{seconds * 1e6:.1f} us" if seconds < 1e-3 else f"{seconds * 1e3:.2f} ms"
+
+
+if __name__ == "__main__":
+    main()

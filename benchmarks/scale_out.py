@@ -1,0 +1,75 @@
+"""The thesis on more cores: Ray against the process pool on this machine, and the expected time on N cores.
+
+    python benchmarks/scale_out.py --ray --only NAME,... [--profile full] [--workers 2]
+    python benchmarks/scale_out.py --from-records /tmp/thesis-full [--cores 2,4,8,16,32,64]
+
+`--ray` runs `connrl reproduce --only ... --quiet` twice into fresh folders, once with the process pool and once with
+`--executor ray` (a local Ray instance with --workers CPUs), times both, and checks that every run stored the same
+numbers. `--from-records` reads the run records of a `connrl reproduce` (each run's own time) and schedules them as
+the pool does, longest first onto whichever core frees first, on N cores: the expected wall time of the runs on N
+cores (the bound below it is the longest run). Start-up, the page and Ray's own overhead come on top.
+"""
+
+from __future__ import annotations
+
+import argparse
+import heapq
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+COMPARED = ("metrics", "curve_x", "curve_y", "extra", "diverged")
+
+
+def reproduce(out: Path, only: str, profile: str, workers: int, executor: str) -> float:
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "connrl.cli", "reproduce", "--only", only, "--profile", profile, "--out",
+                    str(out), "--workers", str(workers), "--executor", executor, "--quiet"], check=True,
+                   stdout=subprocess.DEVNULL)
+    return time.perf_counter() - t0
+
+
+def records(out: Path) -> dict[str, dict]:
+    return {str(p.relative_to(out)): json.loads(p.read_text()) for p in Path(out).glob("*/runs/*/*/seed-*.json")}
+
+
+def makespan(times: list[float], cores: int) -> float:
+    """Longest first, each onto the core that frees first (the pool's order)."""
+    free = [0.0] * cores
+    for t in sorted(times, reverse=True):
+        heapq.heappush(free, heapq.heappop(free) + t)
+    return max(free)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--ray", action="store_true")
+    ap.add_argument("--only", default="robot-teaching-dk,robot-dp-copy,recharge-bound,cup-task3,pole-full-ahc")
+    ap.add_argument("--profile", default="full")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--from-records", type=Path, default=None)
+    ap.add_argument("--cores", default="2,4,8,16,32,64,128")
+    args = ap.parse_args()
+    if args.ray:
+        base = Path(tempfile.mkdtemp(prefix="scale-out-"))
+        wall = {kind: reproduce(base / kind, args.only, args.profile, args.workers, kind) for kind in ("process", "ray")}
+        a, b = records(base / "process"), records(base / "ray")
+        same = a.keys() == b.keys() and all(
+            json.dumps([a[k].get(f) for f in COMPARED]) == json.dumps([b[k].get(f) for f in COMPARED]) for k in a)
+        print(f"`connrl reproduce --only {args.only} --profile {args.profile} --workers {args.workers}`: "
+              f"{len(a)} runs; process pool {wall['process']:.1f} s, local Ray {wall['ray']:.1f} s "
+              f"(Ray / process = {wall['ray'] / wall['process']:.2f}); every run's numbers the same: {same}")
+    if args.from_records:
+        recs = list(records(args.from_records).values())
+        times = [float(r["wall_time_s"]) + float(r.get("compile_time_s") or 0.0) for r in recs]
+        print(f"{len(times)} runs of {args.from_records}, {sum(times) / 60:.1f} min in all, the longest "
+              f"{max(times):.0f} s; expected wall time of the runs, longest first:")
+        for n in (int(c) for c in args.cores.split(",")):
+            print(f"  {n:>4} cores: {makespan(times, n) / 60:6.1f} min")
+
+
+if __name__ == "__main__":
+    main()
