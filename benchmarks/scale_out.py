@@ -55,7 +55,8 @@ def main() -> None:
     args = ap.parse_args()
     if args.ray:
         base = Path(tempfile.mkdtemp(prefix="scale-out-"))
-        wall = {kind: reproduce(base / kind, args.only, args.profile, args.workers, kind) for kind in ("process", "ray")}
+        wall = {kind: reproduce(base / kind, args.only, args.profile, args.workers, kind)
+                for kind in ("process", "ray")}
         a, b = records(base / "process"), records(base / "ray")
         same = a.keys() == b.keys() and all(
             json.dumps([a[k].get(f) for f in COMPARED]) == json.dumps([b[k].get(f) for f in COMPARED]) for k in a)
