@@ -2,11 +2,13 @@
 the thesis's numbers (issue 45).
 
     python benchmarks/same_numbers.py --out results/thesis --per-experiment 1 [--only NAME,...] [--workers 2]
+    python benchmarks/same_numbers.py --out results/thesis --against /tmp/thesis-full   # two stored folders
 
 For each experiment stored in --out (at the profile its summary names), the first run of each of its first
 --per-experiment variants (in the spec's order) is run again into a scratch folder, and its metrics, curve and
 extra results (the .json) and its rows (the .csv) are compared with the stored ones. Prints one line per run;
-exits 1 if any number moved.
+exits 1 if any number moved. With --against, nothing runs: every run stored in both folders (same experiment, run
+folder, variant and seed) is compared, and one line sums them up, naming the runs that differ.
 """
 
 from __future__ import annotations
@@ -31,7 +33,10 @@ def main() -> int:
     ap.add_argument("--per-experiment", type=int, default=1, help="variants per experiment (default 1)")
     ap.add_argument("--only", default=None, help="comma-separated experiments (default: all stored)")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--against", type=Path, default=None, help="compare with the runs stored there; run nothing")
     args = ap.parse_args()
+    if args.against:
+        return compare_folders(Path(args.out), args.against)
     specs = all_experiments()
     names = args.only.split(",") if args.only else sorted(specs)
     unknown = [n for n in names if n not in specs]
@@ -53,16 +58,35 @@ def main() -> int:
                 stored[b.path] = a.path
                 todo.append(b)
     moved = 0
-    for job, _ in execute(todo, min(args.workers, max(len(todo), 1)), False, "same numbers"):
-        old, rec = (json.loads(Path(p).with_suffix(".json").read_text()) for p in (stored[job.path], job.path))
-        diff = [k for k in COMPARED if json.dumps(old.get(k), sort_keys=True) != json.dumps(rec.get(k), sort_keys=True)]
-        if Path(stored[job.path]).with_suffix(".csv").read_text() != Path(job.path).with_suffix(".csv").read_text():
-            diff.append("the CSV rows")
+    for job, rec in execute(todo, min(args.workers, max(len(todo), 1)), False, "same numbers"):
+        old = json.loads(Path(stored[job.path]).with_suffix(".json").read_text())
+        diff = differences(Path(stored[job.path]), Path(job.path))
         moved += bool(diff)
         print(f"{'MOVED' if diff else 'same '} {job.experiment}: {job.variant} seed {job.seed} "
               f"({rec['wall_time_s']:.1f} s now, {old['wall_time_s']:.1f} s stored)"
               + (f": {', '.join(diff)} differ" if diff else ""), flush=True)
     print(f"{len(todo) - moved} of {len(todo)} runs gave the stored numbers bit for bit")
+    return 1 if moved else 0
+
+
+def differences(old: Path, new: Path) -> list[str]:
+    """What differs between two stored runs (paths without suffix): the compared record fields, and the CSV rows."""
+    a, b = (json.loads(p.with_suffix(".json").read_text()) for p in (old, new))
+    diff = [k for k in COMPARED if json.dumps(a.get(k), sort_keys=True) != json.dumps(b.get(k), sort_keys=True)]
+    if old.with_suffix(".csv").read_text() != new.with_suffix(".csv").read_text():
+        diff.append("the CSV rows")
+    return diff
+
+
+def compare_folders(out: Path, against: Path) -> int:
+    mine = {p.relative_to(out).with_suffix("") for p in out.glob("*/runs/*/*/seed-*.json")}
+    theirs = {p.relative_to(against).with_suffix("") for p in against.glob("*/runs/*/*/seed-*.json")}
+    both = sorted(mine & theirs)
+    moved = [str(r) for r in both if differences(out / r, against / r)]
+    for r in moved:
+        print(f"MOVED {r}: {', '.join(differences(out / r, against / r))} differ")
+    print(f"{len(both) - len(moved)} of the {len(both)} runs stored in both {out} and {against} have the same numbers "
+          f"bit for bit ({len(theirs - mine)} only in {against}, {len(mine - theirs)} only in {out})")
     return 1 if moved else 0
 
 

@@ -65,6 +65,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--from-records", action="store_true", help="read stored runs; run nothing")
     ap.add_argument("--write", type=Path, default=None, help="paste the table into this Markdown file's block")
+    ap.add_argument("--block", default="thesis_time", help="the block's name (default thesis_time)")
     ap.add_argument("--write-times", action="store_true", help=f"write {RUN_TIMES.relative_to(Path.cwd())}")
     ap.add_argument("--top", type=int, default=0, help="profile the longest run of the N most expensive experiments")
     args = ap.parse_args()
@@ -102,8 +103,8 @@ def main() -> None:
     print(text)
     if args.write:
         doc = args.write.read_text()
-        block = f"<!-- thesis_time:begin -->\n{text}\n<!-- thesis_time:end -->"
-        pattern = r"<!-- thesis_time:begin -->.*?<!-- thesis_time:end -->"
+        block = f"<!-- {args.block}:begin -->\n{text}\n<!-- {args.block}:end -->"
+        pattern = rf"<!-- {re.escape(args.block)}:begin -->.*?<!-- {re.escape(args.block)}:end -->"
         doc = re.sub(pattern, lambda _: block, doc, flags=re.S) if re.search(pattern, doc, re.S) else (
             doc + "\n" + block + "\n")
         args.write.write_text(doc)
@@ -113,7 +114,8 @@ def report(records, order, chapter_of, args, wall, cpu, start, end) -> list[str]
     per = per_experiment(records)
     total = sum(e["run_s"] for e in per.values())
     how = (f"`python benchmarks/thesis_time.py --out {args.out} --profile {args.profile}"
-           + (" --from-records`" if args.from_records else f" --workers {args.workers}`"))
+           + (" --from-records" if args.from_records else f" --workers {args.workers}")
+           + (f" --top {args.top}" if args.top else "") + "`")
     lines = [f"Measured {time.strftime('%Y-%m-%d')} by {how} on {os.cpu_count()} cores: "
              f"{len(records)} runs of {len(order)} experiments at the {args.profile} profile."]
     if wall is not None:
