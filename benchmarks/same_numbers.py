@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -66,6 +67,7 @@ def main() -> int:
               f"({rec['wall_time_s']:.1f} s now, {old['wall_time_s']:.1f} s stored)"
               + (f": {', '.join(diff)} differ" if diff else ""), flush=True)
     print(f"{len(todo) - moved} of {len(todo)} runs gave the stored numbers bit for bit")
+    shutil.rmtree(scratch, ignore_errors=True)
     return 1 if moved else 0
 
 

@@ -5,9 +5,13 @@
 
 `--ray` runs `connrl reproduce --only ... --quiet` twice into fresh folders, once with the process pool and once with
 `--executor ray` (a local Ray instance with --workers CPUs), times both, and checks that every run stored the same
-numbers. `--from-records` reads the run records of a `connrl reproduce` (each run's own time) and schedules them as
-the pool does, longest first onto whichever core frees first, on N cores: the expected wall time of the runs on N
-cores (the bound below it is the longest run). Start-up, the page and Ray's own overhead come on top.
+numbers.
+
+`--from-records` reads the run records of a `connrl reproduce` (each run's own time, its compiling included) and
+schedules them longest first onto whichever core frees first, on N cores: the expected wall time of the runs on N
+cores (the bound below it is the longest run). It orders by the measured times, which the pool only knows as
+expectations (connrl/data/run_times.json), and each of N workers compiles once as each of these did: a slight
+underestimate. Start-up, the page and Ray's own overhead come on top.
 """
 
 from __future__ import annotations

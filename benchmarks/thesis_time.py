@@ -7,8 +7,8 @@ chapter, and where the cores sat idle; optionally profile the most expensive exp
 `--from-records` skips the run and reads what is stored (the pool's idle time is then unknown: the runs may come from
 several commands). `--write-times` writes connrl/data/run_times.json (each variant's mean run time: the order runs start
 in and the ETA of `connrl reproduce`). `--top N` runs the longest run of each of the N most expensive experiments again
-under cProfile, in this process, and splits its time into environment steps, action selection, learning (replay,
-updates, models) and the rest (bookkeeping).
+under cProfile, in this process, and splits its time into Ch. 4's compiled test plays, environment steps, action
+selection, learning (replay, updates, models) and the rest (bookkeeping).
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from connrl.experiments.timing import RUN_TIMES, per_experiment, pool_usage, run
 
 # cProfile's own-time of each function, by where it lives (the first pattern that matches the "file:function")
 CATEGORIES = [
+    ("compiled test plays", r"_greedy_loop"),  # Ch. 4's greedy plays: world steps and choices in one kernel
     ("environment", r"connrl/envs/|gymnasium/|survival_models\.py:\d+\(predict|cup\.py"),
     ("action selection", r"exploration\.py|\((values|_mlp_values|_rotated_values|_forward_all|outputs|act|choose|"
                          r"q_values|applicable|select\w*)\)"),
@@ -48,8 +49,8 @@ def categorise(stats: pstats.Stats) -> dict[str, float]:
     return out
 
 
-def profile_run(spec, record: dict) -> dict[str, float]:
-    jobs = make_jobs(spec, "full", spec.full_runs, spec.seed, Path("/nonexistent"))
+def profile_run(spec, record: dict, profile: str) -> dict[str, float]:
+    jobs = make_jobs(spec, profile, spec.full_runs if profile == "full" else None, spec.seed, Path("/nonexistent"))
     job = next(j for j in jobs if j.variant == record["variant"] and j.seed == record["seed"])
     prof = cProfile.Profile()
     prof.enable()
@@ -66,7 +67,7 @@ def main() -> None:
     ap.add_argument("--from-records", action="store_true", help="read stored runs; run nothing")
     ap.add_argument("--write", type=Path, default=None, help="paste the table into this Markdown file's block")
     ap.add_argument("--block", default="thesis_time", help="the block's name (default thesis_time)")
-    ap.add_argument("--write-times", action="store_true", help=f"write {RUN_TIMES.relative_to(Path.cwd())}")
+    ap.add_argument("--write-times", action="store_true", help="write connrl/data/run_times.json")
     ap.add_argument("--top", type=int, default=0, help="profile the longest run of the N most expensive experiments")
     args = ap.parse_args()
     out = Path(args.out)
@@ -98,7 +99,7 @@ def main() -> None:
         RUN_TIMES.write_text(json.dumps(table, indent=1) + "\n")
     lines = report(records, order, chapter_of, args, wall, cpu, start, end)
     if args.top:
-        lines += profile_top(records, specs, args.top)
+        lines += profile_top(records, specs, args.top, args.profile)
     text = "\n".join(lines)
     print(text)
     if args.write:
@@ -145,16 +146,17 @@ def report(records, order, chapter_of, args, wall, cpu, start, end) -> list[str]
     return lines
 
 
-def profile_top(records, specs, n) -> list[str]:
+def profile_top(records, specs, n, profile) -> list[str]:
     per = per_experiment(records)
     top = sorted(per, key=lambda k: -per[k]["run_s"])[:n]
     lines = ["", f"The {n} most expensive experiments, each one's longest run again under cProfile (own time of every "
              "function, by kind; cProfile slows Python calls more than compiled kernels, so the Python shares are "
-             "upper bounds):", "", "| experiment | run | environment | action selection | learning | bookkeeping |",
-             "|---|---|---|---|---|---|"]
+             "upper bounds):", "",
+             "| experiment | run | compiled test plays | environment | action selection | learning | bookkeeping |",
+             "|---|---|---|---|---|---|---|"]
     for name in top:
         rec = max((r for r in records if r["experiment"] == name), key=lambda r: r["wall_time_s"])
-        shares = profile_run(specs[name], rec)
+        shares = profile_run(specs[name], rec, profile)
         s = sum(shares.values()) or 1.0
         lines.append(f"| {name} | {rec['variant']}, seed {rec['seed']} | "
                      + " | ".join(f"{v / s:.0%}" for v in shares.values()) + " |")

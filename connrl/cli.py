@@ -113,7 +113,7 @@ def _run_pool(specs, args) -> int:
     from connrl.report.plots import plot_experiment
 
     batches = [Batch(s, args.profile, s.full_runs if args.profile == "full" else None, s.seed) for s in specs]
-    done = []
+    done, unplotted = [], []
 
     def on_done(outcome) -> None:
         spec = next(b.spec for b in batches if b.spec.name == outcome.summary["experiment"])
@@ -123,8 +123,8 @@ def _run_pool(specs, args) -> int:
               f"--seed {spec.seed}{runs}): {outcome.ran} run(s) executed, {outcome.reused} reused", flush=True)
         try:
             plot_experiment(spec, outcome.records, Path(args.out) / spec.name)
-        except OSError as exc:
-            raise SystemExit(f"connrl: the runs are saved, but the plot could not be written: {exc}") from None
+        except OSError as exc:  # said after the pool: the other experiments' runs go on
+            unplotted.append(f"{spec.name}: {exc}")
         _print_summary(outcome.summary)
 
     try:
@@ -138,6 +138,8 @@ def _run_pool(specs, args) -> int:
         raise SystemExit(f"connrl: {exc.strerror or exc}") from None
     except ExecutorError as exc:
         raise SystemExit(f"connrl: {exc}") from None
+    if unplotted:
+        raise SystemExit("connrl: the runs are saved, but these plots could not be written: " + "; ".join(unplotted))
     return 0
 
 

@@ -161,7 +161,8 @@ class Progress:
     """A rich live display: one bar for the pool, with an ETA, and one bar per run in flight.
 
     ``expected`` gives each job's expected seconds (by its path); the ETA is the expected time of what is left over
-    the workers, scaled by how the finished runs compared with their expectation (the machine's speed). With
+    the workers (never less than the longest run left), scaled by how the finished runs compared with their
+    expectation (the machine's speed). With
     ``calibrated`` False the expected times are only relative (another profile's), so no ETA is shown until a run
     has finished."""
 
@@ -183,8 +184,8 @@ class Progress:
         if not self.calibrated and self.planned == 0:
             return None
         speed = self.took / self.planned if self.planned > 0 else 1.0
-        left = sum(self.expected.get(p, 0.0) * (1.0 - self.fraction.get(p, 0.0)) for p in self.jobs)
-        return left * speed / self.workers
+        left = [self.expected.get(p, 0.0) * (1.0 - self.fraction.get(p, 0.0)) for p in self.jobs]
+        return speed * max(sum(left) / self.workers, max(left, default=0.0))  # no sooner than the longest run left
 
     def eta_text(self) -> str:
         eta = self.eta_seconds()

@@ -147,7 +147,7 @@ def run_job(job: Job) -> tuple[dict, list[dict]]:
         "wall_time_s": wall,  # without the Numba compiling the run triggered (the first run of a process pays it)
         "compile_time_s": compile_s,
         "cpu_time_s": max(cpu, 0.0),
-        "started_at": started,  # Unix time at the worker: when the run began (the pool's timing, `connrl timing`)
+        "started_at": started,  # Unix time at the worker: when the run began (benchmarks/thesis_time.py's pool timing)
         "pid": os.getpid(),
         "diverged": diverged,
     }
@@ -285,7 +285,10 @@ def run_experiments(batches: list[Batch], *, out: Path | str = "runs", workers: 
 
         def finish(b: Batch) -> None:
             recs = records[b.spec.name]
-            summary = summarize(b.spec, b.profile, b.seed, recs, time.perf_counter() - t0)
+            ran = recs[reused[b.spec.name]:]  # this call's runs: its wall time is their span, not the pool's
+            wall = (max(r["started_at"] + r["wall_time_s"] + r["compile_time_s"] for r in ran)
+                    - min(r["started_at"] for r in ran)) if ran else time.perf_counter() - t0
+            summary = summarize(b.spec, b.profile, b.seed, recs, wall)
             summary_path = out / b.spec.name / "summary.json"
             atomic_write_text(summary_path, strict_json(summary, indent=1, default=json_default))
             outcomes[b.spec.name] = RunOutcome(summary, summary_path, recs, left_at_start[b.spec.name],
@@ -300,7 +303,8 @@ def run_experiments(batches: list[Batch], *, out: Path | str = "runs", workers: 
         todo.sort(key=lambda j: -expected[j.path])  # stable: equal times keep the experiments' order
         workers = min(workers or os.cpu_count() or 1, max(len(todo), 1))
         by_name = {b.spec.name: b for b in batches}
-        for job, rec in execute(todo, workers, show_progress, title, executor, address, expected, calibrated):
+        for job, rec in (execute(todo, workers, show_progress, title, executor, address, expected, calibrated)
+                         if todo else ()):
             records[job.experiment].append(rec)
             left[job.experiment] -= 1
             if left[job.experiment] == 0:
@@ -319,7 +323,7 @@ def execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind
         mp.get_context("spawn").Queue() if workers > 1 else queue.SimpleQueue())
     pool: Executor = (RayExecutor(workers, address) if kind == "ray" else
                       ProcessExecutor(workers, q) if workers > 1 else SerialExecutor(q))
-    display = Progress(jobs, title, expected, workers, calibrated) if show_progress else None
+    display = Progress(jobs, title, expected, workers, calibrated and expected is not None) if show_progress else None
 
     def tick():
         if display:

@@ -116,12 +116,16 @@ def _perceptron_update(w2, d2, a, x, target, is_error, scale, lr, momentum, line
 
 @intrinsic
 def _dot_in_lanes(typingctx, w, x, n, start):
-    """``start + sum_i w[i] x[i]`` over the first ``n`` entries of two float64 arrays, summed as LLVM's AVX-512 loop
+    """``start + sum_i w[i] x[i]`` over the first ``n`` entries (``n`` <= both lengths: unchecked) of two 1-D
+    C-contiguous float64 arrays, summed as LLVM's AVX-512 loop
     sums it under fastmath: four 8-lane accumulators of fused multiply-adds over blocks of 32 (``start`` in lane 0),
     added (0 + 1) + (2 + 3) and then lane halves (4, 2, 1); one 8-lane accumulator over the blocks of 8 left (the
     sum so far in lane 0), added the same way; fused multiply-adds over the last few. Written here in vector IR,
     it is that order on every CPU, without the gathers a permuted read forced (issue 45: ``_rotated_values`` kept
     its numbers bit for bit and got faster)."""
+    for a in (w, x):  # it reads the data in a straight line: 1-D contiguous float64 only (else a typing error)
+        if not (isinstance(a, types.Array) and a.ndim == 1 and a.layout == "C" and a.dtype == types.float64):
+            return None
     sig = types.float64(w, x, types.int64, types.float64)
 
     def codegen(context, builder, signature, args):
@@ -189,7 +193,8 @@ def _fma(typingctx, a, b, c):
 def _rotated_values(w1, w2, x, perms, scale, q, xr):
     """q[a] = scale * net(x[perms[a]]) for every rotation a (one hidden layer, symmetric sigmoids); ``xr`` (I,) is
     scratch. The arithmetic is the fastmath loop's this replaced (a gathered read of x per input; see
-    ``_dot_in_lanes``), bit for bit: tests/nets/test_rotated.py holds it to a plain copy of that loop."""
+    ``_dot_in_lanes``), bit for bit on the CPU the stored results were made on (znver5), and in that loop's order on
+    every CPU: tests/nets/test_rotated_kernel.py."""
     n_h, n_in = w1.shape[1], w1.shape[2] - 1
     for a in range(perms.shape[0]):
         for i in range(n_in):

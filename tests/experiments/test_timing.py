@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from connrl.experiments import timing
+from connrl.experiments import runner, timing
 from connrl.experiments.executors import Progress
 from connrl.experiments.registry import get_experiment
 from connrl.experiments.runner import Batch, run_experiment, run_experiments
@@ -55,11 +55,13 @@ def test_per_experiment_sums_runs_and_counts_compiling_in_the_span():
 def test_progress_eta_is_what_is_left_over_the_workers_at_the_measured_speed():
     jobs = [_job("a", "x"), _job("a", "y")]
     p = Progress(jobs, "t", {jobs[0].path: 10.0, jobs[1].path: 30.0}, workers=2)
-    assert p.eta_seconds() == 20.0
+    assert p.eta_seconds() == 30.0  # 40 s over 2 workers is 20 s, but the 30-s run alone takes 30
     p.finish(jobs[0], wall=20.0)  # twice as slow as expected
-    assert p.eta_seconds() == 30.0
+    assert p.eta_seconds() == 60.0
     p.fraction[jobs[1].path] = 0.5
-    assert p.eta_seconds() == 15.0 and p.eta_text() == "ETA 0:00:15"
+    assert p.eta_seconds() == 30.0 and p.eta_text() == "ETA 0:00:30"
+    many = [_job("a", f"v{k}") for k in range(4)]
+    assert Progress(many, "t", {j.path: 10.0 for j in many}, workers=2).eta_seconds() == 20.0
     q = Progress(jobs, "t", {jobs[0].path: 10.0, jobs[1].path: 30.0}, workers=2, calibrated=False)
     assert q.eta_seconds() is None and q.eta_text() == ""  # relative weights only: no ETA before a run ends
 
@@ -79,6 +81,10 @@ def test_one_pool_starts_the_longest_runs_first_and_gives_each_experiment_its_ow
         alone = run_experiment(spec, profile="tiny", seed=0, out=tmp_path / "alone", workers=1, show_progress=False)
         assert json.dumps(outcome.summary["variants"]) == json.dumps(alone.summary["variants"])
         assert (outcome.ran, outcome.reused) == (len(alone.records), 0)
+    for o in outcomes:  # each experiment's wall time is its own runs' span, not the pool's
+        spans = [timing.run_span(r) for r in o.records]
+        assert o.summary["timing"]["wall_time_s"] == max(b for _, b in spans) - min(a for a, _ in spans)
+    monkeypatch.setattr(runner, "RayExecutor", lambda *a, **k: pytest.fail("an executor started with nothing to run"))
     again = run_experiments([Batch(s, "tiny", None, 0) for s in specs], out=tmp_path / "pool", workers=1,
-                            show_progress=False)
+                            show_progress=False, executor="ray")
     assert [(o.ran, o.reused) for o in again] == [(0, len(o.records)) for o in outcomes]
