@@ -44,8 +44,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
+
+from connrl.nets.recurrent_kernels import (  # noqa: F401 (tests and benchmarks reach the kernels here too)
+    _bptt,
+    _forward_all,
+    _forward_sequence,
+    _hidden,
+    _momentum_step,
+    _output,
+    _policy_weights,
+    _replay_q_lesson,
+)
 
 
 @dataclass(frozen=True)
@@ -88,212 +98,6 @@ class RecurrentNetConfig:
             raise ValueError(f"decay must be in [0, 1] (thesis: 0.9), got {self.decay}")
         if not math.isfinite(self.feedback):
             raise ValueError(f"feedback must be finite (thesis: 1.5), got {self.feedback}")
-
-
-# --------------------------------------------------------------------------------------------- kernels
-# float64, C-contiguous arrays. w1: (A, H, I+C+1) over [x, c, 1]; w2: (S, O, H+1), S = 1 (shared) or A.
-
-@numba.njit(cache=True)
-def _hidden(w1, a, x, c, h):
-    """Hidden activations of net a at input x and context c, written into h (H,)."""
-    n_h = w1.shape[1]
-    n_in = x.shape[0]
-    n_c = c.shape[0]
-    bias = n_in + n_c
-    for j in range(n_h):
-        s = w1[a, j, bias]
-        for i in range(n_in):
-            s += w1[a, j, i] * x[i]
-        for k in range(n_c):
-            s += w1[a, j, n_in + k] * c[k]
-        h[j] = 1.0 / (1.0 + math.exp(-s)) - 0.5
-
-
-@numba.njit(cache=True)
-def _output(w2, s, h, o):
-    """Squashed outputs f(net) (before scaling) of output layer s, written into o (O,)."""
-    n_o, n_h1 = w2.shape[1], w2.shape[2]
-    n_h = n_h1 - 1
-    for k in range(n_o):
-        z = w2[s, k, n_h]
-        for j in range(n_h):
-            z += w2[s, k, j] * h[j]
-        o[k] = 1.0 / (1.0 + math.exp(-z)) - 0.5
-
-
-@numba.njit(cache=True)
-def _forward_all(w1, w2, x, c, scale, h_all, y):
-    """Outputs of every action net at (x, c): y (A, O) scaled; h_all (A, H) keeps the hidden layers."""
-    n_a = w1.shape[0]
-    shared = w2.shape[0] == 1
-    for a in range(n_a):
-        _hidden(w1, a, x, c, h_all[a])
-        _output(w2, 0 if shared else a, h_all[a], y[a])
-        for k in range(y.shape[1]):
-            y[a, k] *= scale
-
-
-@numba.njit(cache=True)
-def _forward_sequence(w1, w2, xs, actions, feedback, scale, ys, cs):
-    """Run a trial from c_0 = 0: ys (T, A, O) outputs of all nets, cs (T+1, C) the contexts seen."""
-    n_t = xs.shape[0]
-    n_c = cs.shape[1]
-    h_all = np.empty((w1.shape[0], w1.shape[1]))
-    cs[0, :] = 0.0
-    for t in range(n_t):
-        _forward_all(w1, w2, xs[t], cs[t], scale, h_all, ys[t])
-        a = actions[t]
-        for k in range(n_c):
-            cs[t + 1, k] = feedback * h_all[a, k]
-
-
-@numba.njit(cache=True)
-def _bptt(w1, w2, xs, actions, targets, weights, feedback, decay, scale, g1, g2):
-    """Loss of a trial and its (decayed) BPTT gradients, accumulated into zeroed g1, g2; returns the loss."""
-    n_t, n_in = xs.shape
-    n_h = w1.shape[1]
-    n_c = w1.shape[2] - n_in - 1
-    n_o = w2.shape[1]
-    shared = w2.shape[0] == 1
-    hs = np.empty((n_t, n_h))
-    os = np.empty((n_t, n_o))
-    cs = np.zeros((n_t + 1, n_c))
-    # forward through the taken actions' nets only (the others do not affect the loss or the context)
-    for t in range(n_t):
-        a = actions[t]
-        _hidden(w1, a, xs[t], cs[t], hs[t])
-        _output(w2, 0 if shared else a, hs[t], os[t])
-        for k in range(n_c):
-            cs[t + 1, k] = feedback * hs[t, k]
-    loss = 0.0
-    dc = np.zeros(n_c)  # dE/dc_{t+1}, arriving from step t+1
-    dh = np.empty(n_h)
-    do = np.empty(n_o)
-    for t in range(n_t - 1, -1, -1):
-        a = actions[t]
-        s = 0 if shared else a
-        wt = weights[t]
-        for k in range(n_o):
-            e = (scale * os[t, k] - targets[t, k]) / scale  # error in the net's own output units
-            loss += 0.5 * wt * e * e
-            do[k] = wt * e * (0.25 - os[t, k] * os[t, k])  # f'(z) = 0.25 - f^2
-        for j in range(n_h):
-            dh[j] = 0.0
-        for k in range(n_o):
-            dk = do[k]
-            if dk != 0.0:
-                for j in range(n_h):
-                    g2[s, k, j] += dk * hs[t, j]
-                    dh[j] += dk * w2[s, k, j]
-                g2[s, k, n_h] += dk
-        for k in range(n_c):  # context path from step t+1, decayed (7.4)
-            dh[k] += decay * feedback * dc[k]
-        for k in range(n_c):
-            dc[k] = 0.0
-        for j in range(n_h):
-            d = dh[j] * (0.25 - hs[t, j] * hs[t, j])
-            if d != 0.0:
-                for i in range(n_in):
-                    g1[a, j, i] += d * xs[t, i]
-                for k in range(n_c):
-                    g1[a, j, n_in + k] += d * cs[t, k]
-                    dc[k] += d * w1[a, j, n_in + k]
-                g1[a, j, n_in + n_c] += d
-    return loss
-
-
-@numba.njit(cache=True)
-def _momentum_step(w, d, g, lr, momentum):
-    """``d <- momentum * d - lr * g``; ``w <- w + d`` on flat views."""
-    for i in range(w.shape[0]):
-        step = momentum * d[i] - lr * g[i]
-        d[i] = step
-        w[i] += step
-
-
-@numba.njit(cache=True)
-def _policy_weights(ys, actions, temperature, p_threshold, bweights, weights):
-    """The non-policy test (3.5.1) at every step, into ``weights`` (1 replayed, 0 not): the taken action's probability
-    by Eq. 3.6, or by Eq. 6.6 with each step's W (``bweights`` (n, A); 0 rows: none), against P_t; greedy ties share
-    the mass at T = 0. ``connrl.core.replay.policy_mask``'s arithmetic (its sums run left to right, as NumPy's do
-    over fewer than 8 choices)."""
-    n_a = ys.shape[1]
-    has_w = bweights.shape[0] > 0
-    for t in range(actions.shape[0]):
-        m, found = 0.0, False
-        for b in range(n_a):
-            if (not has_w or bweights[t, b] > 0.0) and (not found or ys[t, b, 0] > m):
-                m, found = ys[t, b, 0], True
-        a = actions[t]
-        if temperature == 0.0:
-            ties = 0
-            for b in range(n_a):
-                ties += (not has_w or bweights[t, b] > 0.0) and ys[t, b, 0] == m
-            p = 1.0 / ties if ((not has_w or bweights[t, a] > 0.0) and ys[t, a, 0] == m) else 0.0
-        else:
-            z, ea = 0.0, 0.0
-            for b in range(n_a):
-                e = 0.0
-                if not has_w:
-                    e = math.exp((ys[t, b, 0] - m) / temperature)
-                elif bweights[t, b] > 0.0:
-                    e = bweights[t, b] * math.exp((ys[t, b, 0] - m) / temperature)
-                z += e
-                if b == a:
-                    ea = e
-            p = ea / z
-        weights[t] = 1.0 if p >= p_threshold else 0.0
-
-
-@numba.njit(cache=True)
-def _replay_q_lesson(w1, w2, d1, d2, g1, g2, xs, actions, rewards, terminated, gamma, lam, temperature,
-                     p_threshold, clip, has_clip, feedback, decay, scale, lr, momentum, bweights, allowed):
-    """Batch replay of one lesson into a recurrent Q-net, whole (7.5; Fig. 5.1(a) in batch mode): every net's values
-    along the lesson from c_0 = 0, the non-policy test (3.5.1, with Eq. 6.6's W per step in ``bweights`` (n, A)), the
-    lambda-returns from those fixed values (Eq. 5.5; each state's max over its ``allowed`` (n+1, A) choices, all where
-    none is), then one BPTT + momentum step on the policy steps. 0-row ``bweights`` / ``allowed``: none. The same
-    arithmetic as ``connrl.agents.memory``'s ``replay_recurrent_q`` composes from ``batch_targets`` and
-    ``train_sequence``; returns the steps replayed. ``xs`` (n+1, I) holds the lesson's inputs, the last one the state
-    after the last action."""
-    n = actions.shape[0]
-    n_a = w1.shape[0]
-    acts = np.zeros(n + 1, dtype=np.int64)  # the action at x_n does not affect the outputs at x_n
-    acts[:n] = actions
-    ys = np.empty((n + 1, n_a, 1))
-    cs = np.empty((n + 2, w1.shape[2] - xs.shape[1] - 1))  # the contexts of n + 1 steps and the one after
-    _forward_sequence(w1, w2, xs, acts, feedback, scale, ys, cs)
-    weights = np.ones(n)
-    if p_threshold > 0.0:
-        _policy_weights(ys, actions, temperature, p_threshold, bweights, weights)
-    targets = np.empty((n, 1))
-    e_next = 0.0
-    for t in range(n - 1, -1, -1):
-        u = 0.0
-        if not (t == n - 1 and terminated):
-            some = False
-            if allowed.shape[0] > 0:
-                for b in range(n_a):
-                    some = some or allowed[t + 1, b]
-            found = False
-            for b in range(n_a):
-                if (not some or allowed[t + 1, b]) and (not found or ys[t + 1, b, 0] > u):
-                    u, found = ys[t + 1, b, 0], True
-        lam_t = lam if (t < n - 1 and weights[t + 1] > 0.0) else 0.0  # a non-policy next action cuts lambda
-        e = rewards[t] + gamma * ((1.0 - lam_t) * u + lam_t * e_next)
-        if has_clip and e > clip:
-            e = clip
-        targets[t, 0] = e
-        e_next = e
-    used = 0
-    for t in range(n):
-        used += weights[t] > 0.0
-    if used > 0:
-        g1[...] = 0.0
-        g2[...] = 0.0
-        _bptt(w1, w2, xs[:n], actions, targets, weights, feedback, decay, scale, g1, g2)
-        _momentum_step(w1.reshape(-1), d1.reshape(-1), g1.reshape(-1), lr, momentum)
-        _momentum_step(w2.reshape(-1), d2.reshape(-1), g2.reshape(-1), lr, momentum)
-    return used
 
 
 # --------------------------------------------------------------------------------------- pure functions
