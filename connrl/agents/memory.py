@@ -39,7 +39,7 @@ from connrl.core.exploration import TemperatureSchedule, boltzmann_select
 from connrl.core.lessons import Lesson
 from connrl.core.replay import ReplayParams, batch_targets, replay_q
 from connrl.nets import OAON, NetConfig
-from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
+from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON, check_sequence
 
 ON, OFF = 0.5, -0.5  # binary input encoding (5.3.2)
 
@@ -253,6 +253,7 @@ class RecurrentModelQ(LessonAgent):
         self.freeze_model = False  # 7.5.2: "I fixed the model at some point of learning"
         self.track_model_error = False  # measure the model on each new lesson (7.5.1; off: it costs a pass)
         self.last_model_error: dict[str, float] | None = None  # on the latest lesson, before training on it
+        self._checked: dict[int, tuple] = {}  # id(lesson) -> the lesson and its arrays as the kernels take them
         self._xq: np.ndarray | None = None
 
     def q_input(self, sensation: np.ndarray) -> np.ndarray:
@@ -293,14 +294,26 @@ class RecurrentModelQ(LessonAgent):
         picks = [len(self.history) - 1] + list(self.rng.integers(0, len(self.history), k - 1))
         loss = 0.0
         for i in picks:
-            lesson = self.history[i]
-            loss += self.model.train_sequence(lesson.inputs[:-1], lesson.actions,
-                                              model_targets(lesson, self.config.payoff_scale))
+            loss += self.model.train_checked(*self._arrays(self.history[i])[:4])
         return loss / len(picks)
+
+    def _arrays(self, lesson: Lesson) -> tuple[np.ndarray, ...]:
+        """A past lesson as the model's kernels take it, checked and computed once (it is replayed many times):
+        (x_0..x_{n-1}, actions, model targets, ones, x_0..x_n, the actions and a last 0)."""
+        got = self._checked.get(id(lesson))
+        if got is None or got[0] is not lesson:
+            c = self.config.model
+            xs, acts, targets, ones = check_sequence(lesson.inputs[:-1], lesson.actions,
+                                                     model_targets(lesson, self.config.payoff_scale), None,
+                                                     c.n_inputs, self.model.n_nets, c.n_outputs)
+            whole, acts_ext, _, _ = check_sequence(lesson.inputs, np.append(lesson.actions, 0), None, None, c.n_inputs,
+                                                   self.model.n_nets, c.n_outputs)
+            got = self._checked[id(lesson)] = (lesson, xs, acts, targets, ones, whole, acts_ext)
+        return got[1:]
 
     def q_lesson(self, lesson: Lesson) -> Lesson:
         """The lesson with Q-net inputs ``[x_t, c_t]``, contexts recomputed by the current model."""
-        _, cs = self.model.forward_sequence(lesson.inputs, np.append(lesson.actions, 0))
+        _, cs = self.model.forward_checked(*self._arrays(lesson)[4:])
         return Lesson(np.hstack([lesson.inputs, cs[:-1]]), lesson.actions, lesson.rewards,
                       terminated=lesson.terminated, truncated=lesson.truncated, taught=lesson.taught)
 

@@ -102,7 +102,9 @@ class RecurrentNetConfig:
 
 # --------------------------------------------------------------------------------------- pure functions
 
-def _check_sequence(xs, actions, targets, weights, n_inputs, n_actions, n_outputs):
+def check_sequence(xs, actions, targets, weights, n_inputs, n_actions, n_outputs):
+    """A trial's arrays as the kernels take them (contiguous float64 / int64, targets (T, O), weights (T,) >= 0,
+    ones if None), or one ValueError naming the one that does not fit."""
     xs = np.ascontiguousarray(xs, dtype=np.float64)
     if xs.ndim != 2 or xs.shape[1] != n_inputs or xs.shape[0] < 1:
         raise ValueError(f"xs must have shape (T >= 1, n_inputs={n_inputs}), got {xs.shape}")
@@ -169,7 +171,7 @@ def gradients(
     n_in = np.asarray(xs).shape[-1]
     if not 0 <= w1.shape[2] - n_in - 1 <= w1.shape[1]:
         raise ValueError(f"w1 {w1.shape} does not fit {n_in} inputs plus 0..H context units")
-    xs, actions, targets, weights = _check_sequence(
+    xs, actions, targets, weights = check_sequence(
         xs, actions, targets, weights, n_in, w1.shape[0], w2.shape[1])
     g1 = np.zeros_like(w1)
     g2 = np.zeros_like(w2)
@@ -262,7 +264,13 @@ class RecurrentOAON:
         seen at each step (cs[T] is the context after the last action). Online state is not touched.
         """
         c = self.config
-        xs, actions, _, _ = _check_sequence(xs, actions, None, None, c.n_inputs, self.n_nets, c.n_outputs)
+        xs, actions, _, _ = check_sequence(xs, actions, None, None, c.n_inputs, self.n_nets, c.n_outputs)
+        return self.forward_checked(xs, actions)
+
+    def forward_checked(self, xs: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``forward_sequence`` on arrays already as ``check_sequence`` returns them (a caller that replays the same
+        lesson many times checks it once)."""
+        c = self.config
         ys = np.empty((xs.shape[0], self.n_nets, c.n_outputs))
         cs = np.empty((xs.shape[0] + 1, c.n_context))
         _forward_sequence(self.w1, self.w2, xs, actions, c.feedback, self.scale, ys, cs)
@@ -276,8 +284,11 @@ class RecurrentOAON:
         >= 0 scale each step's error (0 = not trained, e.g. a non-policy action that is not replayed).
         """
         c = self.config
-        xs, actions, targets, weights = _check_sequence(
-            xs, actions, targets, weights, c.n_inputs, self.n_nets, c.n_outputs)
+        return self.train_checked(*check_sequence(xs, actions, targets, weights, c.n_inputs, self.n_nets, c.n_outputs))
+
+    def train_checked(self, xs: np.ndarray, actions: np.ndarray, targets: np.ndarray, weights: np.ndarray) -> float:
+        """``train_sequence`` on arrays already as ``check_sequence`` returns them."""
+        c = self.config
         self._g1[...] = 0.0
         self._g2[...] = 0.0
         loss = _bptt(self.w1, self.w2, xs, actions, targets, weights, c.feedback, c.decay, self.scale,
@@ -300,7 +311,7 @@ class RecurrentOAON:
         if temperature < 0:
             raise ValueError(f"temperature must be >= 0, got {temperature}")
         xs = np.ascontiguousarray(xs, dtype=np.float64)
-        _, actions, _, _ = _check_sequence(xs[:-1], actions, None, None, c.n_inputs, self.n_nets, 1)
+        _, actions, _, _ = check_sequence(xs[:-1], actions, None, None, c.n_inputs, self.n_nets, 1)
         rewards = np.ascontiguousarray(rewards, dtype=np.float64)
         if rewards.shape != actions.shape:
             raise ValueError(f"rewards must have shape {actions.shape}, got {rewards.shape}")

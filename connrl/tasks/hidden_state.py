@@ -10,6 +10,7 @@ Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Cup collection",
 
 from __future__ import annotations
 
+import functools
 from typing import Protocol
 
 import gymnasium as gym
@@ -241,18 +242,13 @@ def make_cup_envs(task: int) -> tuple[CupCollectionEnv, gym.Wrapper]:
                                                                      control_error=0.0))
 
 
-def model_probe(agent, task: int, seed: int, walks: int = 200, unseen: int = 10) -> dict[str, float | None]:
-    """7.5.1's imperfect model away from the agent's own path: the recurrent model's errors on random walks.
-
-    ``walks`` episodes of random actions (instances A and B in turn, control errors off, 30 steps at most), drawn
-    from ``seed`` alone, so a run's random stream is untouched; the model is not trained on them. Returns the
-    share of steps whose next sensation the model gets wrong in some bit, and the share of steps on which a cup
-    comes into sight after ``unseen`` or more steps without one ("if the agent had not seen a cup for 10 steps or
-    more, the model normally was unable to predict the appearance of the cup") that it gets wrong (None: none).
-    """
+@functools.lru_cache(maxsize=4)
+def _probe_walks(task: int, seed: int, walks: int, unseen: int) -> tuple[tuple[Lesson, np.ndarray], ...]:
+    """``model_probe``'s random walks (they depend on ``seed`` alone, so a run's probes, and every run's, share them),
+    each with the steps whose next sensation shows a cup after ``unseen`` or more steps without one."""
     env = CupCollectionEnv(random_bits=CUP_TASKS[task]["random_bits"])
     rng = np.random.default_rng(seed)
-    wrong_all, wrong_seen = [], []
+    out = []
     for w in range(walks):
         x, _ = env.reset(seed=int(rng.integers(2**31)), options={"instance": INSTANCES[w % 2]})
         xs, actions, rewards, done = [x], [], [], False
@@ -265,11 +261,26 @@ def model_probe(agent, task: int, seed: int, walks: int = 200, unseen: int = 10)
             done = terminated or truncated
         lesson = Lesson(np.array(xs), np.array(actions), np.array(rewards), terminated=terminated,
                         truncated=truncated)
-        wrong = agent.wrong_steps(lesson)
         cup = np.array(xs)[:, :2].max(axis=1) > 0  # a cup in sight in x_0 .. x_n
-        for t in range(unseen - 1, len(actions)):  # the prediction of x_{t+1}
-            if cup[t + 1] and not cup[t + 1 - unseen:t + 1].any():
-                wrong_seen.append(wrong[t])
+        seen = [t for t in range(unseen - 1, len(actions))  # the prediction of x_{t+1}
+                if cup[t + 1] and not cup[t + 1 - unseen:t + 1].any()]
+        out.append((lesson, np.array(seen, dtype=np.int64)))
+    return tuple(out)
+
+
+def model_probe(agent, task: int, seed: int, walks: int = 200, unseen: int = 10) -> dict[str, float | None]:
+    """7.5.1's imperfect model away from the agent's own path: the recurrent model's errors on random walks.
+
+    ``walks`` episodes of random actions (instances A and B in turn, control errors off, 30 steps at most), drawn
+    from ``seed`` alone, so a run's random stream is untouched; the model is not trained on them. Returns the
+    share of steps whose next sensation the model gets wrong in some bit, and the share of steps on which a cup
+    comes into sight after ``unseen`` or more steps without one ("if the agent had not seen a cup for 10 steps or
+    more, the model normally was unable to predict the appearance of the cup") that it gets wrong (None: none).
+    """
+    wrong_all, wrong_seen = [], []
+    for lesson, seen in _probe_walks(task, seed, walks, unseen):
+        wrong = agent.wrong_steps(lesson)
+        wrong_seen.extend(wrong[seen])
         wrong_all.append(wrong)
     return {"probe_wrong_steps": float(np.concatenate(wrong_all).mean()),
             "probe_cup_after_unseen_wrong": float(np.mean(wrong_seen)) if wrong_seen else None,

@@ -1,6 +1,8 @@
 """Memory architectures of Ch. 7: window encoding, recurrent-Q replay, and that what an agent sees while
 acting is exactly what replay reconstructs."""
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -302,3 +304,25 @@ def test_same_seed_same_learning(make):
             float(np.sum(v)) for v in (getattr(agent, "q", None) or agent.net).state_dict().values()]
 
     assert trace(make(seed=2)) == trace(make(seed=2))
+
+
+def test_recurrent_model_trains_and_replays_from_lessons_checked_once():
+    """The model's BPTT passes and the Q-lessons' contexts come from a lesson's arrays checked once (issue 45): the
+    same weights and contexts as train_sequence and forward_sequence on the lesson itself, and a lesson replaced in
+    the cache under a reused id is checked again."""
+    agent = model_agent(seed=2)
+    env = CupCollectionEnv()
+    for k in range(3):
+        run_trial(env, agent, trial=k, learning=True, seed=k)
+    twin = copy.deepcopy(agent.model)
+    for lesson in agent.history:
+        agent.model.train_checked(*agent._arrays(lesson)[:4])
+        twin.train_sequence(lesson.inputs[:-1], lesson.actions, model_targets(lesson, agent.config.payoff_scale))
+        for name in ("w1", "w2", "d1", "d2"):
+            np.testing.assert_array_equal(getattr(agent.model, name), getattr(twin, name))
+        np.testing.assert_array_equal(agent.q_lesson(lesson).inputs[:, 4:],
+                                      twin.forward_sequence(lesson.inputs, np.append(lesson.actions, 0))[1][:-1])
+    lesson = agent.history[0]
+    other = Lesson(lesson.inputs[::-1].copy(), lesson.actions, lesson.rewards, terminated=False)
+    agent._checked[id(other)] = agent._checked[id(lesson)]  # as if the id had been reused
+    np.testing.assert_array_equal(agent._arrays(other)[4], other.inputs)
