@@ -10,13 +10,13 @@ command that produced it, so every number in the document comes from a committed
 from __future__ import annotations
 
 import argparse
-import re
 import subprocess
 import sys
-import time
 from pathlib import Path
 
-SCRIPTS = ["bench_survival_env.py", "bench_robot.py", "bench_recurrent.py", "bench_memory.py",
+from blocks import paste
+
+SCRIPTS = ["bench_speedups.py", "bench_survival_env.py", "bench_robot.py", "bench_recurrent.py", "bench_memory.py",
            "bench_survival_agents.py", "bench_robot_agent.py",
            "bench_recharge.py"]  # bench_gymnasium.py writes its own block (--write)
 
@@ -26,17 +26,11 @@ def main() -> None:
     ap.add_argument("--write", type=Path, required=True)
     ap.add_argument("--only", nargs="*", default=None, help="script names to run (default: all)")
     args = ap.parse_args()
-    doc = args.write.read_text()
     here = Path(__file__).parent
     for script in args.only or SCRIPTS:
         out = subprocess.run([sys.executable, str(here / script)], capture_output=True, text=True, check=True).stdout
-        name = script.removesuffix(".py")
-        block = (f"<!-- {name}:begin -->\n`python benchmarks/{script}` ({time.strftime('%Y-%m-%d')}):\n\n```\n"
-                 f"{out.strip()}\n```\n<!-- {name}:end -->")
-        pattern = rf"<!-- {name}:begin -->.*?<!-- {name}:end -->"
-        doc = re.sub(pattern, block, doc, flags=re.S) if re.search(pattern, doc, re.S) else doc + "\n" + block + "\n"
+        paste(args.write, script.removesuffix(".py"), f"python benchmarks/{script}", out)
         print(f"{script}: done", flush=True)
-    args.write.write_text(doc)
 
 
 if __name__ == "__main__":

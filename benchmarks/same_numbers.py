@@ -21,6 +21,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from blocks import paste
+
 from connrl.experiments.registry import all_experiments
 from connrl.experiments.runner import execute, make_jobs
 from connrl.experiments.store import load_summary
@@ -35,9 +37,14 @@ def main() -> int:
     ap.add_argument("--only", default=None, help="comma-separated experiments (default: all stored)")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--against", type=Path, default=None, help="compare with the runs stored there; run nothing")
+    ap.add_argument("--write", type=Path, default=None, help="paste the summary into this Markdown file's block")
     args = ap.parse_args()
     if args.against:
-        return compare_folders(Path(args.out), args.against)
+        code, text = compare_folders(Path(args.out), args.against)
+        if args.write:
+            paste(args.write, "same_numbers", f"python benchmarks/same_numbers.py --out {args.out} --against "
+                  f"{args.against}", text)
+        return code
     specs = all_experiments()
     names = args.only.split(",") if args.only else sorted(specs)
     unknown = [n for n in names if n not in specs]
@@ -80,16 +87,16 @@ def differences(old: Path, new: Path) -> list[str]:
     return diff
 
 
-def compare_folders(out: Path, against: Path) -> int:
+def compare_folders(out: Path, against: Path) -> tuple[int, str]:
     mine = {p.relative_to(out).with_suffix("") for p in out.glob("*/runs/*/*/seed-*.json")}
     theirs = {p.relative_to(against).with_suffix("") for p in against.glob("*/runs/*/*/seed-*.json")}
     both = sorted(mine & theirs)
     moved = [str(r) for r in both if differences(out / r, against / r)]
-    for r in moved:
-        print(f"MOVED {r}: {', '.join(differences(out / r, against / r))} differ")
-    print(f"{len(both) - len(moved)} of the {len(both)} runs stored in both {out} and {against} have the same numbers "
-          f"bit for bit ({len(theirs - mine)} only in {against}, {len(mine - theirs)} only in {out})")
-    return 1 if moved else 0
+    lines = [f"MOVED {r}: {', '.join(differences(out / r, against / r))} differ" for r in moved]
+    lines.append(f"{len(both) - len(moved)} of the {len(both)} runs stored in both {out} and {against} have the same "
+                 f"numbers bit for bit ({len(theirs - mine)} only in {against}, {len(mine - theirs)} only in {out})")
+    print("\n".join(lines))
+    return (1 if moved else 0), "\n".join(lines)
 
 
 if __name__ == "__main__":

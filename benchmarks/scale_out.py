@@ -25,6 +25,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from blocks import paste
+
 COMPARED = ("metrics", "curve_x", "curve_y", "extra", "diverged")
 
 
@@ -56,7 +58,9 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--from-records", type=Path, default=None)
     ap.add_argument("--cores", default="2,4,8,16,32,64,128")
+    ap.add_argument("--write", type=Path, default=None, help="paste the output into this Markdown file's block")
     args = ap.parse_args()
+    lines: list[str] = []
     if args.ray:
         base = Path(tempfile.mkdtemp(prefix="scale-out-"))
         wall = {kind: reproduce(base / kind, args.only, args.profile, args.workers, kind)
@@ -64,16 +68,19 @@ def main() -> None:
         a, b = records(base / "process"), records(base / "ray")
         same = a.keys() == b.keys() and all(
             json.dumps([a[k].get(f) for f in COMPARED]) == json.dumps([b[k].get(f) for f in COMPARED]) for k in a)
-        print(f"`connrl reproduce --only {args.only} --profile {args.profile} --workers {args.workers}`: "
-              f"{len(a)} runs; process pool {wall['process']:.1f} s, local Ray {wall['ray']:.1f} s "
-              f"(Ray / process = {wall['ray'] / wall['process']:.2f}); every run's numbers the same: {same}")
+        lines.append(f"connrl reproduce --only {args.only} --profile {args.profile} --workers {args.workers}: "
+                     f"{len(a)} runs; process pool {wall['process']:.1f} s, local Ray {wall['ray']:.1f} s "
+                     f"(Ray / process = {wall['ray'] / wall['process']:.2f}); every run's numbers the same: {same}")
     if args.from_records:
         recs = list(records(args.from_records).values())
         times = [float(r["wall_time_s"]) + float(r.get("compile_time_s") or 0.0) for r in recs]
-        print(f"{len(times)} runs of {args.from_records}, {sum(times) / 60:.1f} min in all, the longest "
-              f"{max(times):.0f} s; expected wall time of the runs, longest first:")
-        for n in (int(c) for c in args.cores.split(",")):
-            print(f"  {n:>4} cores: {makespan(times, n) / 60:6.1f} min")
+        lines.append(f"{len(times)} runs of {args.from_records}, {sum(times) / 60:.1f} min in all, the longest "
+                     f"{max(times):.0f} s; expected wall time of the runs, longest first:")
+        lines += [f"  {n:>4} cores: {makespan(times, n) / 60:6.1f} min" for n in map(int, args.cores.split(","))]
+    print("\n".join(lines))
+    if args.write:
+        called = " ".join(["python benchmarks/scale_out.py"] + sys.argv[1:]).split(" --write")[0]
+        paste(args.write, "scale_out", called, "\n".join(lines))
 
 
 if __name__ == "__main__":

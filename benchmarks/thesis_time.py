@@ -25,6 +25,8 @@ import sys
 import time
 from pathlib import Path
 
+from blocks import paste
+
 from connrl.experiments.registry import CHAPTERS, all_experiments, by_chapter
 from connrl.experiments.runner import make_jobs, run_job, stored_runs
 from connrl.experiments.timing import RUN_TIMES, per_experiment, pool_usage, run_times_table
@@ -103,22 +105,22 @@ def main() -> None:
     text = "\n".join(lines)
     print(text)
     if args.write:
-        doc = args.write.read_text()
-        block = f"<!-- {args.block}:begin -->\n{text}\n<!-- {args.block}:end -->"
-        pattern = rf"<!-- {re.escape(args.block)}:begin -->.*?<!-- {re.escape(args.block)}:end -->"
-        doc = re.sub(pattern, lambda _: block, doc, flags=re.S) if re.search(pattern, doc, re.S) else (
-            doc + "\n" + block + "\n")
-        args.write.write_text(doc)
+        paste(args.write, args.block, how_called(args), text, fenced=False)
+
+
+def how_called(args) -> str:
+    return (f"python benchmarks/thesis_time.py --out {args.out} --profile {args.profile}"
+            + (" --from-records" if args.from_records else f" --workers {args.workers}")
+            + (f" --top {args.top}" if args.top else ""))
 
 
 def report(records, order, chapter_of, args, wall, cpu, start, end) -> list[str]:
     per = per_experiment(records)
     total = sum(e["run_s"] for e in per.values())
-    how = (f"`python benchmarks/thesis_time.py --out {args.out} --profile {args.profile}"
-           + (" --from-records" if args.from_records else f" --workers {args.workers}")
-           + (f" --top {args.top}" if args.top else "") + "`")
-    lines = [f"Measured {time.strftime('%Y-%m-%d')} by {how} on {os.cpu_count()} cores: "
-             f"{len(records)} runs of {len(order)} experiments at the {args.profile} profile."]
+    commits = sorted({(r.get("environment") or {}).get("git_commit", "?")[:7] for r in records})
+    lines = [f"On {os.cpu_count()} cores: {len(records)} runs of {len(order)} experiments at the {args.profile} "
+             f"profile, made at commit{'s' if len(commits) > 1 else ''} {', '.join(commits[:6])}"
+             + (f" and {len(commits) - 6} more" if len(commits) > 6 else "") + "."]
     if wall is not None:
         use = pool_usage(records, args.workers, start, end)
         lines += ["", f"- `connrl reproduce --profile {args.profile}`: **{wall / 60:.1f} min** wall, "
@@ -135,7 +137,8 @@ def report(records, order, chapter_of, args, wall, cpu, start, end) -> list[str]
         if e is None:
             continue
         span = f"{(e['last'] - e['first']) / 60:.1f}" if wall is not None else "–"
-        lines.append(f"| {chapter_of[name]} | {name} | {e['runs']} | {e['run_s'] / 60:.2f} | {e['cpu_s'] / 60:.2f} | "
+        cpu = f"{e['cpu_s'] / 60:.2f}" if e["cpu_known"] else "–"
+        lines.append(f"| {chapter_of[name]} | {name} | {e['runs']} | {e['run_s'] / 60:.2f} | {cpu} | "
                      f"{e['run_s'] / total:.1%} | {e['longest_s']:.1f} | {span} |")
     lines += ["", "| chapter | runs | run time (min) | over the cores (min) |", "|---|---|---|---|"]
     for chapter in sorted(set(chapter_of[n] for n in order)):

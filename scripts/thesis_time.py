@@ -1,4 +1,7 @@
-"""Sum the wall times that the stored full-profile summaries record, per chapter and in all (README, "Experiments").
+"""Sum the wall times that the stored full-profile summaries record, per chapter and in all (docs/PERFORMANCE.md's
+tables before issue 45 used it). Since issue 45, `connrl reproduce` runs all experiments as one pool and a summary
+records its experiment's span in that pool, which overlaps the others': time a reproduce with
+`python benchmarks/thesis_time.py` instead.
 
     python scripts/thesis_time.py [--out runs] [--chapters 6] [--per-experiment]
 

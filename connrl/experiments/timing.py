@@ -89,15 +89,18 @@ def pool_usage(records: list[dict], workers: int, start: float, end: float) -> d
 
 
 def per_experiment(records: Iterable[dict]) -> dict[str, dict]:
-    """Per experiment: runs, run seconds (wall, CPU, compiling), the longest run, and its span in the pool."""
+    """Per experiment: runs, run seconds (wall, CPU, compiling), the longest run, and its span in the pool
+    (``cpu_known`` False: some record did not note its CPU time, which then counts as its wall time)."""
     out: dict[str, dict] = {}
     for r in records:
         e = out.setdefault(r["experiment"], {"runs": 0, "run_s": 0.0, "cpu_s": 0.0, "compile_s": 0.0,
-                                              "longest_s": 0.0, "first": float("inf"), "last": 0.0})
+                                              "longest_s": 0.0, "first": float("inf"), "last": 0.0,
+                                              "cpu_known": True})
         a, b = run_span(r)
         e["runs"] += 1
         e["run_s"] += float(r["wall_time_s"])
         e["cpu_s"] += float(r.get("cpu_time_s", r["wall_time_s"]))
+        e["cpu_known"] &= "cpu_time_s" in r  # records from before issue 45 did not note it
         e["compile_s"] += float(r.get("compile_time_s") or 0.0)
         e["longest_s"] = max(e["longest_s"], float(r["wall_time_s"]))
         e["first"], e["last"] = min(e["first"], a), max(e["last"], b)
