@@ -289,6 +289,7 @@ def run_experiments(batches: list[Batch], *, out: Path | str = "runs", workers: 
             wall = (max(r["started_at"] + r["wall_time_s"] + r["compile_time_s"] for r in ran)
                     - min(r["started_at"] for r in ran)) if ran else time.perf_counter() - t0
             summary = summarize(b.spec, b.profile, b.seed, recs, wall)
+            summary["timing"]["pooled"] = len(batches) > 1 and bool(ran)  # its wall time is a span in a shared pool
             summary_path = out / b.spec.name / "summary.json"
             atomic_write_text(summary_path, strict_json(summary, indent=1, default=json_default))
             outcomes[b.spec.name] = RunOutcome(summary, summary_path, recs, left_at_start[b.spec.name],

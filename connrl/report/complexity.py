@@ -12,6 +12,7 @@ import numpy as np
 from connrl.experiments.complexity import EXPERIMENTS, LEARNERS
 from connrl.report.page import figure, fixed, note, run_rows, stored
 from connrl.report.plots import save_figure
+from connrl.report.wall import wall_text
 
 THESIS = {  # Table 6.1 and 6.2.2-6.2.3: the order in n, per dimension
     1: {"flat": "2", "single": "1.5", "multi": "n log n", "additional_inside": "1.5", "additional_outside": "1.5"},
@@ -59,10 +60,11 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     if summary is None or not records:
         return ""
     t = summary.get("timing", {}).get("wall_time_s")
+    wall = wall_text(summary) if t is not None else f"wall time {fixed(t, 0)}"
     lines = ["## Section 6.2: the complexity of learning, flat and hierarchical (Table 6.1)", "",
              f"`connrl run complexity --profile {summary['profile']} --runs {summary['runs_per_variant']} --seed "
              f"{summary['base_seed']}`: {summary['runs_per_variant']} runs per variant (seeds from "
-             f"{summary['base_seed']}), wall time {fixed(t, 0)} s. The thesis derived these orders and measured none "
+             f"{summary['base_seed']}), {wall}. The thesis derived these orders and measured none "
              "of them.", "",
              "Fitted exponents e and constants c of executions ~ c n^e (means over runs), beside Table 6.1:", "",
              "| variant | " + " | ".join(n.replace("_", " ") for n in LEARNERS) + " |",

@@ -22,6 +22,7 @@ from connrl.experiments.registry import all_experiments
 from connrl.experiments.runner import make_jobs, missing_runs, stored_runs
 from connrl.experiments.store import DamagedFile
 from connrl.report import verdicts
+from connrl.report.wall import wall_text
 from connrl.storage import FileError, atomic_write_text, read_limited_text
 
 
@@ -67,7 +68,7 @@ def summary_table(summary: dict) -> str:
         f"`connrl run {summary['experiment']} --profile {summary['profile']} --runs {summary['runs_per_variant']} "
         f"--seed {summary['base_seed']}` — {summary['runs_per_variant']} run(s) per variant, seeds "
         f"{summary['base_seed']}..{summary['base_seed'] + summary['runs_per_variant'] - 1}, "
-        f"wall time {summary['timing']['wall_time_s']:.0f} s, commit "
+        f"{wall_text(summary)}, commit "
         f"`{(summary['environment'].get('git_commit') or 'unknown')[:10]}`.",
         "",
         "| variant | quantity | better | ours (mean) | per run | thesis | meets thesis |",

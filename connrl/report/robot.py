@@ -19,6 +19,7 @@ from connrl.report import checks, verdicts
 from connrl.report.page import figure, fixed, note, recheck_tag, stored
 from connrl.report.plots import save_figure
 from connrl.report.robot_dp import copy_table, dp_notes
+from connrl.report.wall import wall_text
 
 EXPERIMENTS = [*SKILLS[:1], *BOUNDS, *SKILLS[1:], *NOISE]  # what this section covers; the copy bound beside DP
 
@@ -100,7 +101,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     lines: list[str] = []
     curves: dict[tuple[str, str], tuple[np.ndarray, np.ndarray, int]] = {}
     any_found = False
-    walls, run_walls, cpus, seeds = [], [], set(), {}
+    walls, run_walls, cpus, seeds, pooled = [], [], set(), {}, False
     copy_summary = None
     per_run: dict = {}  # (experiment, variant) -> (x, each run's curve)
     summaries: dict = {}
@@ -112,13 +113,14 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
         summaries[spec.name] = summary
         seeds[spec.name] = f"{summary['base_seed']}..{summary['base_seed'] + summary['runs_per_variant'] - 1}"
         walls.append(summary["timing"]["wall_time_s"])
+        pooled = pooled or bool(summary["timing"].get("pooled"))
         run_walls += summary["timing"]["run_wall_time_s"]
         cpus.add(summary["environment"].get("cpus"))
         prof = summary["profile"]
         lines += [f"### {spec.name}: {spec.title} (thesis {spec.section})", "",
                   f"`connrl run {spec.name} --profile {prof} --seed {summary['base_seed']}` — "
                   f"{summary['runs_per_variant']} runs per variant, seeds {seeds[spec.name]}, "
-                  f"wall {summary['timing']['wall_time_s']:.0f} s.", ""]
+                  f"{wall_text(summary)}.", ""]
         if spec in BOUNDS:
             copy_summary = summary
             lines += copy_table(spec, summary)
@@ -144,8 +146,10 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     intro += ["The simulator as Fig. 5.3 shows it (`connrl.envs.robot.render_figure_5_3`, noisy readings, seed 0):",
               "", figure(sim_png, doc, "robot-figure-5-3"), ""]
     lines = intro + lines
-    lines += [f"**Compute:** the {len(walls)} Ch. 5 experiments above ({len(run_walls)} runs) took "
-              f"{sum(walls) / 60:.1f} min of wall time together ({sum(run_walls) / 60:.1f} min summed over runs; "
+    together = ("ran in one pool with other experiments" if pooled else
+                f"took {sum(walls) / 60:.1f} min of wall time together")
+    lines += [f"**Compute:** the {len(walls)} Ch. 5 experiments above ({len(run_walls)} runs) {together} "
+              f"({sum(run_walls) / 60:.1f} min summed over runs; "
               f"machine with {', '.join(str(c) for c in sorted(cpus, key=str))} CPUs; the `connrl run` commands "
               "above).", ""]
     lines += _speedup_tables(curves) + _fresh_speedups(curves, summaries)

@@ -12,6 +12,7 @@ from connrl.experiments.td_depth import EXPERIMENTS, MARKS
 from connrl.report import verdicts
 from connrl.report.page import figure, fixed, run_rows, stored
 from connrl.report.plots import save_figure
+from connrl.report.wall import wall_text
 
 MATCH = 1e-6  # relative deviation from the formula below which D counts as reproduced (float rounding only)
 
@@ -55,7 +56,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     lines = [f"### {spec.name}: {spec.title} (thesis {spec.section})", "",
              f"`connrl run {spec.name} --profile {summary['profile']}` — deterministic, 1 run, "
              f"{len(rows)} lambdas, lessons of {recs[0]['params']['steps']} steps, "
-             f"wall {summary['timing']['wall_time_s']:.1f} s.", "",
+             f"{wall_text(summary)}.", "",
              "| lambda | D ours (weight to 1/e) | thesis: -1/ln(lambda) | mean look-ahead (ours) |",
              "|---|---|---|---|"]
     lines += [f"| {lam:g} | {fixed(by_lam[lam]['depth'], 3)} | {fixed(-1 / math.log(lam), 3)} | "
