@@ -191,7 +191,7 @@ def _check_step_arrays(lesson: Lesson, weights, allowed, discounts) -> None:
 
 
 # type of Q-function -> compiled whole-lesson replay ``fn(q, lesson, params, repair_index, weights, allowed,
-# discounts) -> used``
+# discounts) -> used`` (None: not compiled for these options, the reference loop replays)
 FAST_PATHS: dict[type, Callable[..., int]] = {}
 # (type of V-net, type of policy net) -> compiled whole-lesson Fig. 5.1(b) ``fn(v_net, policy_net, lesson, params)``
 AHC_FAST_PATHS: dict[tuple[type, type], Callable[..., int]] = {}
@@ -214,7 +214,8 @@ def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "
         raise ValueError(f"repair must be one of {REPAIRS}, got {repair!r}")
     _check_step_arrays(lesson, weights, allowed, discounts)
     check_lesson_fits(lesson, q.n_actions, q.config.n_inputs)
-    return fn(q, lesson, params, REPAIRS.index(repair), weights, allowed, discounts)
+    used = fn(q, lesson, params, REPAIRS.index(repair), weights, allowed, discounts)
+    return replay_q_reference(q, lesson, params, repair, weights, allowed, discounts) if used is None else used
 
 
 def check_lesson_fits(lesson: Lesson, n_actions: int, n_inputs: int) -> None:
@@ -252,7 +253,8 @@ def replay_ahc(v_net, policy_net, lesson: Lesson, params: ReplayParams, fast: bo
     if fn is None:
         return replay_ahc_reference(v_net, policy_net, lesson, params)
     check_lesson_fits(lesson, policy_net.n_actions, policy_net.config.n_inputs)
-    return fn(v_net, policy_net, lesson, params)
+    used = fn(v_net, policy_net, lesson, params)
+    return replay_ahc_reference(v_net, policy_net, lesson, params) if used is None else used
 
 
 def replay_ahc_reference(v_net, policy_net, lesson: Lesson, params: ReplayParams) -> int:

@@ -34,15 +34,14 @@ def replay_oaon(net: OAON, lesson, params, repair: int = 0, weights=None, allowe
                                 net.config.linear_output, w, m))
 
 
-def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=None, allowed=None, discounts=None) -> int:
+def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=None, allowed=None,
+                   discounts=None) -> int | None:
     """Compiled incremental backward replay of one lesson into a rotated net (4.2.4): the registered fast path of
     ``connrl.core.replay.replay_q`` for Ch. 4's nets, bit for bit the reference loop's (tests/core/test_replay.py).
-    The 5.4.3 repairs and Ch. 6's per-step weights and allowed choices, which Ch. 4 does not use, take the reference
-    loop."""
+    The 5.4.3 repairs and Ch. 6's per-step weights and allowed choices, which Ch. 4 does not use, are not compiled:
+    None sends them to the reference loop."""
     if repair or weights is not None or allowed is not None:
-        from connrl.core.replay import REPAIRS, replay_q_reference
-
-        return replay_q_reference(net, lesson, params, REPAIRS[repair], weights, allowed, discounts)
+        return None
     n, o = len(lesson), net.net
     d = np.full(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
     return int(_replay_rotated_kernel(o.w1, o.w2, o.d1, o.d2, o._h, net._xr, np.empty(net.n_actions), net.perms,
@@ -54,13 +53,11 @@ def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=Non
                                       o.scale, o.lr, net.config.momentum))
 
 
-def replay_ahc_rotated(v_net: OAON, policy: RotatedNet, lesson, params) -> int:
+def replay_ahc_rotated(v_net: OAON, policy: RotatedNet, lesson, params) -> int | None:
     """Compiled incremental Fig. 5.1(b) into Ch. 4's AHCON nets (a V-net with a hidden layer, a rotated policy net):
     the registered fast path of ``connrl.core.replay.replay_ahc``, bit for bit the reference loop's."""
     if v_net.config.n_hidden == 0 or v_net.n_nets != 1:
-        from connrl.core.replay import replay_ahc_reference
-
-        return replay_ahc_reference(v_net, policy, lesson, params)
+        return None  # a perceptron V-net is not compiled: the reference loop
     p = policy.net
     return int(_replay_ahc_rotated_kernel(
         v_net.w1, v_net.w2, v_net.d1, v_net.d2, v_net._h, v_net.scale, v_net.lr, v_net.config.momentum,

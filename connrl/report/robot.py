@@ -94,6 +94,14 @@ def _solution_paths(spec, recs: list[dict], out_dir: Path, doc: Path) -> list[st
             figure(Path(f), doc, f"{spec.name}-paths"), ""]
 
 
+def _compute_note(walls, run_walls, cpus, summaries) -> str:
+    together = ("ran in one pool with other experiments" if any(s["timing"].get("pooled") for s in summaries.values())
+                else f"took {sum(walls) / 60:.1f} min of wall time together")
+    return (f"**Compute:** the {len(walls)} Ch. 5 experiments above ({len(run_walls)} runs) {together} "
+            f"({sum(run_walls) / 60:.1f} min summed over runs; "
+            f"machine with {', '.join(str(c) for c in sorted(cpus, key=str))} CPUs; the `connrl run` commands above).")
+
+
 def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     """Markdown for docs/RESULTS.md: our Ch. 5 numbers beside the thesis's, from OUT/robot-*/ records."""
     out_dir = Path(out_dir)
@@ -101,7 +109,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     lines: list[str] = []
     curves: dict[tuple[str, str], tuple[np.ndarray, np.ndarray, int]] = {}
     any_found = False
-    walls, run_walls, cpus, seeds, pooled = [], [], set(), {}, False
+    walls, run_walls, cpus, seeds = [], [], set(), {}
     copy_summary = None
     per_run: dict = {}  # (experiment, variant) -> (x, each run's curve)
     summaries: dict = {}
@@ -113,7 +121,6 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
         summaries[spec.name] = summary
         seeds[spec.name] = f"{summary['base_seed']}..{summary['base_seed'] + summary['runs_per_variant'] - 1}"
         walls.append(summary["timing"]["wall_time_s"])
-        pooled = pooled or bool(summary["timing"].get("pooled"))
         run_walls += summary["timing"]["run_wall_time_s"]
         cpus.add(summary["environment"].get("cpus"))
         prof = summary["profile"]
@@ -146,12 +153,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
     intro += ["The simulator as Fig. 5.3 shows it (`connrl.envs.robot.render_figure_5_3`, noisy readings, seed 0):",
               "", figure(sim_png, doc, "robot-figure-5-3"), ""]
     lines = intro + lines
-    together = ("ran in one pool with other experiments" if pooled else
-                f"took {sum(walls) / 60:.1f} min of wall time together")
-    lines += [f"**Compute:** the {len(walls)} Ch. 5 experiments above ({len(run_walls)} runs) {together} "
-              f"({sum(run_walls) / 60:.1f} min summed over runs; "
-              f"machine with {', '.join(str(c) for c in sorted(cpus, key=str))} CPUs; the `connrl run` commands "
-              "above).", ""]
+    lines += [_compute_note(walls, run_walls, cpus, summaries), ""]
     lines += _speedup_tables(curves) + _fresh_speedups(curves, summaries)
     lines += ["### Where Ch. 5 falls short", "", note("robot-shortfall"), "",
               *dp_notes(curves, copy_summary, seeds, per_run, summaries), *_docking_notes(curves, seeds),
