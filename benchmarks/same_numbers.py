@@ -87,14 +87,20 @@ def differences(old: Path, new: Path) -> list[str]:
     return diff
 
 
-def compare_folders(out: Path, against: Path) -> tuple[int, str]:
+def folder_differences(out: Path, against: Path) -> tuple[dict[str, list[str]], int, int, int]:
+    """Two stored folders run by run: (what differs in each run that differs, the runs in both, only in ``out``,
+    only in ``against``)."""
     mine = {p.relative_to(out).with_suffix("") for p in out.glob("*/runs/*/*/seed-*.json")}
     theirs = {p.relative_to(against).with_suffix("") for p in against.glob("*/runs/*/*/seed-*.json")}
-    both = sorted(mine & theirs)
-    moved = [str(r) for r in both if differences(out / r, against / r)]
-    lines = [f"MOVED {r}: {', '.join(differences(out / r, against / r))} differ" for r in moved]
-    lines.append(f"{len(both) - len(moved)} of the {len(both)} runs stored in both {out} and {against} have the same "
-                 f"numbers bit for bit ({len(theirs - mine)} only in {against}, {len(mine - theirs)} only in {out})")
+    diffs = {str(r): differences(out / r, against / r) for r in sorted(mine & theirs)}
+    return {r: d for r, d in diffs.items() if d}, len(mine & theirs), len(mine - theirs), len(theirs - mine)
+
+
+def compare_folders(out: Path, against: Path) -> tuple[int, str]:
+    moved, both, only_out, only_against = folder_differences(out, against)
+    lines = [f"MOVED {r}: {', '.join(d)} differ" for r, d in moved.items()]
+    lines.append(f"{both - len(moved)} of the {both} runs stored in both {out} and {against} have the same numbers "
+                 f"bit for bit ({only_against} only in {against}, {only_out} only in {out})")
     print("\n".join(lines))
     return (1 if moved else 0), "\n".join(lines)
 

@@ -26,8 +26,7 @@ import time
 from pathlib import Path
 
 from blocks import paste
-
-COMPARED = ("metrics", "curve_x", "curve_y", "extra", "diverged")
+from same_numbers import folder_differences
 
 
 def reproduce(out: Path, only: str, profile: str, workers: int, executor: str) -> float:
@@ -65,11 +64,10 @@ def main() -> None:
         base = Path(tempfile.mkdtemp(prefix="scale-out-"))
         wall = {kind: reproduce(base / kind, args.only, args.profile, args.workers, kind)
                 for kind in ("process", "ray")}
-        a, b = records(base / "process"), records(base / "ray")
-        same = a.keys() == b.keys() and all(
-            json.dumps([a[k].get(f) for f in COMPARED]) == json.dumps([b[k].get(f) for f in COMPARED]) for k in a)
+        moved, both, only_process, only_ray = folder_differences(base / "process", base / "ray")
+        same = not moved and not only_process and not only_ray
         lines.append(f"connrl reproduce --only {args.only} --profile {args.profile} --workers {args.workers}: "
-                     f"{len(a)} runs; process pool {wall['process']:.1f} s, local Ray {wall['ray']:.1f} s "
+                     f"{both} runs; process pool {wall['process']:.1f} s, local Ray {wall['ray']:.1f} s "
                      f"(Ray / process = {wall['ray'] / wall['process']:.2f}); every run's numbers the same: {same}")
     if args.from_records:
         recs = list(records(args.from_records).values())

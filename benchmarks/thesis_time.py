@@ -96,8 +96,7 @@ def main() -> None:
                 records += recs
                 order.append(spec.name)
     if args.write_times:
-        table = run_times_table(records, args.profile, f"python benchmarks/thesis_time.py --out {out} "
-                                f"{'--from-records ' if args.from_records else ''}--write-times")
+        table = run_times_table(records, args.profile, how_called(args) + " --write-times")
         RUN_TIMES.write_text(json.dumps(table, indent=1) + "\n")
     lines = report(records, order, chapter_of, args, wall, cpu, start, end)
     if args.top:

@@ -16,6 +16,12 @@ from connrl.nets.mlp import OAON
 from connrl.nets.rotated import RotatedNet
 
 
+def _lesson_arrays(lesson) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A lesson's inputs, actions and rewards as the kernels take them (contiguous float64 / int64 / float64)."""
+    return (np.ascontiguousarray(lesson.inputs, dtype=np.float64), np.ascontiguousarray(lesson.actions, dtype=np.int64),
+            np.ascontiguousarray(lesson.rewards, dtype=np.float64))
+
+
 def replay_oaon(net: OAON, lesson, params, repair: int = 0, weights=None, allowed=None, discounts=None) -> int:
     """Compiled incremental backward replay of one lesson into an OAON Q-function: the registered fast path
     of ``connrl.core.replay.replay_q`` (its arguments). ``repair`` 1/2 adds the lower/raise repairs of 5.4.3 after
@@ -24,11 +30,8 @@ def replay_oaon(net: OAON, lesson, params, repair: int = 0, weights=None, allowe
     d = np.full(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
     w = np.zeros((0, a)) if weights is None else np.ascontiguousarray(weights, dtype=np.float64)
     m = np.zeros((0, a), dtype=np.bool_) if allowed is None else np.ascontiguousarray(allowed, dtype=np.bool_)
-    return int(_replay_q_kernel(net.w1, net.w2, net.d1, net.d2, net._h, np.empty(a),
-                                np.ascontiguousarray(lesson.inputs, dtype=np.float64),
-                                np.ascontiguousarray(lesson.actions),
-                                np.ascontiguousarray(lesson.rewards, dtype=np.float64), bool(lesson.terminated),
-                                d, float(params.lam), float(params.temperature),
+    return int(_replay_q_kernel(net.w1, net.w2, net.d1, net.d2, net._h, np.empty(a), *_lesson_arrays(lesson),
+                                bool(lesson.terminated), d, float(params.lam), float(params.temperature),
                                 float(params.p_threshold), 0.0 if params.clip is None else float(params.clip),
                                 params.clip is not None, net.scale, net.lr, net.config.momentum, int(repair),
                                 net.config.linear_output, w, m))
@@ -37,18 +40,16 @@ def replay_oaon(net: OAON, lesson, params, repair: int = 0, weights=None, allowe
 def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=None, allowed=None,
                    discounts=None) -> int | None:
     """Compiled incremental backward replay of one lesson into a rotated net (4.2.4): the registered fast path of
-    ``connrl.core.replay.replay_q`` for Ch. 4's nets, bit for bit the reference loop's (tests/core/test_replay.py).
-    The 5.4.3 repairs and Ch. 6's per-step weights and allowed choices, which Ch. 4 does not use, are not compiled:
-    None sends them to the reference loop."""
+    ``connrl.core.replay.replay_q`` for Ch. 4's nets, bit for bit the reference loop's
+    (tests/core/test_replay_compiled.py). The 5.4.3 repairs and Ch. 6's per-step weights and allowed choices, which
+    Ch. 4 does not use, are not compiled: None sends them to the reference loop."""
     if repair or weights is not None or allowed is not None:
         return None
     n, o = len(lesson), net.net
     d = np.full(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
     return int(_replay_rotated_kernel(o.w1, o.w2, o.d1, o.d2, o._h, net._xr, np.empty(net.n_actions), net.perms,
-                                      np.ascontiguousarray(lesson.inputs, dtype=np.float64),
-                                      np.ascontiguousarray(lesson.actions, dtype=np.int64),
-                                      np.ascontiguousarray(lesson.rewards, dtype=np.float64), bool(lesson.terminated),
-                                      d, float(params.lam), float(params.temperature), float(params.p_threshold),
+                                      *_lesson_arrays(lesson), bool(lesson.terminated), d, float(params.lam),
+                                      float(params.temperature), float(params.p_threshold),
                                       0.0 if params.clip is None else float(params.clip), params.clip is not None,
                                       o.scale, o.lr, net.config.momentum))
 
@@ -62,7 +63,6 @@ def replay_ahc_rotated(v_net: OAON, policy: RotatedNet, lesson, params) -> int |
     return int(_replay_ahc_rotated_kernel(
         v_net.w1, v_net.w2, v_net.d1, v_net.d2, v_net._h, v_net.scale, v_net.lr, v_net.config.momentum,
         p.w1, p.w2, p.d1, p.d2, p._h, policy._xr, np.empty(policy.n_actions), policy.perms, p.scale, p.lr,
-        policy.config.momentum, np.ascontiguousarray(lesson.inputs, dtype=np.float64),
-        np.ascontiguousarray(lesson.actions, dtype=np.int64), np.ascontiguousarray(lesson.rewards, dtype=np.float64),
-        bool(lesson.terminated), float(params.gamma), float(params.lam), float(params.temperature),
-        float(params.p_threshold), 0.0 if params.clip is None else float(params.clip), params.clip is not None))
+        policy.config.momentum, *_lesson_arrays(lesson), bool(lesson.terminated), float(params.gamma),
+        float(params.lam), float(params.temperature), float(params.p_threshold),
+        0.0 if params.clip is None else float(params.clip), params.clip is not None))

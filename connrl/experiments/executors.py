@@ -107,8 +107,8 @@ class ProcessExecutor:
 class RayExecutor:
     """Runs as Ray tasks (``--executor ray``): on a local Ray instance started here, or on the cluster at ``address``
     (``ray start --head`` on one machine, ``ray start --address=HEAD:6379`` on the others; ``--address HEAD:6379``
-    here). ``fn(job)`` runs as a task and its result comes back here (``_execute`` gives it ``run_job``, which writes
-    nothing, and writes the records itself, so the cluster needs no shared disk)."""
+    here). ``fn(job)`` runs as a task and its result comes back here (``runner.execute`` gives it ``run_job``, which
+    writes nothing, and writes the records itself, so the cluster needs no shared disk)."""
 
     def __init__(self, workers: int, address: str | None = None):
         self.workers, self.address = workers, address
@@ -162,9 +162,8 @@ class Progress:
 
     ``expected`` gives each job's expected seconds (by its path); the ETA is the expected time of what is left over
     the workers (never less than the longest run left), scaled by how the finished runs compared with their
-    expectation (the machine's speed). With
-    ``calibrated`` False the expected times are only relative (another profile's), so no ETA is shown until a run
-    has finished."""
+    expectation (the machine's speed). With ``calibrated`` False the expected times are only relative (another
+    profile's), so no ETA is shown until a run has finished."""
 
     def __init__(self, jobs: Iterable[Any], title: str, expected: dict[str, float] | None = None, workers: int = 1,
                  calibrated: bool = True):

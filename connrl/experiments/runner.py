@@ -292,11 +292,9 @@ def run_experiments(batches: list[Batch], *, out: Path | str = "runs", workers: 
             summary["timing"]["pooled"] = len(batches) > 1 and bool(ran)  # its wall time is a span in a shared pool
             summary_path = out / b.spec.name / "summary.json"
             atomic_write_text(summary_path, strict_json(summary, indent=1, default=json_default))
-            outcomes[b.spec.name] = RunOutcome(summary, summary_path, recs, left_at_start[b.spec.name],
-                                               reused[b.spec.name])
+            outcomes[b.spec.name] = RunOutcome(summary, summary_path, recs, len(ran), reused[b.spec.name])
             on_done(outcomes[b.spec.name])
 
-        left_at_start = dict(left)
         for b, _ in plans:
             if left[b.spec.name] == 0:
                 finish(b)
@@ -344,11 +342,6 @@ def execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind
     finally:
         if display:
             display.stop()
-
-
-def _execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind: str = "process",
-             address: str | None = None) -> list[dict]:
-    return [rec for _, rec in execute(jobs, workers, show_progress, title, kind, address)]
 
 
 def prepare_outputs(folder: Path, jobs: list[Job]) -> None:

@@ -26,7 +26,7 @@ import numpy as np
 
 from connrl.envs.robot import Layout, RobotSim
 from connrl.experiments.robot import BEFORE_44, RobotParams, first_reaching
-from connrl.experiments.runner import Job, _execute, params_hash
+from connrl.experiments.runner import Job, execute, params_hash
 from connrl.experiments.spec import as_dict, qualified_name
 from connrl.experiments.store import load_record
 from connrl.storage import atomic_write_text, read_json, strict_json
@@ -126,7 +126,8 @@ def run_jobs(jobs: list[Job], workers: int, executor: str, address: str | None, 
         else:
             done[job.path] = rec
     if todo:
-        _execute(todo, min(workers, len(todo)), show, "world-family", executor, address)  # writes the records
+        for _ in execute(todo, min(workers, len(todo)), show, "world-family", executor, address):
+            pass  # execute writes each run's records
         for job in todo:
             rec, damage = load_record(job.path, job)
             if rec is None:
