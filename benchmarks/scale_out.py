@@ -28,6 +28,8 @@ from pathlib import Path
 from blocks import paste
 from same_numbers import folder_differences
 
+from connrl.experiments.timing import computed
+
 
 def reproduce(out: Path, only: str, profile: str, workers: int, executor: str) -> float:
     t0 = time.perf_counter()
@@ -70,7 +72,7 @@ def main() -> None:
                      f"{both} runs; process pool {wall['process']:.1f} s, local Ray {wall['ray']:.1f} s "
                      f"(Ray / process = {wall['ray'] / wall['process']:.2f}); every run's numbers the same: {same}")
     if args.from_records:
-        recs = list(records(args.from_records).values())
+        recs = computed(records(args.from_records).values())  # a copied twin run took no time
         times = [float(r["wall_time_s"]) + float(r.get("compile_time_s") or 0.0) for r in recs]
         lines.append(f"{len(times)} runs of {args.from_records}, {sum(times) / 60:.1f} min in all, the longest "
                      f"{max(times):.0f} s; expected wall time of the runs, longest first:")

@@ -29,7 +29,7 @@ from blocks import paste
 
 from connrl.experiments.registry import CHAPTERS, all_experiments, by_chapter
 from connrl.experiments.runner import make_jobs, run_job, stored_runs
-from connrl.experiments.timing import RUN_TIMES, per_experiment, pool_usage, run_times_table
+from connrl.experiments.timing import RUN_TIMES, computed, per_experiment, pool_usage, run_times_table
 
 # cProfile's own-time of each function, by where it lives (the first pattern that matches the "file:function")
 CATEGORIES = [
@@ -117,8 +117,11 @@ def report(records, order, chapter_of, args, wall, cpu, start, end) -> list[str]
     per = per_experiment(records)
     total = sum(e["run_s"] for e in per.values())
     commits = sorted({(r.get("environment") or {}).get("git_commit", "?")[:7] for r in records})
+    copies = len(records) - len(computed(records))
     lines = [f"On {os.cpu_count()} cores: {len(records)} runs of {len(order)} experiments at the {args.profile} "
-             f"profile, made at commit{'s' if len(commits) > 1 else ''} {', '.join(commits[:6])}"
+             + (f"profile ({copies} of them copies of a twin run in another experiment, computed once), "
+                if copies else "profile, ")
+             + f"made at commit{'s' if len(commits) > 1 else ''} {', '.join(commits[:6])}"
              + (f" and {len(commits) - 6} more" if len(commits) > 6 else "") + "."]
     if wall is not None:
         use = pool_usage(records, args.workers, start, end)

@@ -48,6 +48,7 @@ from connrl.experiments.store import (
     json_default,
     load_record,
     load_summary,
+    write_copy,
     write_run_records,
 )
 from connrl.storage import atomic_write_text, strict_json
@@ -300,15 +301,32 @@ def run_experiments(batches: list[Batch], *, out: Path | str = "runs", workers: 
                 finish(b)
         expected, calibrated = expected_seconds(todo)
         todo.sort(key=lambda j: -expected[j.path])  # stable: equal times keep the experiments' order
+        todo, twins = split_twins(todo)
         workers = min(workers or os.cpu_count() or 1, max(len(todo), 1))
         by_name = {b.spec.name: b for b in batches}
         for job, rec in (execute(todo, workers, show_progress, title, executor, address, expected, calibrated)
                          if todo else ()):
-            records[job.experiment].append(rec)
-            left[job.experiment] -= 1
-            if left[job.experiment] == 0:
-                finish(by_name[job.experiment])
+            for j, r in [(job, rec)] + [(t, write_copy(Path(job.path), rec, t)) for t in twins.get(job.path, [])]:
+                records[j.experiment].append(r)
+                left[j.experiment] -= 1
+                if left[j.experiment] == 0:
+                    finish(by_name[j.experiment])
     return [outcomes[b.spec.name] for b in batches]
+
+
+def split_twins(jobs: list[Job]) -> tuple[list[Job], dict[str, list[Job]]]:
+    """The jobs to run, and for each (by path) its twins: jobs of other experiments or variants with the same run
+    function, parameters and seed, which would compute the same numbers (a run is a pure function of these; e.g.
+    survival-speedup's QCON-M is survival-study2's). A twin's records are copied from the run, not computed again."""
+    first: dict[str, Job] = {}
+    twins: dict[str, list[Job]] = {}
+    for job in jobs:
+        key = json.dumps([job.run_ref, job.params_type, job.params, job.seed], sort_keys=True, default=json_default)
+        if key in first:
+            twins.setdefault(first[key].path, []).append(job)
+        else:
+            first[key] = job
+    return list(first.values()), twins
 
 
 def execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind: str = "process",

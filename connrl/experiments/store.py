@@ -23,6 +23,7 @@ from connrl.storage import (
     MAX_JSON_BYTES,
     MAX_NESTING,
     FileError,
+    atomic_write_bytes,
     atomic_write_text,
     finite_float,
     json_problem,
@@ -207,6 +208,18 @@ def write_run_records(path: Path, record: dict, rows: list[dict]) -> None:
     atomic_write_text(path.with_suffix(".csv"), buf.getvalue())
     # the .json is written last: its presence marks the run as finished
     atomic_write_text(path.with_suffix(".json"), strict_json(record, indent=1, default=json_default))
+
+
+def write_copy(source: Path, record: dict, job) -> dict:
+    """``job``'s records as a copy of the finished run at ``source`` (its ``record``), which had the same run
+    function, parameters and seed: the CSV as it is, the record under ``job``'s experiment and variant with
+    ``copy_of`` naming the run it copies (timing counts that run's time once). Returns the copy's record."""
+    rec = dict(record, experiment=job.experiment, variant=job.variant,
+               copy_of={"experiment": record["experiment"], "variant": record["variant"]})
+    path = Path(job.path)
+    atomic_write_bytes(path.with_suffix(".csv"), Path(source).with_suffix(".csv").read_bytes())
+    atomic_write_text(path.with_suffix(".json"), strict_json(rec, indent=1, default=json_default))
+    return rec
 
 
 def json_default(o):

@@ -53,6 +53,12 @@ def run_times_table(records: Iterable[dict], profile: str, made_by: str) -> dict
     return {"profile": profile, "made_by": made_by, "seconds": seconds}
 
 
+def computed(records: Iterable[dict]) -> list[dict]:
+    """The records of runs computed, not copied from a twin (``connrl.experiments.store.write_copy``): their time
+    was spent once, in the run they copy."""
+    return [r for r in records if not r.get("copy_of")]
+
+
 def run_span(rec: dict) -> tuple[float, float]:
     """(start, end) of a run in Unix seconds: its compiling counts, it kept a core busy (0-based for a record from
     before runs noted their start)."""
@@ -67,7 +73,7 @@ def pool_usage(records: list[dict], workers: int, start: float, end: float) -> d
     time before the first run began (imports, refusals, reading what is stored), ``tail_s`` the time after fewer than
     ``workers`` runs were left in flight for good (the pool's tail: the last long runs), ``tail_idle_s`` the
     core-seconds idle in it."""
-    spans = sorted(run_span(r) for r in records)
+    spans = sorted(run_span(r) for r in computed(records))
     wall = max(end - start, 1e-9)
     busy = sum(b - a for a, b in spans)
     if not spans:
@@ -92,7 +98,7 @@ def per_experiment(records: Iterable[dict]) -> dict[str, dict]:
     """Per experiment: runs, run seconds (wall, CPU, compiling), the longest run, and its span in the pool
     (``cpu_known`` False: some record did not note its CPU time, which then counts as its wall time)."""
     out: dict[str, dict] = {}
-    for r in records:
+    for r in computed(records):
         e = out.setdefault(r["experiment"], {"runs": 0, "run_s": 0.0, "cpu_s": 0.0, "compile_s": 0.0,
                                               "longest_s": 0.0, "first": float("inf"), "last": 0.0,
                                               "cpu_known": True})

@@ -42,6 +42,40 @@ def _output(w2, s, h, o):
 
 
 @numba.njit(cache=True)
+def _transposed(w1):
+    """w1 (A, H, I+C+1) as (I+C+1, A*H): a row per input (x, c, then the bias), every net's hidden units side by
+    side, so that ``_hidden_lanes`` reads each input's weights to many units at once."""
+    n_a, n_h, n_w = w1.shape
+    wt = np.empty((n_w, n_a * n_h))
+    for a in range(n_a):
+        for j in range(n_h):
+            for i in range(n_w):
+                wt[i, a * n_h + j] = w1[a, j, i]
+    return wt
+
+
+@numba.njit(cache=True)
+def _hidden_lanes(wt, lo, hi, x, c, h):
+    """``_hidden`` for the hidden units lo..hi-1 of ``_transposed``'s columns (net a's are a*H..a*H+H-1), into h
+    (hi - lo,). Each unit sums its bias, inputs, then context in ``_hidden``'s order, so its value is ``_hidden``'s
+    bit for bit; the units advance together one input at a time, which the CPU does in vector lanes."""
+    n_in, n_c = x.shape[0], c.shape[0]
+    bias = n_in + n_c
+    for u in range(lo, hi):
+        h[u - lo] = wt[bias, u]
+    for i in range(n_in):
+        xi = x[i]
+        for u in range(lo, hi):
+            h[u - lo] += wt[i, u] * xi
+    for k in range(n_c):
+        ck = c[k]
+        for u in range(lo, hi):
+            h[u - lo] += wt[n_in + k, u] * ck
+    for u in range(hi - lo):
+        h[u] = 1.0 / (1.0 + math.exp(-h[u])) - 0.5
+
+
+@numba.njit(cache=True)
 def _forward_all(w1, w2, x, c, scale, h_all, y):
     """Outputs of every action net at (x, c): y (A, O) scaled; h_all (A, H) keeps the hidden layers."""
     n_a = w1.shape[0]
@@ -60,13 +94,16 @@ def _forward_sequence(w1, w2, xs, actions, feedback, scale, ys, cs, hs=None, os=
     what ``_bptt``'s own forward pass would compute again."""
     n_t = xs.shape[0]
     n_c = cs.shape[1]
-    h_all = np.empty((w1.shape[0], w1.shape[1]))
+    n_a, n_h = w1.shape[0], w1.shape[1]
+    wt = _transposed(w1)
+    h_flat = np.empty(n_a * n_h)
+    h_all = h_flat.reshape((n_a, n_h))
     shared = w2.shape[0] == 1
     cs[0, :] = 0.0
     for t in range(n_t):
         a = actions[t]
-        for b in range(w1.shape[0]):  # _forward_all, keeping the taken net's output before it is scaled
-            _hidden(w1, b, xs[t], cs[t], h_all[b])
+        _hidden_lanes(wt, 0, n_a * n_h, xs[t], cs[t], h_flat)  # every net's hidden layer at once
+        for b in range(n_a):  # _forward_all, keeping the taken net's output before it is scaled
             _output(w2, 0 if shared else b, h_all[b], ys[t, b])
             if os is not None and b == a and t < os.shape[0]:
                 os[t, :] = ys[t, b, :]
@@ -87,10 +124,11 @@ def _bptt(w1, w2, xs, actions, targets, weights, feedback, decay, scale, g1, g2)
     hs = np.empty((n_t, n_h))
     os = np.empty((n_t, w2.shape[1]))
     cs = np.zeros((n_t + 1, n_c))
+    wt = _transposed(w1)
     # forward through the taken actions' nets only (the others do not affect the loss or the context)
     for t in range(n_t):
         a = actions[t]
-        _hidden(w1, a, xs[t], cs[t], hs[t])
+        _hidden_lanes(wt, a * n_h, a * n_h + n_h, xs[t], cs[t], hs[t])
         _output(w2, 0 if shared else a, hs[t], os[t])
         for k in range(n_c):
             cs[t + 1, k] = feedback * hs[t, k]

@@ -1,9 +1,11 @@
 """State grouping (6.6.4): groups of consecutive similar states, random centres, rewards and discounts gamma^k."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from connrl.core.grouping import group_lesson, group_states
+from connrl.core.grouping import _pairwise_sum, _sq_distance, group_lesson, group_states, group_states_reference
 from connrl.core.lessons import Lesson
 
 
@@ -67,3 +69,63 @@ def test_a_group_ends_where_the_action_changes():
 def test_bad_mu_range_is_one_clear_error(bad):
     with pytest.raises(ValueError, match="mu_range must be"):
         group_states(np.zeros((2, 1)), bad, _FixedRng(1.0))
+
+
+def _old_group_lesson(lesson, gamma, mu_range, rng):
+    """group_lesson as it was written before it was compiled (centres drawn per group, rewards by NumPy)."""
+    n = len(lesson)
+    starts = group_states_reference(lesson.inputs[:n], mu_range, rng, lesson.actions)
+    ends = np.append(starts[1:], n)
+    centres = np.array([int(rng.integers(s, e)) for s, e in zip(starts, ends, strict=True)], dtype=np.int64)
+    nxt = np.append(centres[1:], n)
+    rewards = np.array([np.sum(lesson.rewards[c:m] * gamma ** np.arange(m - c)) for c, m in zip(centres, nxt,
+                                                                                                  strict=True)])
+    return centres, rewards, gamma ** (nxt - centres).astype(np.float64)
+
+
+@pytest.mark.parametrize("dim", [1, 3, 16, 17, 40])
+def test_compiled_grouping_is_the_plain_loop_bit_for_bit(dim):
+    data = np.random.default_rng(dim)
+    for trial in range(30):
+        n = int(data.integers(1, 300))
+        # a random walk, so runs of nearby states form groups of many sizes; actions in long stretches
+        x = np.cumsum(data.normal(0, 0.3 / np.sqrt(dim), (n + 1, dim)), axis=0)
+        acts = np.repeat(data.integers(0, 4, n), data.integers(1, 40, n))[:n]
+        lesson = Lesson(x, acts, data.normal(size=n) * (data.random(n) < 0.3), terminated=bool(trial % 2))
+        a, b = np.random.default_rng(trial), np.random.default_rng(trial)
+        assert group_states(x[:n], (0.5, 2.5), a).tolist() == group_states_reference(x[:n], (0.5, 2.5), b).tolist()
+        g = group_lesson(lesson, 0.9, (0.25, 1.25), a)
+        centres, rewards, discounts = _old_group_lesson(lesson, 0.9, (0.25, 1.25), b)
+        assert g.centres.tolist() == centres.tolist()
+        assert g.lesson.rewards.tobytes() == rewards.tobytes() and g.discounts.tobytes() == discounts.tobytes()
+        assert a.random() == b.random()  # the same draws, in the same order
+
+
+def test_compiled_distance_and_sum_follow_numpy():
+    data = np.random.default_rng(0)
+    d, acc = np.empty(40), np.empty(16)
+    same = []
+    for dim in range(1, 41):
+        x = data.normal(size=(2, dim)) * 10 ** data.uniform(-3, 3, (2, dim))
+        ours, numpy_ = _sq_distance(x, 0, 1, d[:dim], acc), np.linalg.norm(x[1] - x[0]) ** 2
+        assert ours == pytest.approx(numpy_, rel=1e-14)
+        same.append(np.sqrt(ours) == np.linalg.norm(x[1] - x[0]))
+    # NumPy's dot sums in its BLAS's order; with OpenBLAS's Haswell kernel (the machine the results were made on)
+    # every distance is NumPy's bit for bit
+    if _blas_core() in ("Haswell", "Zen"):
+        assert all(same)
+    for n in [0, 1, 7, 8, 9, 15, 16, 127, 128, 129, 255, 256, 257, 1000, 4099]:
+        a = data.normal(size=n) * 10 ** data.uniform(-3, 3, n)
+        assert 0.0 + _pairwise_sum(a, 0, n) == np.sum(a)
+
+
+def _blas_core() -> str:
+    import ctypes
+    import glob
+
+    for lib in glob.glob(str(Path(np.__file__).parents[1] / "numpy.libs" / "libscipy_openblas*")):
+        f = getattr(ctypes.CDLL(lib), "scipy_openblas_get_corename64_", None)
+        if f is not None:
+            f.restype = ctypes.c_char_p
+            return f().decode()
+    return "unknown"

@@ -88,3 +88,29 @@ def test_one_pool_starts_the_longest_runs_first_and_gives_each_experiment_its_ow
     again = run_experiments([Batch(s, "tiny", None, 0) for s in specs], out=tmp_path / "pool", workers=1,
                             show_progress=False, executor="ray")
     assert [(o.ran, o.reused) for o in again] == [(0, len(o.records)) for o in outcomes]
+
+
+def test_a_run_two_experiments_share_is_computed_once_and_copied(tmp_path, monkeypatch):
+    # robot-dp-replay-order's "3 lessons, after" is robot-repairs-3's "none": same run function, parameters and seed
+    specs = [get_experiment("robot-repairs-3"), get_experiment("robot-dp-replay-order")]
+    pair = {("robot-repairs-3", "none"), ("robot-dp-replay-order", "3 lessons, after")}
+    ran = []
+    execute_job = runner.execute_job
+    monkeypatch.setattr(runner, "execute_job", lambda job: ran.append(job.path) or execute_job(job))
+    pooled = run_experiments([Batch(s, "tiny", None, 0) for s in specs], out=tmp_path / "pool", workers=1,
+                             show_progress=False)
+    assert len(ran) == sum(len(o.records) for o in pooled) - 1
+    (copy,) = [r for o in pooled for r in o.records if r.get("copy_of")]
+    source = (copy["copy_of"]["experiment"], copy["copy_of"]["variant"])
+    assert {(copy["experiment"], copy["variant"]), source} == pair
+    assert timing.per_experiment([copy]) == {}  # its time was spent once, in the run it copies
+    monkeypatch.setattr(runner, "execute_job", execute_job)
+    spec = get_experiment(copy["experiment"])
+    alone = run_experiment(spec, profile="tiny", seed=0, out=tmp_path / "alone", workers=1, show_progress=False)
+    pooled_summary = next(o.summary for o in pooled if o.summary["experiment"] == spec.name)
+    assert json.dumps(pooled_summary["variants"]) == json.dumps(alone.summary["variants"])
+    for p in (tmp_path / "pool" / spec.name).rglob("seed-*.csv"):
+        assert p.read_bytes() == (tmp_path / "alone" / p.relative_to(tmp_path / "pool")).read_bytes()
+    again = run_experiments([Batch(s, "tiny", None, 0) for s in specs], out=tmp_path / "pool", workers=1,
+                            show_progress=False)
+    assert [o.ran for o in again] == [0, 0]  # a copy is a finished run like any other
