@@ -12,6 +12,10 @@ the loop adds on top of it.
 - a greedy test play (Ch. 4): ``run_trial`` against ``connrl.tasks.survival_play.greedy_play``;
 - Ch. 8's recurrent replay over behaviours (weights and allowed choices): ``batch_targets`` + ``train_sequence``
   against the one kernel;
+- the recurrent nets' forward over a lesson (Chs. 7, 8): unit by unit (tests/nets/test_recurrent_lanes.py keeps it)
+  against ``_forward_sequence`` (vector lanes over units);
+- state grouping (Ch. 6): ``group_lesson``'s plain loops (``group_states_reference``,
+  ``centres_and_rewards_reference``) against its compiled paths;
 - Boltzmann selection at T > 0: ``boltzmann_probabilities`` + cumsum + searchsorted against ``boltzmann_select``.
 Each time is the best of --repeat rounds.
 """
@@ -28,6 +32,7 @@ import numpy as np
 
 from connrl.agents.memory import replay_recurrent_q
 from connrl.core.exploration import boltzmann_probabilities, boltzmann_select
+from connrl.core.grouping import group_lesson
 from connrl.core.lessons import Lesson
 from connrl.core.replay import ReplayParams, replay_ahc, replay_ahc_reference, replay_q, replay_q_reference
 from connrl.core.rollout import run_trial
@@ -35,11 +40,13 @@ from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, Surviva
 from connrl.nets import OAON, NetConfig
 from connrl.nets.kernels import _rotated_values
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
+from connrl.nets.recurrent_kernels import _forward_sequence
 from connrl.nets.rotated import RotatedNet
 from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 from connrl.tasks.survival_play import greedy_play
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "nets"))
+from test_recurrent_lanes import _forward_by_unit  # noqa: E402  (the recurrent forward as it was)
 from test_rotated_kernel import _gathered_fastmath  # noqa: E402  (the kernel as it was)
 
 PERMS = np.ascontiguousarray(ROTATION_PERMUTATIONS[list(ACTION_ROTATION)])
@@ -90,6 +97,12 @@ def rows(repeat: int) -> list[tuple[str, float, float]]:
                 best_of(lambda: [run_trial(env, agent, trial=0, learning=False, seed=k, options={"layout_seed": k})
                                  for k in seeds], repeat, 1),
                 best_of(lambda: [greedy_play(env, agent, k) for k in seeds], repeat, 1)))
+    return out + later_rows(repeat, rng)
+
+
+def later_rows(repeat: int, rng) -> list[tuple[str, float, float]]:
+    """Chs. 6-8's hot paths, and Boltzmann selection."""
+    out = []
     # Ch. 8's recurrent replay over behaviours
     cfg = RecurrentNetConfig(16, 12, 8, 1, lr=0.05)
     rnets = [RecurrentOAON(cfg, 4, np.random.default_rng(4)) for _ in range(2)]
@@ -101,6 +114,20 @@ def rows(repeat: int) -> list[tuple[str, float, float]]:
     out.append(("recurrent replay of a 60-step lesson over 4 behaviours (Ch. 8)",
                 best_of(lambda: replay_recurrent_q(rnets[0], rl, rp, w, ok, fast=False), repeat, 300),
                 best_of(lambda: replay_recurrent_q(rnets[1], rl, rp, w, ok), repeat, 300)))
+    # Ch. 7/8's recurrent forward over a lesson, every net (the replay's and the model's first pass)
+    w1, w2 = rng.uniform(-0.6, 0.6, (4, 12, 23)), rng.uniform(-0.6, 0.6, (4, 1, 13))
+    xs, acts = rng.normal(size=(160, 14)), rng.integers(0, 4, 160)
+    ys, cs = np.empty((160, 4, 1)), np.empty((161, 8))
+    out.append(("recurrent forward of a 160-step lesson, 4 nets of 14+8-12-1 (Ch. 7/8)",
+                best_of(lambda: _forward_by_unit(w1, w2, xs, acts, 1.5, 200.0, ys, cs), repeat, 300),
+                best_of(lambda: _forward_sequence(w1, w2, xs, acts, 1.5, 200.0, ys, cs), repeat, 300)))
+    # Ch. 6's state grouping of a long lesson (a random walk, so groups of many sizes)
+    walk = np.cumsum(rng.normal(0, 0.1, (567, 16)), axis=0)
+    gl = Lesson(walk, np.repeat(rng.integers(0, 4, 566), 20)[:566], rng.normal(size=566), False)
+    g0, g1 = np.random.default_rng(6), np.random.default_rng(6)
+    out.append(("state grouping of a 566-step lesson of 16 inputs (Ch. 6, 6.6.4)",
+                best_of(lambda: group_lesson(gl, 0.9, (0.25, 1.25), _PlainRng(g0)), repeat, 50),
+                best_of(lambda: group_lesson(gl, 0.9, (0.25, 1.25), g1), repeat, 50)))
     # Boltzmann selection
     merits, g = rng.normal(size=4), np.random.default_rng(5)
 
@@ -111,6 +138,13 @@ def rows(repeat: int) -> list[tuple[str, float, float]]:
     out.append(("Boltzmann selection of 4 actions at T = 0.05 (every training step)",
                 best_of(plain, repeat, 50000), best_of(lambda: boltzmann_select(merits, 0.05, g), repeat, 50000)))
     return out
+
+
+class _PlainRng:
+    """A Generator seen through plain method calls: ``group_lesson`` then takes its plain loops (the code as it was)."""
+
+    def __init__(self, g):
+        self.uniform, self.integers = g.uniform, g.integers
 
 
 def main() -> None:

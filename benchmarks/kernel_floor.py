@@ -70,7 +70,7 @@ def main() -> None:
         if summary is None or summary["profile"] != args.profile:
             continue
         recs = computed(recs)  # a copy of a twin run took no time
-        for variant in {r["variant"] for r in recs}:
+        for variant in sorted({r["variant"] for r in recs}):
             rs = sorted((r for r in recs if r["variant"] == variant), key=lambda r: r["wall_time_s"])
             mid = rs[(len(rs) - 1) // 2]
             picks.append((name, variant, mid["seed"], mid["wall_time_s"], sum(r["wall_time_s"] for r in rs)))

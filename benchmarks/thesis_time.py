@@ -119,8 +119,8 @@ def report(records, order, chapter_of, args, wall, cpu, start, end) -> list[str]
     commits = sorted({(r.get("environment") or {}).get("git_commit", "?")[:7] for r in records})
     copies = len(records) - len(computed(records))
     lines = [f"On {os.cpu_count()} cores: {len(records)} runs of {len(order)} experiments at the {args.profile} "
-             + (f"profile ({copies} of them copies of a twin run in another experiment, computed once), "
-                if copies else "profile, ")
+             + (f"profile ({copies} of them copies of a twin run with the same run function, parameters and seed, "
+                "computed once), " if copies else "profile, ")
              + f"made at commit{'s' if len(commits) > 1 else ''} {', '.join(commits[:6])}"
              + (f" and {len(commits) - 6} more" if len(commits) > 6 else "") + "."]
     if wall is not None:
@@ -138,16 +138,17 @@ def report(records, order, chapter_of, args, wall, cpu, start, end) -> list[str]
         e = per.get(name)
         if e is None:
             continue
-        span = f"{(e['last'] - e['first']) / 60:.1f}" if wall is not None else "–"
+        span = f"{(e['last'] - e['first']) / 60:.1f}" if wall is not None and e["runs"] else "–"
         cpu = f"{e['cpu_s'] / 60:.2f}" if e["cpu_known"] else "–"
-        lines.append(f"| {chapter_of[name]} | {name} | {e['runs']} | {e['run_s'] / 60:.2f} | {cpu} | "
+        runs = f"{e['runs']} (+{e['copies']} copied)" if e["copies"] else str(e["runs"])
+        lines.append(f"| {chapter_of[name]} | {name} | {runs} | {e['run_s'] / 60:.2f} | {cpu} | "
                      f"{e['run_s'] / total:.1%} | {e['longest_s']:.1f} | {span} |")
     lines += ["", "| chapter | runs | run time (min) | over the cores (min) |", "|---|---|---|---|"]
     for chapter in sorted(set(chapter_of[n] for n in order)):
         es = [per[n] for n in order if chapter_of[n] == chapter and n in per]
         s = sum(e["run_s"] for e in es)
         lines.append(f"| {chapter} | {sum(e['runs'] for e in es)} | {s / 60:.1f} | {s / 60 / args.workers:.1f} |")
-    lines.append(f"| all | {len(records)} | {total / 60:.1f} | {total / 60 / args.workers:.1f} |")
+    lines.append(f"| all | {len(records) - copies} | {total / 60:.1f} | {total / 60 / args.workers:.1f} |")
     return lines
 
 

@@ -21,6 +21,9 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
+from llvmlite import ir
+from numba.core import types
+from numba.extending import intrinsic
 
 from connrl.core.lessons import Lesson
 
@@ -31,8 +34,8 @@ def check_mu_range(mu_range) -> tuple[float, float]:
         lo, hi = (float(v) for v in mu_range)
     except (TypeError, ValueError):
         raise ValueError(f"mu_range must be two numbers (low, high), got {mu_range!r}") from None
-    if not 0 <= lo <= hi:
-        raise ValueError(f"mu_range must be (low, high) with 0 <= low <= high, got {mu_range!r}")
+    if not 0 <= lo <= hi < math.inf:
+        raise ValueError(f"mu_range must be (low, high) with 0 <= low <= high, both finite, got {mu_range!r}")
     return lo, hi
 
 
@@ -43,10 +46,12 @@ def group_states(inputs: np.ndarray, mu_range: tuple[float, float], rng: np.rand
     ``group_states_reference``."""
     x = np.ascontiguousarray(inputs, dtype=np.float64)
     lo, hi = check_mu_range(mu_range)
-    if x.ndim != 2 or not isinstance(rng, np.random.Generator):
+    acts = np.zeros(0, dtype=np.int64) if actions is None else np.asarray(actions)
+    # the compiled loop takes a Generator's draws, integer actions, one per row (else the plain loop's own errors)
+    if (x.ndim != 2 or not isinstance(rng, np.random.Generator) or acts.dtype.kind not in "iu"
+            or (actions is not None and acts.shape != (len(x),))):
         return group_states_reference(x, (lo, hi), rng, actions)
-    acts = np.zeros(0, dtype=np.int64) if actions is None else np.ascontiguousarray(actions, dtype=np.int64)
-    return _group_starts(x, lo, hi, rng, acts, actions is not None)
+    return _group_starts(x, lo, hi, rng, np.ascontiguousarray(acts, dtype=np.int64), actions is not None)
 
 
 def group_states_reference(inputs: np.ndarray, mu_range: tuple[float, float], rng: np.random.Generator,
@@ -86,17 +91,20 @@ def _group_starts(x, lo, hi, rng, actions, has_actions):
 
 @numba.njit(cache=True)
 def _sq_distance(x, i, j, d, acc):
-    """|x[j] - x[i]|^2 summed in the order of ``np.linalg.norm``'s dot on the machine the stored results were made on
-    (OpenBLAS's Haswell ddot: sixteen fused multiply-add lanes over blocks of 16, a fixed tree, then a plain tail).
-    Where NumPy sums otherwise, a distance can differ in its last bit, which moves a group only if it lies within that
-    bit of mu. ``d`` (I,) and ``acc`` (16,) are scratch."""
+    """|x[j] - x[i]|^2 summed in the order of ``np.linalg.norm``'s dot where the stored results were made (NumPy's
+    OpenBLAS with ``OPENBLAS_CORETYPE=Haswell``: sixteen fused multiply-add lanes over blocks of 16, a fixed tree,
+    then a plain tail), fixed here on every machine. ``d`` (I,) and ``acc`` (16,) are scratch."""
     n = x.shape[1]
     for k in range(n):
         d[k] = x[j, k] - x[i, k]
     n1 = n & -16
     s = 0.0
     if n1:
-        _fma_lanes(d, n1, acc)
+        for lane in range(16):
+            acc[lane] = 0.0
+        for b in range(0, n1, 16):
+            for lane in range(16):
+                acc[lane] = _fma(d[b + lane], d[b + lane], acc[lane])
         even = ((acc[0] + acc[2]) + (acc[4] + acc[6])) + ((acc[8] + acc[10]) + (acc[12] + acc[14]))
         odd = ((acc[1] + acc[3]) + (acc[5] + acc[7])) + ((acc[9] + acc[11]) + (acc[13] + acc[15]))
         s = even + odd
@@ -105,15 +113,15 @@ def _sq_distance(x, i, j, d, acc):
     return s
 
 
-@numba.njit(cache=True, fastmath={"contract"})
-def _fma_lanes(d, n1, acc):
-    """acc[lane] = sum of d[b + lane]^2 over the blocks b of 16, each step one fused multiply-add (only this
-    function contracts)."""
-    for lane in range(16):
-        acc[lane] = 0.0
-    for b in range(0, n1, 16):
-        for lane in range(16):
-            acc[lane] = d[b + lane] * d[b + lane] + acc[lane]
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """``a * b + c`` rounded once, on every CPU (hardware FMA or libm's fma)."""
+
+    def codegen(context, builder, signature, args):
+        d = ir.DoubleType()
+        return builder.call(builder.module.declare_intrinsic("llvm.fma", [d], ir.FunctionType(d, [d, d, d])), args)
+
+    return types.float64(types.float64, types.float64, types.float64), codegen
 
 
 @dataclass(frozen=True)

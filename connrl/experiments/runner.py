@@ -5,7 +5,8 @@ Layout of ``OUT/NAME/``::
     summary.json                   every reproduced quantity: per-run values, mean, the thesis's value
     curve.png, curve.svg           learning curves, mean and spread over runs (``connrl.report.plots``)
     runs/PROFILE-HASH/VARIANT/seed-S.csv   the run's learning curve and rows
-    runs/PROFILE-HASH/VARIANT/seed-S.json  metadata: params, seed, versions, git commit, wall time, metrics
+    runs/PROFILE-HASH/VARIANT/seed-S.json  metadata: params, seed, versions, git commit, wall time, metrics;
+                                   ``copy_of`` when the run was copied from a twin (``split_twins``)
 
 A run whose ``.json`` exists is finished and is not redone, so a run interrupted with Ctrl-C resumes where it
 stopped. The executor sits behind ``Executor`` (``map_unordered``), so another backend (e.g. Ray) can run the
@@ -24,6 +25,7 @@ import re
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
@@ -217,7 +219,9 @@ def summarize(spec: ExperimentSpec, profile: str, seed: int, records: list[dict]
         "environment": dict(environment_info()),
         "timing": {"wall_time_s": wall,
                    "run_compile_time_s": [r.get("compile_time_s", 0.0) for r in in_order],
-                   "run_wall_time_s": [r["wall_time_s"] for r in in_order]},
+                   "run_wall_time_s": [r["wall_time_s"] for r in in_order],
+                   # per run: copied from a twin run (store.write_copy), whose time was spent there
+                   "run_copied": [bool(r.get("copy_of")) for r in in_order]},
     }
 
 
@@ -306,7 +310,8 @@ def run_experiments(batches: list[Batch], *, out: Path | str = "runs", workers: 
         by_name = {b.spec.name: b for b in batches}
         for job, rec in (execute(todo, workers, show_progress, title, executor, address, expected, calibrated)
                          if todo else ()):
-            for j, r in [(job, rec)] + [(t, write_copy(Path(job.path), rec, t)) for t in twins.get(job.path, [])]:
+            # the run first, then its twins' copies, each written only once the one before is recorded
+            for j, r in chain([(job, rec)], ((t, write_copy(Path(job.path), rec, t)) for t in twins.get(job.path, []))):
                 records[j.experiment].append(r)
                 left[j.experiment] -= 1
                 if left[j.experiment] == 0:

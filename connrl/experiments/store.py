@@ -107,6 +107,10 @@ def check_record(rec: object, job=None) -> str | None:
         return "a metric is neither a number nor null"
     if rec.get("diverged") is not None and not isinstance(rec["diverged"], dict):
         return "'diverged' is neither null nor an object"
+    twin = rec.get("copy_of")
+    if twin is not None and not (isinstance(twin, dict) and all(isinstance(twin.get(k), str) for k in
+                                                                   ("experiment", "variant"))):
+        return "'copy_of' does not name the experiment and variant of the run it copies"
     if job is not None:
         params = json.loads(json.dumps(job.params, default=json_default))  # as stored: tuples become lists
         for key, want in (("experiment", job.experiment), ("variant", job.variant), ("seed", job.seed),
@@ -215,7 +219,8 @@ def write_copy(source: Path, record: dict, job) -> dict:
     function, parameters and seed: the CSV as it is, the record under ``job``'s experiment and variant with
     ``copy_of`` naming the run it copies (timing counts that run's time once). Returns the copy's record."""
     rec = dict(record, experiment=job.experiment, variant=job.variant,
-               copy_of={"experiment": record["experiment"], "variant": record["variant"]})
+               copy_of={"experiment": record["experiment"], "variant": record["variant"],
+                        "record": "/".join(Path(source).parts[-5:]) + ".json"})  # EXP/runs/PROFILE-HASH/VARIANT/...
     path = Path(job.path)
     atomic_write_bytes(path.with_suffix(".csv"), Path(source).with_suffix(".csv").read_bytes())
     atomic_write_text(path.with_suffix(".json"), strict_json(rec, indent=1, default=json_default))

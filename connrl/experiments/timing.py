@@ -95,13 +95,17 @@ def pool_usage(records: list[dict], workers: int, start: float, end: float) -> d
 
 
 def per_experiment(records: Iterable[dict]) -> dict[str, dict]:
-    """Per experiment: runs, run seconds (wall, CPU, compiling), the longest run, and its span in the pool
-    (``cpu_known`` False: some record did not note its CPU time, which then counts as its wall time)."""
+    """Per experiment: the runs it computed and their seconds (wall, CPU, compiling), the longest, and their span in
+    the pool (``cpu_known`` False: some record did not note its CPU time, which then counts as its wall time);
+    ``copies``: its runs copied from a twin run (store.write_copy), whose time counts where they ran."""
     out: dict[str, dict] = {}
-    for r in computed(records):
-        e = out.setdefault(r["experiment"], {"runs": 0, "run_s": 0.0, "cpu_s": 0.0, "compile_s": 0.0,
+    for r in records:
+        e = out.setdefault(r["experiment"], {"runs": 0, "copies": 0, "run_s": 0.0, "cpu_s": 0.0, "compile_s": 0.0,
                                               "longest_s": 0.0, "first": float("inf"), "last": 0.0,
                                               "cpu_known": True})
+        if r.get("copy_of"):
+            e["copies"] += 1
+            continue
         a, b = run_span(r)
         e["runs"] += 1
         e["run_s"] += float(r["wall_time_s"])

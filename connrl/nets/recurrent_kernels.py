@@ -56,9 +56,10 @@ def _transposed(w1):
 
 @numba.njit(cache=True)
 def _hidden_lanes(wt, lo, hi, x, c, h):
-    """``_hidden`` for the hidden units lo..hi-1 of ``_transposed``'s columns (net a's are a*H..a*H+H-1), into h
-    (hi - lo,). Each unit sums its bias, inputs, then context in ``_hidden``'s order, so its value is ``_hidden``'s
-    bit for bit; the units advance together one input at a time, which the CPU does in vector lanes."""
+    """``_hidden``'s sums, not yet squashed (``_squash_output`` does that), for the hidden units lo..hi-1 of
+    ``_transposed``'s columns (net a's are a*H..a*H+H-1), into h (hi - lo,). Each unit sums its bias, inputs, then
+    context in ``_hidden``'s order, so its value is ``_hidden``'s bit for bit; the units advance together one input
+    at a time, which the CPU does in vector lanes."""
     n_in, n_c = x.shape[0], c.shape[0]
     bias = n_in + n_c
     for u in range(lo, hi):
@@ -71,8 +72,21 @@ def _hidden_lanes(wt, lo, hi, x, c, h):
         ck = c[k]
         for u in range(lo, hi):
             h[u - lo] += wt[n_in + k, u] * ck
-    for u in range(hi - lo):
-        h[u] = 1.0 / (1.0 + math.exp(-h[u])) - 0.5
+
+
+@numba.njit(cache=True)
+def _squash_output(w2, s, h, o):
+    """Squash ``_hidden_lanes``' sums h (H,) in place into ``_hidden``'s activations, then ``_output``. Each unit is
+    squashed inside the output's chain of additions, a loop the compiler cannot vectorise, so its ``exp`` is libm's
+    as in ``_hidden`` (a vectorised exp, e.g. Intel's SVML, would differ in the last bits)."""
+    n_h = w2.shape[2] - 1
+    for k in range(w2.shape[1]):
+        z = w2[s, k, n_h]
+        for j in range(n_h):
+            if k == 0:
+                h[j] = 1.0 / (1.0 + math.exp(-h[j])) - 0.5
+            z += w2[s, k, j] * h[j]
+        o[k] = 1.0 / (1.0 + math.exp(-z)) - 0.5
 
 
 @numba.njit(cache=True)
@@ -102,9 +116,9 @@ def _forward_sequence(w1, w2, xs, actions, feedback, scale, ys, cs, hs=None, os=
     cs[0, :] = 0.0
     for t in range(n_t):
         a = actions[t]
-        _hidden_lanes(wt, 0, n_a * n_h, xs[t], cs[t], h_flat)  # every net's hidden layer at once
+        _hidden_lanes(wt, 0, n_a * n_h, xs[t], cs[t], h_flat)  # every net's hidden sums at once
         for b in range(n_a):  # _forward_all, keeping the taken net's output before it is scaled
-            _output(w2, 0 if shared else b, h_all[b], ys[t, b])
+            _squash_output(w2, 0 if shared else b, h_all[b], ys[t, b])
             if os is not None and b == a and t < os.shape[0]:
                 os[t, :] = ys[t, b, :]
                 hs[t, :] = h_all[b, :]
@@ -129,7 +143,7 @@ def _bptt(w1, w2, xs, actions, targets, weights, feedback, decay, scale, g1, g2)
     for t in range(n_t):
         a = actions[t]
         _hidden_lanes(wt, a * n_h, a * n_h + n_h, xs[t], cs[t], hs[t])
-        _output(w2, 0 if shared else a, hs[t], os[t])
+        _squash_output(w2, 0 if shared else a, hs[t], os[t])
         for k in range(n_c):
             cs[t + 1, k] = feedback * hs[t, k]
     return _bptt_backward(w1, w2, xs, actions, targets, weights, feedback, decay, scale, g1, g2, hs, os, cs)

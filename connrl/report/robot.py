@@ -19,7 +19,7 @@ from connrl.report import checks, verdicts
 from connrl.report.page import figure, fixed, note, recheck_tag, stored
 from connrl.report.plots import save_figure
 from connrl.report.robot_dp import copy_table, dp_notes
-from connrl.report.wall import wall_text
+from connrl.report.wall import run_seconds, wall_text
 
 EXPERIMENTS = [*SKILLS[:1], *BOUNDS, *SKILLS[1:], *NOISE]  # what this section covers; the copy bound beside DP
 
@@ -97,9 +97,13 @@ def _solution_paths(spec, recs: list[dict], out_dir: Path, doc: Path) -> list[st
 def _compute_note(walls, run_walls, cpus, summaries) -> str:
     together = ("ran in one pool with other experiments" if any(s["timing"].get("pooled") for s in summaries.values())
                 else f"took {sum(walls) / 60:.1f} min of wall time together")
-    return (f"**Compute:** the {len(walls)} Ch. 5 experiments above ({len(run_walls)} runs) {together} "
-            f"({sum(run_walls) / 60:.1f} min summed over runs; "
-            f"machine with {', '.join(str(c) for c in sorted(cpus, key=str))} CPUs; the `connrl run` commands above).")
+    runs = sum(len(s["timing"]["run_wall_time_s"]) for s in summaries.values())
+    copied = sum(sum(s["timing"].get("run_copied") or []) for s in summaries.values())
+    return (f"**Compute:** the {len(walls)} Ch. 5 experiments above ({runs} runs) {together} "
+            f"({sum(run_walls) / 60:.1f} min summed over runs"
+            + (f", {copied} of them copied from twin runs and counted once" if copied else "")
+            + f"; machine with {', '.join(str(c) for c in sorted(cpus, key=str))} CPUs; "
+            "the `connrl run` commands above).")
 
 
 def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
@@ -121,7 +125,7 @@ def results_section(out_dir: Path, doc: Path = Path("docs/RESULTS.md")) -> str:
         summaries[spec.name] = summary
         seeds[spec.name] = f"{summary['base_seed']}..{summary['base_seed'] + summary['runs_per_variant'] - 1}"
         walls.append(summary["timing"]["wall_time_s"])
-        run_walls += summary["timing"]["run_wall_time_s"]
+        run_walls += run_seconds(summary)  # copies of twin runs counted once, where they ran
         cpus.add(summary["environment"].get("cpus"))
         prof = summary["profile"]
         lines += [f"### {spec.name}: {spec.title} (thesis {spec.section})", "",

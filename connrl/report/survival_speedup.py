@@ -13,7 +13,7 @@ import numpy as np
 from connrl.experiments.survival import EXPERIMENTS
 from connrl.report import checks, verdicts
 from connrl.report.page import figure, stored
-from connrl.report.wall import wall_text
+from connrl.report.wall import copies_text, run_seconds, wall_text
 
 SPECS = {s.name: s for s in EXPERIMENTS}
 SPEEDUP_ROWS = [("QCON", "no extensions", 200), ("QCON-M (learned model)", "using a learned model", 140),
@@ -45,7 +45,7 @@ def command(summary: dict) -> str:
     n, s = summary["runs_per_variant"], summary["base_seed"]
     return (f"`connrl run {summary['experiment']} --profile {summary['profile']} --runs {n} --seed {s}` "
             f"({n} run(s) per agent, seeds {s}..{s + n - 1}, {wall_text(summary, 'min')}, "
-            f"{sum(summary['timing']['run_wall_time_s']) / 60:.1f} min of run time)")
+            f"{sum(run_seconds(summary)) / 60:.1f} min of run time{copies_text(summary)})")
 
 
 def by_variant(recs: list[dict]) -> dict[str, list[dict]]:

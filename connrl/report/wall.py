@@ -9,3 +9,17 @@ def wall_text(summary: dict, unit: str = "s") -> str:
     value = f"{t['wall_time_s']:.0f} s" if unit == "s" else f"{t['wall_time_s'] / 60:.1f} min"
     return f"{value} from its first run to its last in a pool with other experiments" if t.get("pooled") else (
         f"wall time {value}")
+
+
+def run_seconds(summary: dict) -> list[float]:
+    """The run times an experiment spent: its runs' own, without those copied from a twin run in another experiment
+    (``timing.run_copied``; their time is counted where they ran)."""
+    t = summary["timing"]
+    copied = t.get("run_copied") or [False] * len(t["run_wall_time_s"])
+    return [w for w, c in zip(t["run_wall_time_s"], copied, strict=True) if not c]
+
+
+def copies_text(summary: dict) -> str:
+    """``; N runs copied from twin runs`` when some were, else nothing."""
+    n = sum(summary["timing"].get("run_copied") or [])
+    return f"; {n} run{'s' if n > 1 else ''} copied from twin runs" if n else ""

@@ -22,13 +22,20 @@ class _FixedRng:
         return min(lo + self.offset, hi - 1)
 
 
-def test_groups_are_runs_within_mu_of_their_first_state():
+# the plain loop (a stand-in generator) and the compiled one (a Generator: low == high draws exactly that mu)
+RNGS = [pytest.param(_FixedRng, id="plain"), pytest.param(lambda mu: np.random.default_rng(0), id="compiled")]
+
+
+@pytest.mark.parametrize("make_rng", RNGS)
+def test_groups_are_runs_within_mu_of_their_first_state(make_rng):
     x = np.array([[0.0], [0.4], [0.9], [1.0], [3.0], [3.2]])
-    # mu = 1: 0.4 and 0.9 lie within 1 of 0, 1.0 does not; 3.2 is within 1 of 3.0
-    assert group_states(x, (1.0, 1.0), _FixedRng(1.0)).tolist() == [0, 3, 4]
-    assert group_states(x, (0.0, 0.0), _FixedRng(0.0)).tolist() == [0, 1, 2, 3, 4, 5]  # mu 0: no grouping
+    # mu = 1: 0.4 and 0.9 lie within 1 of 0, 1.0 does not (the distance must be below mu); 3.2 is within 1 of 3.0
+    assert group_states(x, (1.0, 1.0), make_rng(1.0)).tolist() == [0, 3, 4]
+    assert group_states(x, (0.0, 0.0), make_rng(0.0)).tolist() == [0, 1, 2, 3, 4, 5]  # mu 0: no grouping
     with pytest.raises(ValueError, match="mu_range"):
-        group_states(x, (2.0, 1.0), _FixedRng(1.0))
+        group_states(x, (2.0, 1.0), make_rng(1.0))
+    with pytest.raises(ValueError, match="finite"):
+        group_states(x, (0.0, np.inf), make_rng(1.0))
 
 
 def test_grouped_lesson_rewards_and_discounts_by_hand():
@@ -57,9 +64,12 @@ def test_centres_vary_so_every_state_is_trained_on_in_time():
     assert seen == set(range(10))  # footnote 5: sometimes b, sometimes c, sometimes d
 
 
-def test_a_group_ends_where_the_action_changes():
+@pytest.mark.parametrize("make_rng", RNGS)
+def test_a_group_ends_where_the_action_changes(make_rng):
     x = np.zeros((6, 1))  # identical states: only the actions split them
-    assert group_states(x, (1.0, 1.0), _FixedRng(1.0), np.array([0, 0, 1, 1, 1, 0])).tolist() == [0, 2, 5]
+    assert group_states(x, (1.0, 1.0), make_rng(1.0), np.array([0, 0, 1, 1, 1, 0])).tolist() == [0, 2, 5]
+    with pytest.raises(IndexError):  # an action per state, as the plain loop reads them
+        group_states(x, (1.0, 1.0), make_rng(1.0), np.array([0, 0, 1]))
     lesson = Lesson(np.zeros((4, 1)), np.array([3, 3, 1]), np.zeros(3), terminated=False, truncated=True)
     g = group_lesson(lesson, 0.9, (1.0, 1.0), _FixedRng(1.0))
     assert g.lesson.actions.tolist() == [3, 1] and g.centres.tolist() == [0, 2]
@@ -101,22 +111,27 @@ def test_compiled_grouping_is_the_plain_loop_bit_for_bit(dim):
         assert a.random() == b.random()  # the same draws, in the same order
 
 
-def test_compiled_distance_and_sum_follow_numpy():
+def test_compiled_distance_is_numpys_to_the_last_bits_and_sums_are_numpys_bit_for_bit():
     data = np.random.default_rng(0)
     d, acc = np.empty(40), np.empty(16)
-    same = []
     for dim in range(1, 41):
         x = data.normal(size=(2, dim)) * 10 ** data.uniform(-3, 3, (2, dim))
-        ours, numpy_ = _sq_distance(x, 0, 1, d[:dim], acc), np.linalg.norm(x[1] - x[0]) ** 2
-        assert ours == pytest.approx(numpy_, rel=1e-14)
-        same.append(np.sqrt(ours) == np.linalg.norm(x[1] - x[0]))
-    # NumPy's dot sums in its BLAS's order; with OpenBLAS's Haswell kernel (the machine the results were made on)
-    # every distance is NumPy's bit for bit
-    if _blas_core() in ("Haswell", "Zen"):
-        assert all(same)
+        assert _sq_distance(x, 0, 1, d[:dim], acc) == pytest.approx(np.linalg.norm(x[1] - x[0]) ** 2, rel=1e-14)
     for n in [0, 1, 7, 8, 9, 15, 16, 127, 128, 129, 255, 256, 257, 1000, 4099]:
         a = data.normal(size=n) * 10 ** data.uniform(-3, 3, n)
         assert 0.0 + _pairwise_sum(a, 0, n) == np.sum(a)
+
+
+def test_compiled_distance_is_numpys_dot_bit_for_bit_where_the_results_were_made():
+    if _blas_core() not in ("Haswell", "Zen"):  # the stored results' NumPy (OPENBLAS_CORETYPE=Haswell)
+        pytest.skip(f"NumPy's dot sums in OpenBLAS's {_blas_core()} order here, not the Haswell order the stored "
+                    "results were made in (set OPENBLAS_CORETYPE=Haswell)")
+    data = np.random.default_rng(1)
+    d, acc = np.empty(70), np.empty(16)
+    for dim in list(range(1, 70)) * 20:
+        x = data.normal(size=(2, dim)) * 10 ** data.uniform(-3, 3, (2, dim))
+        diff = x[1] - x[0]
+        assert _sq_distance(x, 0, 1, d[:dim], acc) == diff.dot(diff)
 
 
 def _blas_core() -> str:

@@ -11,6 +11,7 @@ from connrl.experiments import runner, timing
 from connrl.experiments.executors import Progress
 from connrl.experiments.registry import get_experiment
 from connrl.experiments.runner import Batch, run_experiment, run_experiments
+from connrl.experiments.store import check_record
 
 TABLE = {"profile": "full", "seconds": {"a": {"x": 10.0, "y": 30.0, "z": 50.0}, "b": {"x": 2.0}}}
 
@@ -103,7 +104,10 @@ def test_a_run_two_experiments_share_is_computed_once_and_copied(tmp_path, monke
     (copy,) = [r for o in pooled for r in o.records if r.get("copy_of")]
     source = (copy["copy_of"]["experiment"], copy["copy_of"]["variant"])
     assert {(copy["experiment"], copy["variant"]), source} == pair
-    assert timing.per_experiment([copy]) == {}  # its time was spent once, in the run it copies
+    assert (tmp_path / "pool" / copy["copy_of"]["record"]).is_file()
+    assert "copy_of" in check_record(dict(copy, copy_of="robot-repairs-3"))  # a damaged mark is reported
+    e = timing.per_experiment([copy])[copy["experiment"]]
+    assert (e["runs"], e["copies"], e["run_s"]) == (0, 1, 0.0)  # its time was spent once, in the run it copies
     monkeypatch.setattr(runner, "execute_job", execute_job)
     spec = get_experiment(copy["experiment"])
     alone = run_experiment(spec, profile="tiny", seed=0, out=tmp_path / "alone", workers=1, show_progress=False)
