@@ -151,9 +151,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
-    print(f"{'hot path':<66}{'before':>12}{'after':>12}{'ratio':>8}")
+    print(f"{'hot path':<72}{'before':>12}{'after':>12}{'ratio':>8}")
     for label, before, after in rows(args.repeat):
-        print(f"{label:<66}{_fmt(before):>12}{_fmt(after):>12}{before / after:>7.1f}x")
+        print(f"{label:<72}{_fmt(before):>12}{_fmt(after):>12}{before / after:>7.1f}x")
 
 
 def _fmt(seconds: float) -> str:

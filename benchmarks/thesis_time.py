@@ -161,7 +161,7 @@ def profile_top(records, specs, n, profile) -> list[str]:
              "| experiment | run | compiled test plays | environment | action selection | learning | bookkeeping |",
              "|---|---|---|---|---|---|---|"]
     for name in top:
-        rec = max((r for r in records if r["experiment"] == name), key=lambda r: r["wall_time_s"])
+        rec = max((r for r in computed(records) if r["experiment"] == name), key=lambda r: r["wall_time_s"])
         shares = profile_run(specs[name], rec, profile)
         s = sum(shares.values()) or 1.0
         lines.append(f"| {name} | {rec['variant']}, seed {rec['seed']} | "

@@ -83,7 +83,7 @@ class ReplayConfig:
             try:
                 check_mu_range(self.grouping)
             except ValueError:
-                raise ValueError(f"grouping must be None or (mu_low, mu_high) with 0 <= low <= high, got "
+                raise ValueError(f"grouping must be None or (mu_low, mu_high) with 0 <= low <= high, both finite, got "
                                  f"{self.grouping!r}") from None
         for name in ("p_threshold", "taught_p_threshold"):
             v = getattr(self, name)

@@ -29,7 +29,7 @@ from connrl.core.lessons import Lesson
 
 
 def check_mu_range(mu_range) -> tuple[float, float]:
-    """``mu_range`` as (low, high) with 0 <= low <= high, else one clear ValueError."""
+    """``mu_range`` as (low, high) with 0 <= low <= high, both finite, else one clear ValueError."""
     try:
         lo, hi = (float(v) for v in mu_range)
     except (TypeError, ValueError):

@@ -180,6 +180,10 @@ def _summary_problem(doc: dict, name: str) -> str | None:
     timing = doc["timing"]
     if not _number(timing.get("wall_time_s")) or not isinstance(timing.get("run_wall_time_s"), list):
         return "its timing is incomplete"
+    copied = timing.get("run_copied")
+    if copied is not None and not (isinstance(copied, list) and len(copied) == len(timing["run_wall_time_s"])
+                                   and all(isinstance(c, bool) for c in copied)):
+        return "its timing's run_copied is not a true/false per run"
     if not isinstance(doc["environment"].get("git_commit"), str | type(None)):
         return "its environment's git_commit is not text"
     for label, v in doc["variants"].items():

@@ -1,5 +1,6 @@
 """State grouping (6.6.4): groups of consecutive similar states, random centres, rewards and discounts gamma^k."""
 
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -120,6 +121,40 @@ def test_compiled_distance_is_numpys_to_the_last_bits_and_sums_are_numpys_bit_fo
     for n in [0, 1, 7, 8, 9, 15, 16, 127, 128, 129, 255, 256, 257, 1000, 4099]:
         a = data.normal(size=n) * 10 ** data.uniform(-3, 3, n)
         assert 0.0 + _pairwise_sum(a, 0, n) == np.sum(a)
+
+
+def _fma(a: float, b: float, c: float) -> float:
+    return float(Fraction(a) * Fraction(b) + Fraction(c))  # exact, then rounded once (to nearest, as fma does)
+
+
+def _haswell_sq_norm(v: np.ndarray) -> float:
+    """|v|^2 in OpenBLAS's Haswell ddot order, by hand: 16 fma lanes over blocks of 16, its tree, a plain tail."""
+    n1 = len(v) - len(v) % 16
+    acc = [0.0] * 16
+    for b in range(0, n1, 16):
+        acc = [_fma(float(v[b + k]), float(v[b + k]), acc[k]) for k in range(16)]
+    s = 0.0
+    if n1:
+        even = ((acc[0] + acc[2]) + (acc[4] + acc[6])) + ((acc[8] + acc[10]) + (acc[12] + acc[14]))
+        odd = ((acc[1] + acc[3]) + (acc[5] + acc[7])) + ((acc[9] + acc[11]) + (acc[13] + acc[15]))
+        s = even + odd
+    for k in range(n1, len(v)):
+        s += float(v[k]) * float(v[k])
+    return s
+
+
+def test_compiled_distance_sums_in_the_haswell_order_on_every_machine():
+    data = np.random.default_rng(2)
+    d, acc = np.empty(70), np.empty(16)
+    for dim in list(range(1, 70)) * 3:
+        x = data.normal(size=(2, dim)) * 10 ** data.uniform(-3, 3, (2, dim))
+        assert _sq_distance(x, 0, 1, d[:dim], acc) == _haswell_sq_norm(x[1] - x[0])
+
+
+def test_non_integer_actions_take_the_plain_loop():
+    x = np.zeros((3, 1))  # identical states: only the actions split them; 0.5 and 1.0 differ, not cut to integers
+    actions = np.array([0.0, 0.5, 1.0])
+    assert group_states(x, (1.0, 1.0), np.random.default_rng(0), actions).tolist() == [0, 1, 2]
 
 
 def test_compiled_distance_is_numpys_dot_bit_for_bit_where_the_results_were_made():

@@ -65,7 +65,22 @@ def test_forward_in_lanes_is_the_unit_by_unit_forward_bit_for_bit(shape):
         assert ys.tobytes() == ys0.tobytes() and cs.tobytes() == cs0.tobytes()
 
 
-def test_one_net_in_lanes_is_hidden_bit_for_bit_and_bptt_is_unchanged():
+@pytest.mark.parametrize("shape", [(4, 12, 14, 8, 1, False), (3, 5, 7, 5, 2, True), (1, 24, 20, 0, 1, False)])
+def test_bptt_in_lanes_is_the_backward_pass_of_the_unit_by_unit_forward(shape):
+    rng = np.random.default_rng(sum(shape[:4]) + 1)
+    w1, w2 = _net(rng, *shape)
+    n_a, n_in, n_o, n_t = shape[0], shape[2], shape[4], 25
+    xs, acts = rng.normal(size=(n_t, n_in)), rng.integers(0, n_a, n_t)
+    targets, weights = rng.uniform(-50, 50, (n_t, n_o)), rng.choice([0.0, 1.0], n_t)
+    g1, g2 = np.zeros_like(w1), np.zeros_like(w2)
+    loss = _bptt(w1, w2, xs, acts, targets, weights, 1.5, 0.9, 200.0, g1, g2)
+    hs, os, cs = _taken_by_unit(w1, w2, xs, acts, 1.5)
+    r1, r2 = np.zeros_like(w1), np.zeros_like(w2)
+    ref = _bptt_backward(w1, w2, xs, acts, targets, weights, 1.5, 0.9, 200.0, r1, r2, hs, os, cs)
+    assert loss == ref and g1.tobytes() == r1.tobytes() and g2.tobytes() == r2.tobytes()
+
+
+def test_one_net_in_lanes_is_hidden_bit_for_bit():
     rng = np.random.default_rng(7)
     w1, w2 = _net(rng)
     wt = _transposed(w1)
@@ -76,16 +91,6 @@ def test_one_net_in_lanes_is_hidden_bit_for_bit_and_bptt_is_unchanged():
         _hidden_lanes(wt, a * 12, a * 12 + 12, x, c, lanes)
         _squash_output(w2, a, lanes, np.empty(1))  # squashes the sums in place on its way to the output
         assert ref.tobytes() == lanes.tobytes()
-    # _bptt's forward now runs in lanes: its loss and gradients are the backward pass of the unit-by-unit forward's
-    n_t = 30
-    xs, acts = rng.normal(size=(n_t, 14)), rng.integers(0, 4, n_t)
-    targets, weights = rng.uniform(-50, 50, (n_t, 1)), rng.choice([0.0, 1.0], n_t)
-    g1, g2 = np.zeros_like(w1), np.zeros_like(w2)
-    loss = _bptt(w1, w2, xs, acts, targets, weights, 1.5, 0.9, 200.0, g1, g2)
-    hs, os, cs = _taken_by_unit(w1, w2, xs, acts, 1.5)
-    r1, r2 = np.zeros_like(w1), np.zeros_like(w2)
-    ref = _bptt_backward(w1, w2, xs, acts, targets, weights, 1.5, 0.9, 200.0, r1, r2, hs, os, cs)
-    assert loss == ref and g1.tobytes() == r1.tobytes() and g2.tobytes() == r2.tobytes()
 
 
 @numba.njit
