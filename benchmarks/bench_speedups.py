@@ -25,10 +25,10 @@ from __future__ import annotations
 import argparse
 import copy
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
+from bench_core import best_time  # seconds per call, the best of `repeat` batches
 
 from connrl.agents.memory import replay_recurrent_q
 from connrl.core.exploration import boltzmann_probabilities, boltzmann_select
@@ -52,18 +52,6 @@ from test_rotated_kernel import _gathered_fastmath  # noqa: E402  (the kernel as
 PERMS = np.ascontiguousarray(ROTATION_PERMUTATIONS[list(ACTION_ROTATION)])
 
 
-def best_of(fn, repeat: int, calls: int) -> float:
-    """Seconds per call, the best of ``repeat`` rounds of ``calls`` calls."""
-    fn()
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(calls):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / calls)
-    return best
-
-
 def rows(repeat: int) -> list[tuple[str, float, float]]:
     rng = np.random.default_rng(0)
     n_in = PERMS.shape[1]
@@ -72,21 +60,21 @@ def rows(repeat: int) -> list[tuple[str, float, float]]:
     w1, w2 = rng.uniform(-0.1, 0.1, (1, 30, n_in + 1)), rng.uniform(-0.1, 0.1, (1, 31))
     x, q, xr = rng.choice([-0.5, 0.5], n_in), np.empty(4), np.empty(n_in)
     out.append(("rotated values, 145-30-1 x 4 rotations (Ch. 4)",
-                best_of(lambda: _gathered_fastmath(w1, w2, x, PERMS, 1.0, q), repeat, 20000),
-                best_of(lambda: _rotated_values(w1, w2, x, PERMS, 1.0, q, xr), repeat, 20000)))
+                best_time(lambda: _gathered_fastmath(w1, w2, x, PERMS, 1.0, q), 20000, repeat),
+                best_time(lambda: _rotated_values(w1, w2, x, PERMS, 1.0, q, xr), 20000, repeat)))
     # lesson replay into Ch. 4's nets
     lesson = Lesson(rng.choice([-0.5, 0.5], (101, n_in)), rng.integers(0, 4, 100), rng.choice([0.0, 0.4], 100), True)
     params = ReplayParams(gamma=0.9, lam=0.0, temperature=0.05, p_threshold=0.01)
     net = RotatedNet(NetConfig(n_in, 30, lr=0.1), PERMS, np.random.default_rng(1))
     nets = [copy.deepcopy(net) for _ in range(2)]
     out.append(("QCON replay of a 100-step lesson, rotated net (Ch. 4)",
-                best_of(lambda: replay_q_reference(nets[0], lesson, params), repeat, 20),
-                best_of(lambda: replay_q(nets[1], lesson, params), repeat, 20)))
+                best_time(lambda: replay_q_reference(nets[0], lesson, params), 20, repeat),
+                best_time(lambda: replay_q(nets[1], lesson, params), 20, repeat)))
     v = OAON(NetConfig(n_in, 30, lr=0.1), 1, np.random.default_rng(2))
     pairs = [(copy.deepcopy(v), copy.deepcopy(net)) for _ in range(2)]
     out.append(("AHCON replay of a 100-step lesson, rotated policy net (Ch. 4)",
-                best_of(lambda: replay_ahc_reference(*pairs[0], lesson, params), repeat, 20),
-                best_of(lambda: replay_ahc(*pairs[1], lesson, params), repeat, 20)))
+                best_time(lambda: replay_ahc_reference(*pairs[0], lesson, params), 20, repeat),
+                best_time(lambda: replay_ahc(*pairs[1], lesson, params), 20, repeat)))
     # greedy test plays
     env = SurvivalEnv("global")
     agent = make_survival_agent(SurvivalAgentParams("QCON"), env, np.random.default_rng(3))
@@ -94,9 +82,9 @@ def rows(repeat: int) -> list[tuple[str, float, float]]:
         run_trial(env, agent, trial=k, learning=True, seed=k, options={"layout_seed": k})
     seeds = range(1000, 1020)
     out.append(("20 greedy test plays, QCON (Ch. 4)",
-                best_of(lambda: [run_trial(env, agent, trial=0, learning=False, seed=k, options={"layout_seed": k})
-                                 for k in seeds], repeat, 1),
-                best_of(lambda: [greedy_play(env, agent, k) for k in seeds], repeat, 1)))
+                best_time(lambda: [run_trial(env, agent, trial=0, learning=False, seed=k, options={"layout_seed": k})
+                                 for k in seeds], 1, repeat),
+                best_time(lambda: [greedy_play(env, agent, k) for k in seeds], 1, repeat)))
     return out + later_rows(repeat, rng)
 
 
@@ -112,22 +100,22 @@ def later_rows(repeat: int, rng) -> list[tuple[str, float, float]]:
     ok = rng.random((n + 1, 4)) < 0.7
     rp = ReplayParams(gamma=0.9, lam=0.8, temperature=0.05, p_threshold=0.01, batch=True)
     out.append(("recurrent replay of a 60-step lesson over 4 behaviours (Ch. 8)",
-                best_of(lambda: replay_recurrent_q(rnets[0], rl, rp, w, ok, fast=False), repeat, 300),
-                best_of(lambda: replay_recurrent_q(rnets[1], rl, rp, w, ok), repeat, 300)))
+                best_time(lambda: replay_recurrent_q(rnets[0], rl, rp, w, ok, fast=False), 300, repeat),
+                best_time(lambda: replay_recurrent_q(rnets[1], rl, rp, w, ok), 300, repeat)))
     # Ch. 7/8's recurrent forward over a lesson, every net (the replay's and the model's first pass)
     w1, w2 = rng.uniform(-0.6, 0.6, (4, 12, 23)), rng.uniform(-0.6, 0.6, (4, 1, 13))
     xs, acts = rng.normal(size=(160, 14)), rng.integers(0, 4, 160)
     ys, cs = np.empty((160, 4, 1)), np.empty((161, 8))
     out.append(("recurrent forward of a 160-step lesson, 4 nets of 14+8-12-1 (Ch. 7/8)",
-                best_of(lambda: _forward_by_unit(w1, w2, xs, acts, 1.5, 200.0, ys, cs), repeat, 300),
-                best_of(lambda: _forward_sequence(w1, w2, xs, acts, 1.5, 200.0, ys, cs), repeat, 300)))
+                best_time(lambda: _forward_by_unit(w1, w2, xs, acts, 1.5, 200.0, ys, cs), 300, repeat),
+                best_time(lambda: _forward_sequence(w1, w2, xs, acts, 1.5, 200.0, ys, cs), 300, repeat)))
     # Ch. 6's state grouping of a long lesson (a random walk, so groups of many sizes)
     walk = np.cumsum(rng.normal(0, 0.1, (567, 16)), axis=0)
     gl = Lesson(walk, np.repeat(rng.integers(0, 4, 566), 20)[:566], rng.normal(size=566), False)
     g0, g1 = np.random.default_rng(6), np.random.default_rng(6)
     out.append(("state grouping of a 566-step lesson of 16 inputs (Ch. 6, 6.6.4)",
-                best_of(lambda: group_lesson(gl, 0.9, (0.25, 1.25), _PlainRng(g0)), repeat, 50),
-                best_of(lambda: group_lesson(gl, 0.9, (0.25, 1.25), g1), repeat, 50)))
+                best_time(lambda: group_lesson(gl, 0.9, (0.25, 1.25), _PlainRng(g0)), 50, repeat),
+                best_time(lambda: group_lesson(gl, 0.9, (0.25, 1.25), g1), 50, repeat)))
     # Boltzmann selection
     merits, g = rng.normal(size=4), np.random.default_rng(5)
 
@@ -136,7 +124,7 @@ def later_rows(repeat: int, rng) -> list[tuple[str, float, float]]:
         return min(int(np.searchsorted(np.cumsum(p), g.random() * 1.0, side="right")), p.size - 1), p
 
     out.append(("Boltzmann selection of 4 actions at T = 0.05 (every training step)",
-                best_of(plain, repeat, 50000), best_of(lambda: boltzmann_select(merits, 0.05, g), repeat, 50000)))
+                best_time(plain, 50000, repeat), best_time(lambda: boltzmann_select(merits, 0.05, g), 50000, repeat)))
     return out
 
 

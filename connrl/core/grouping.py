@@ -115,7 +115,9 @@ def _sq_distance(x, i, j, d, acc):
 
 @intrinsic
 def _fma(typingctx, a, b, c):
-    """``a * b + c`` rounded once, on every CPU (hardware FMA or libm's fma)."""
+    """``a * b + c`` rounded once, on every CPU (hardware FMA or libm's fma). The same intrinsic as
+    ``connrl.nets.kernels._fma``, defined again here: a cached kernel may only use its own file's
+    (tests/nets/test_kernel_cache.py)."""
 
     def codegen(context, builder, signature, args):
         d = ir.DoubleType()

@@ -19,7 +19,7 @@ from connrl.report import checks, verdicts
 from connrl.report.page import figure, fixed, note, recheck_tag, stored
 from connrl.report.plots import save_figure
 from connrl.report.robot_dp import copy_table, dp_notes
-from connrl.report.wall import run_seconds, wall_text
+from connrl.report.wall import copied_runs, run_seconds, wall_text
 
 EXPERIMENTS = [*SKILLS[:1], *BOUNDS, *SKILLS[1:], *NOISE]  # what this section covers; the copy bound beside DP
 
@@ -98,7 +98,7 @@ def _compute_note(walls, run_walls, cpus, summaries) -> str:
     together = ("ran in one pool with other experiments" if any(s["timing"].get("pooled") for s in summaries.values())
                 else f"took {sum(walls) / 60:.1f} min of wall time together")
     runs = sum(len(s["timing"]["run_wall_time_s"]) for s in summaries.values())
-    copied = sum(sum(s["timing"].get("run_copied") or []) for s in summaries.values())
+    copied = sum(copied_runs(s) for s in summaries.values())
     return (f"**Compute:** the {len(walls)} Ch. 5 experiments above ({runs} runs) {together} "
             f"({sum(run_walls) / 60:.1f} min summed over runs"
             + (f", {copied} of them copied from twin runs and counted once" if copied else "")

@@ -19,7 +19,12 @@ def run_seconds(summary: dict) -> list[float]:
     return [w for w, c in zip(t["run_wall_time_s"], copied, strict=True) if not c]
 
 
+def copied_runs(summary: dict) -> int:
+    """How many of an experiment's runs were copied from a twin run (``timing.run_copied``)."""
+    return sum(summary["timing"].get("run_copied") or [])
+
+
 def copies_text(summary: dict) -> str:
     """``; N runs copied from twin runs`` when some were, else nothing."""
-    n = sum(summary["timing"].get("run_copied") or [])
+    n = copied_runs(summary)
     return f"; {n} run{'s' if n > 1 else ''} copied from twin runs" if n else ""
