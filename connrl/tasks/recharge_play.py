@@ -1,0 +1,314 @@
+"""Chs. 6 and 8's greedy test plays over behaviours, compiled whole (issue 45).
+
+Ch. 6's protocol tests the high-level learner greedily on fixed tasks before the first trial and every few trials,
+and with Experiment 4's fifth-size steps the tests are most of a run's primitive steps (``recharge-long-delay``:
+three in four), each going through a dozen Python calls: the learner's values and its Eq. 6.6 choice at T = 0, the
+chosen behaviour's greedy primitive, the simulator's move and scan, the sensors' encodings and the applicability of
+DK and DP (6.4.3). Here a test play runs as one Numba loop over the same kernels with the same arithmetic and the
+same draws from the world's generator, step for step, as ``run_trial(env, agent, learning=False)``;
+tests/tasks/test_recharge_play.py holds every play, and the world and learner it leaves, to ``run_trial``'s.
+
+Only the plain case is compiled: a ``BehaviourEnv`` over a ``RechargeEnv`` with the 16 (or 14) high-level inputs,
+stored behaviours (``Behaviour`` over an ``OAON``) and Ch. 6's ``BehaviourQCON`` with an ``OAON``; anything else
+plays through ``run_trial``. The robot's partial moves divide by ``math.hypot``, whose CPython algorithm is ported
+here (``_hypot``) and checked against the running interpreter's once per process (``hypot_matches``); where they
+differ, every play goes through ``run_trial``.
+
+The loop is not cached: it calls kernels of other files, and a cached kernel may only call its own file's
+(tests/nets/test_kernel_cache.py); it compiles once per process, in a few seconds.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numba
+import numpy as np
+
+from connrl.agents.behaviour_level import BehaviourQCON
+from connrl.core.rollout import TrialStats
+from connrl.envs.robot.constants import (
+    _RNG_PER_SCAN,
+    ACTION_MOVE_IN,
+    ACTION_TURN_DEG,
+    CONTROL_ERROR,
+    MOVE_FORWARD,
+    N_RAYS,
+    ROBOT_RADIUS,
+    SEG_CHARGER,
+    SONAR_MAX,
+)
+from connrl.envs.robot.geometry import _scan, _time_of_impact
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, RechargeEnv, _scan_units
+from connrl.envs.robot.sim import CONTACT_GAP, RobotSim
+from connrl.envs.robot.tasks import _fill_obs, _side_features
+from connrl.nets import OAON
+from connrl.nets.kernels import _values_any
+from connrl.tasks.behaviours import APPLICABLE_ABOVE, Behaviour
+from connrl.tasks.recharge import BehaviourEnv
+
+_TURN = np.array(ACTION_TURN_DEG)
+_MOVE = np.array(ACTION_MOVE_IN)
+
+
+@numba.njit(cache=False)
+def _dl_mul(x, y):
+    """Dekker's exact product: hi + lo = x * y (CPython's ``dl_mul``)."""
+    t = x * 134217729.0
+    xh = t - (t - x)
+    xl = x - xh
+    t = y * 134217729.0
+    yh = t - (t - y)
+    yl = y - yh
+    hi = x * y
+    return hi, xh * yh - hi + xh * yl + xl * yh + xl * yl
+
+
+@numba.njit(cache=False)
+def _hypot(a, b):
+    """``math.hypot(a, b)`` of CPython 3.10+ for finite a, b (its ``vector_norm``: lossless scaling, squaring and
+    summing, then a square root with one differential correction); Numba's own calls libm, whose last bit differs."""
+    a, b = abs(a), abs(b)
+    m = max(a, b)
+    if m == 0.0:
+        return m
+    _, e = math.frexp(m)
+    if e < -1023:
+        return math.hypot(a, b)  # subnormal: never reached by a robot's move; the check below would flag it
+    scale = math.ldexp(1.0, -e)
+    csum, frac1, frac2 = 1.0, 0.0, 0.0
+    for v in (a, b):
+        hi, lo = _dl_mul(v * scale, v * scale)
+        s = csum + hi
+        frac2 += (csum - s) + hi
+        csum = s
+        frac1 += lo
+    h = math.sqrt(csum - 1.0 + (frac1 + frac2))
+    hi, lo = _dl_mul(-h, h)
+    s = csum + hi
+    frac2 += (csum - s) + hi
+    csum = s
+    frac1 += lo
+    x = csum - 1.0 + (frac1 + frac2)
+    h += x / (2.0 * h)
+    return h / scale
+
+
+@functools.lru_cache(maxsize=1)
+def hypot_matches() -> bool:
+    """Whether ``_hypot`` is this interpreter's ``math.hypot``, bit for bit, on 20,000 pairs of move sizes."""
+    rng = np.random.default_rng(45)
+    pairs = rng.normal(0.0, 12.0, (20_000, 2)) * rng.choice([1.0, 1e-3, 1e3], (20_000, 2))
+    return all(_hypot(a, b) == math.hypot(a, b) for a, b in pairs.tolist())
+
+
+@numba.njit(cache=False)
+def _first_max(q):
+    """``np.argmax``: the first of equal maxima, the first NaN if there is one."""
+    a = 0
+    for k in range(q.size):
+        if np.isnan(q[k]):
+            return k
+        if q[k] > q[a]:
+            a = k
+    return a
+
+
+@numba.njit(cache=False)
+def _move(pose, action, u, control_noise, step_scale, partial, segs, kinds, collision):
+    """``RobotSim.apply`` after its draw ``u``: moves ``pose`` (x, y, heading), sets ``collision`` (front, back, left,
+    right); returns (collided, the kind of surface touched, the contact's direction from the heading)."""
+    scale = (1.0 - CONTROL_ERROR + 2.0 * CONTROL_ERROR * u if control_noise else 1.0) * step_scale
+    for k in range(4):
+        collision[k] = 0
+    turn = _TURN[action]
+    if turn != 0.0:
+        pose[2] = (pose[2] + turn * scale) % 360.0
+        return False, -1, np.nan
+    length = _MOVE[action] * scale
+    h = math.radians(pose[2])
+    dx, dy = length * math.cos(h), length * math.sin(h)
+    t, cx, cy, i = _time_of_impact(pose[0], pose[1], dx, dy, segs, ROBOT_RADIUS)
+    if t > 1.0:
+        pose[0] += dx
+        pose[1] += dy
+        return False, -1, np.nan
+    px, py = pose[0] + t * dx, pose[1] + t * dy
+    if partial:
+        gap = CONTACT_GAP / _hypot(dx, dy)
+        back = gap if gap < t else t
+        pose[0], pose[1] = pose[0] + (t - back) * dx, pose[1] + (t - back) * dy
+    rel = (math.degrees(math.atan2(cy - py, cx - px)) - pose[2] + 180.0) % 360.0 - 180.0  # sim.wrap_deg
+    if rel == -180.0:
+        rel = 180.0
+    a = abs(rel)
+    side = 0 if a <= 45.0 else 1 if a >= 135.0 else 2 if rel > 0 else 3  # FRONT, BACK, LEFT, RIGHT
+    collision[side] = 1
+    return True, kinds[i], rel
+
+
+@numba.njit(cache=False)
+def _room(x, y, rooms):
+    """``Layout.room_at`` as the index of its room (the first whose rectangle holds the point), or -1."""
+    for r in range(rooms.shape[0]):
+        if rooms[r, 0] <= x < rooms[r, 2] and rooms[r, 1] <= y < rooms[r, 3]:
+            return r
+    return -1
+
+
+@numba.njit(cache=False)
+def _observe(pose, room, collision, sonar, light, door, low, xy_scale, size, room_bits, dk, dp, wf, top, feat):
+    """``RechargeEnv._observe`` in "high" mode: the 16 high-level units into ``top``, Ch. 5's observations into
+    ``dk``, ``dp`` and ``wf`` (float32, as the world hands them out); the sonar is read from the centre, so the body
+    clearances are the readings less the radius (``Reading.body_sonar``)."""
+    high = low + 1.0
+    _scan_units(sonar, pose[2], collision, light, door, low, high, float(SONAR_MAX), top)
+    code = room_bits[room] if room >= 0 else -1
+    for r in range(3):
+        top[11 + r] = high if code == r else low
+    top[14] = xy_scale * (pose[0] / size[0] - 0.5)
+    top[15] = xy_scale * (pose[1] / size[1] - 0.5)
+    for k in range(4):
+        feat[k] = 0.0
+    _fill_obs(0, sonar, light, collision, low, high, feat, dk)
+    _fill_obs(0, sonar, door, collision, low, high, feat, dp)
+    _side_features(sonar - (ROBOT_RADIUS - 0.0), ROBOT_RADIUS, feat)
+    _fill_obs(1, sonar, light, collision, low, high, feat, wf)
+
+
+@numba.njit(cache=False)
+def _as_input(obs, x):
+    """``np.asarray(obs, dtype=np.float64)`` into ``x``, which it returns."""
+    for k in range(obs.size):
+        x[k] = obs[k]
+    return x
+
+
+@numba.njit(cache=False)
+def _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, out):
+    """6.4.3 for the state of ``dk``/``dp``: a behaviour applies where its largest value exceeds its threshold
+    (``Behaviour.applicable``; NaN never does), wall following everywhere. DK's and DP's values are left in ``qdk``
+    and ``qdp``: the nets do not change, so a choice of DK or DP in this state acts on them."""
+    _values_any(w1s[0], w2s[0], _as_input(dk, xdk), h, scales[0], qdk, linears[0])
+    _values_any(w1s[1], w2s[1], _as_input(dp, xdp), h, scales[1], qdp, linears[1])
+    for b in range(4):
+        qb = qdk if b == 0 else qdp
+        ok, top = True, qb[0]
+        for k in range(qb.size):
+            ok = ok and not np.isnan(qb[k])
+            top = max(top, qb[k])
+        out[b] = thresholds[b] == -np.inf or (ok and top > thresholds[b])
+
+
+@numba.njit(cache=False)
+def _play_loop(qw1, qw2, qscale, qlinear, w1s, w2s, scales, linears, thresholds, obs, dk, dp, wf, applicable, pose,
+               collision, trace, rng, segs, kinds, lights, rooms, room_bits, size, control_noise, sensor_noise,
+               step_scale, partial, sonar_radius, edge_jump, edge_both, low, xy_scale, dock_tolerance, success_reward,
+               collision_penalty, max_steps, x, q, acted):
+    """The play from the world's state on (module docstring), until it docks or times out. Returns (steps, total
+    reward, docked, collided steps, the last behaviour, the last primitive action); the arrays end as the world and
+    learner leave them (``x``, ``q``, ``acted``: the last input the learner acted on, its values and the applicability
+    its choice read)."""
+    h = np.empty(max(qw1.shape[1], max(w1s[0].shape[1], w1s[1].shape[1], w1s[2].shape[1], w1s[3].shape[1]), 1))
+    xdk, xdp, xwf = np.empty(dk.size), np.empty(dp.size), np.empty(wf.size)
+    qdk, qdp, qwf, feat = np.empty(w2s[0].shape[0]), np.empty(w2s[1].shape[0]), np.empty(w2s[2].shape[0]), np.zeros(4)
+    ranges, sonar = np.empty(N_RAYS), np.empty(N_RAYS)
+    light, door = np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8)
+    top = np.empty(16, dtype=np.float32)
+    steps, total, hits, prim = 0, 0.0, 0, -1
+    _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)  # as reset's
+    while True:
+        # BehaviourQCON.act(greedy=True): the first best applicable behaviour (Eq. 6.6 at T = 0)
+        _values_any(qw1, qw2, _as_input(obs, x), h, qscale, q, qlinear)
+        b, best, nan = -1, 0.0, False
+        for k in range(4):
+            acted[k] = applicable[k]
+            if applicable[k]:
+                nan = nan or np.isnan(q[k])
+                if b < 0 or q[k] > best:
+                    b, best = k, q[k]
+        if nan:
+            b = 0  # no value equals a NaN maximum: np.argmax of an all-False mask
+        # BehaviourEnv.step: the behaviour's greedy primitive, the world's step
+        if b >= 2:
+            _values_any(w1s[b], w2s[b], _as_input(wf, xwf), h, scales[b], qwf, linears[b])
+        prim = _first_max(qdk if b == 0 else qdp if b == 1 else qwf)
+        collided, kind, rel = _move(pose, prim, rng.random(), control_noise, step_scale, partial, segs, kinds,
+                                    collision)
+        u = rng.random(_RNG_PER_SCAN)
+        _scan(pose[0], pose[1], pose[2], segs, kinds, lights[0], lights[1], ROBOT_RADIUS, sonar_radius, u,
+              sensor_noise, edge_jump, edge_both, ranges, sonar, light, door)
+        steps += 1
+        docked = collided and prim == MOVE_FORWARD and kind == SEG_CHARGER and abs(rel) <= dock_tolerance
+        reward = success_reward if docked else (collision_penalty if collided else 0.0)
+        trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
+        _observe(pose, _room(pose[0], pose[1], rooms), collision, sonar, light, door, low, xy_scale, size, room_bits,
+                 dk, dp, wf, top, feat)
+        for k in range(obs.size):
+            obs[k] = top[k]
+        _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)
+        total += reward
+        hits += collided
+        if docked or steps >= max_steps:
+            return steps, total, docked, hits, b, prim
+
+
+def compiled(env, agent) -> bool:
+    """Whether a test play of ``agent`` in ``env`` runs compiled (the plain case of the module docstring)."""
+    if type(env) is not BehaviourEnv or type(agent) is not BehaviourQCON or type(agent.q) is not OAON:
+        return False
+    world = env.world
+    if type(world) is not RechargeEnv or world.obs_mode != "high" or type(world.sim) is not RobotSim:
+        return False
+    lib = [env.library[t] for t in BEHAVIOUR_TASKS]
+    if any(type(b) is not Behaviour or type(b.q) is not OAON or b.q.n_nets != lib[0].q.n_nets for b in lib):
+        return False
+    return world.sim.sonar_radius == 0.0 and world.binary_low == lib[0].binary_low and hypot_matches()
+
+
+def greedy_play(env: BehaviourEnv, agent: BehaviourQCON, seed: int, start) -> tuple[TrialStats, int]:
+    """``run_trial(env, agent, trial=0, learning=False, seed=seed, options={"start": start})`` with
+    ``compiled(env, agent)``; returns its stats and the number of steps with a collision."""
+    obs, info = env.reset(seed=seed, options={"start": start})
+    agent.begin_trial(obs, info, trial=0, learning=False)
+    world, sim = env.world, env.world.sim
+    lib = [env.library[t] for t in BEHAVIOUR_TASKS]
+    tasks = info["task_obs"]
+    obs = np.array(obs, dtype=np.float32)
+    dk, dp, wf = (np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL"))
+    applicable = np.array(info["applicable"], dtype=np.bool_)
+    pose = np.array(sim.pose, dtype=np.float64)
+    trace = np.empty((world.max_steps + 1, 3))
+    trace[0] = pose
+    collision = np.zeros(4, dtype=np.uint8)
+    layout = world.layout
+    rooms = np.array(list(layout.rooms.values()), dtype=np.float64).reshape(-1, 4)
+    room_bits = np.array([ROOMS.index(r) if r in ROOMS else -1 for r in layout.rooms], dtype=np.int64)
+    x, q, acted = np.empty(obs.size), np.empty(agent.q.n_nets), np.empty(4, dtype=np.bool_)
+    steps, total, docked, hits, _, prim = _play_loop(
+        agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output,
+        tuple(b.q.w1 for b in lib), tuple(b.q.w2 for b in lib), np.array([b.q.scale for b in lib]),
+        np.array([b.q.config.linear_output for b in lib]), np.array([APPLICABLE_ABOVE[t] for t in BEHAVIOUR_TASKS]),
+        obs, dk, dp, wf, applicable, pose, collision, trace, sim.rng, np.ascontiguousarray(layout.segments),
+        np.ascontiguousarray(layout.kinds), np.array(layout.light, dtype=np.float64), rooms, room_bits,
+        np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
+        sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, world.binary_low, world.xy_scale,
+        world.dock_tolerance, world.success_reward, world.collision_penalty, world.max_steps, x, q, acted)
+    _leave(env, agent, steps, pose, collision, prim, trace, dk, dp, wf, x, q, acted)
+    info = {"success": bool(docked)}
+    return TrialStats(steps, total, bool(docked), not docked, info), hits
+
+
+def _leave(env, agent, steps, pose, collision, prim, trace, dk, dp, wf, x, q, acted) -> None:
+    """Leave the world and the learner as ``run_trial`` does (but for the learner's record of the trial's choices,
+    ``agent.choice``, which a test trial never reads and the next trial begins anew)."""
+    world, sim = env.world, env.world.sim
+    sim.x, sim.y, sim.heading = (float(v) for v in pose)
+    sim.last_collision, sim.last_action = collision, int(prim)
+    world._steps, world._trace = steps, [tuple(p) for p in trace[:steps + 1].tolist()]
+    env._task_obs = {"DK": dk, "DP": dp, "WFL": wf, "WFR": wf.copy()}
+    agent._x, agent.last_q = x, q
+    best = acted & (q == q[acted].max())
+    agent.last_probabilities = best / best.sum()
+    agent.end_trial()
