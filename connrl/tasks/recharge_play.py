@@ -10,9 +10,9 @@ tests/tasks/test_recharge_play.py holds every play, and the world and learner it
 
 Only the plain case is compiled: a ``BehaviourEnv`` over a ``RechargeEnv`` with the 16 (or 14) high-level inputs,
 stored behaviours (``Behaviour`` over an ``OAON``) and Ch. 6's ``BehaviourQCON`` with an ``OAON``; anything else
-plays through ``run_trial``. The robot's partial moves divide by ``math.hypot``, whose CPython algorithm is ported
-here (``_hypot``) and checked against the running interpreter's once per process (``hypot_matches``); where they
-differ, every play goes through ``run_trial``.
+plays through ``run_trial``. The robot's partial moves divide by ``math.hypot``, whose CPython algorithm
+``connrl.envs.robot.step`` ports and checks against the running interpreter's once per process (``hypot_matches``);
+where they differ, every play goes through ``run_trial``.
 
 The loop is not cached: it calls kernels of other files, and a cached kernel may only call its own file's
 (tests/nets/test_kernel_cache.py); it compiles once per process, in a few seconds.
@@ -20,87 +20,21 @@ The loop is not cached: it calls kernels of other files, and a cached kernel may
 
 from __future__ import annotations
 
-import functools
-import math
-
 import numba
 import numpy as np
 
 from connrl.agents.behaviour_level import BehaviourQCON
 from connrl.core.rollout import TrialStats
-from connrl.envs.robot.constants import (
-    _RNG_PER_SCAN,
-    ACTION_MOVE_IN,
-    ACTION_TURN_DEG,
-    CONTROL_ERROR,
-    MOVE_FORWARD,
-    N_RAYS,
-    ROBOT_RADIUS,
-    SEG_CHARGER,
-    SONAR_MAX,
-)
-from connrl.envs.robot.geometry import _scan, _time_of_impact
+from connrl.envs.robot.constants import _RNG_PER_SCAN, MOVE_FORWARD, N_RAYS, ROBOT_RADIUS, SEG_CHARGER, SONAR_MAX
+from connrl.envs.robot.geometry import _scan
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, RechargeEnv, _scan_units
-from connrl.envs.robot.sim import CONTACT_GAP, RobotSim
+from connrl.envs.robot.sim import RobotSim
+from connrl.envs.robot.step import _move, _room, hypot_matches, room_table
 from connrl.envs.robot.tasks import _fill_obs, _side_features
 from connrl.nets import OAON
 from connrl.nets.kernels import _values_any
 from connrl.tasks.behaviours import APPLICABLE_ABOVE, Behaviour
 from connrl.tasks.recharge import BehaviourEnv
-
-_TURN = np.array(ACTION_TURN_DEG)
-_MOVE = np.array(ACTION_MOVE_IN)
-
-
-@numba.njit(cache=False)
-def _dl_mul(x, y):
-    """Dekker's exact product: hi + lo = x * y (CPython's ``dl_mul``)."""
-    t = x * 134217729.0
-    xh = t - (t - x)
-    xl = x - xh
-    t = y * 134217729.0
-    yh = t - (t - y)
-    yl = y - yh
-    hi = x * y
-    return hi, xh * yh - hi + xh * yl + xl * yh + xl * yl
-
-
-@numba.njit(cache=False)
-def _hypot(a, b):
-    """``math.hypot(a, b)`` of CPython 3.10+ for finite a, b (its ``vector_norm``: lossless scaling, squaring and
-    summing, then a square root with one differential correction); Numba's own calls libm, whose last bit differs."""
-    a, b = abs(a), abs(b)
-    m = max(a, b)
-    if m == 0.0:
-        return m
-    _, e = math.frexp(m)
-    if e < -1023:
-        return math.hypot(a, b)  # subnormal: never reached by a robot's move; the check below would flag it
-    scale = math.ldexp(1.0, -e)
-    csum, frac1, frac2 = 1.0, 0.0, 0.0
-    for v in (a, b):
-        hi, lo = _dl_mul(v * scale, v * scale)
-        s = csum + hi
-        frac2 += (csum - s) + hi
-        csum = s
-        frac1 += lo
-    h = math.sqrt(csum - 1.0 + (frac1 + frac2))
-    hi, lo = _dl_mul(-h, h)
-    s = csum + hi
-    frac2 += (csum - s) + hi
-    csum = s
-    frac1 += lo
-    x = csum - 1.0 + (frac1 + frac2)
-    h += x / (2.0 * h)
-    return h / scale
-
-
-@functools.lru_cache(maxsize=1)
-def hypot_matches() -> bool:
-    """Whether ``_hypot`` is this interpreter's ``math.hypot``, bit for bit, on 20,000 pairs of move sizes."""
-    rng = np.random.default_rng(45)
-    pairs = rng.normal(0.0, 12.0, (20_000, 2)) * rng.choice([1.0, 1e-3, 1e3], (20_000, 2))
-    return all(_hypot(a, b) == math.hypot(a, b) for a, b in pairs.tolist())
 
 
 @numba.njit(cache=False)
@@ -113,48 +47,6 @@ def _first_max(q):
         if q[k] > q[a]:
             a = k
     return a
-
-
-@numba.njit(cache=False)
-def _move(pose, action, u, control_noise, step_scale, partial, segs, kinds, collision):
-    """``RobotSim.apply`` after its draw ``u``: moves ``pose`` (x, y, heading), sets ``collision`` (front, back, left,
-    right); returns (collided, the kind of surface touched, the contact's direction from the heading)."""
-    scale = (1.0 - CONTROL_ERROR + 2.0 * CONTROL_ERROR * u if control_noise else 1.0) * step_scale
-    for k in range(4):
-        collision[k] = 0
-    turn = _TURN[action]
-    if turn != 0.0:
-        pose[2] = (pose[2] + turn * scale) % 360.0
-        return False, -1, np.nan
-    length = _MOVE[action] * scale
-    h = math.radians(pose[2])
-    dx, dy = length * math.cos(h), length * math.sin(h)
-    t, cx, cy, i = _time_of_impact(pose[0], pose[1], dx, dy, segs, ROBOT_RADIUS)
-    if t > 1.0:
-        pose[0] += dx
-        pose[1] += dy
-        return False, -1, np.nan
-    px, py = pose[0] + t * dx, pose[1] + t * dy
-    if partial:
-        gap = CONTACT_GAP / _hypot(dx, dy)
-        back = gap if gap < t else t
-        pose[0], pose[1] = pose[0] + (t - back) * dx, pose[1] + (t - back) * dy
-    rel = (math.degrees(math.atan2(cy - py, cx - px)) - pose[2] + 180.0) % 360.0 - 180.0  # sim.wrap_deg
-    if rel == -180.0:
-        rel = 180.0
-    a = abs(rel)
-    side = 0 if a <= 45.0 else 1 if a >= 135.0 else 2 if rel > 0 else 3  # FRONT, BACK, LEFT, RIGHT
-    collision[side] = 1
-    return True, kinds[i], rel
-
-
-@numba.njit(cache=False)
-def _room(x, y, rooms):
-    """``Layout.room_at`` as the index of its room (the first whose rectangle holds the point), or -1."""
-    for r in range(rooms.shape[0]):
-        if rooms[r, 0] <= x < rooms[r, 2] and rooms[r, 1] <= y < rooms[r, 3]:
-            return r
-    return -1
 
 
 @numba.njit(cache=False)
@@ -283,7 +175,7 @@ def greedy_play(env: BehaviourEnv, agent: BehaviourQCON, seed: int, start) -> tu
     trace[0] = pose
     collision = np.zeros(4, dtype=np.uint8)
     layout = world.layout
-    rooms = np.array(list(layout.rooms.values()), dtype=np.float64).reshape(-1, 4)
+    rooms = room_table(layout)
     room_bits = np.array([ROOMS.index(r) if r in ROOMS else -1 for r in layout.rooms], dtype=np.int64)
     x, q, acted = np.empty(obs.size), np.empty(agent.q.n_nets), np.empty(4, dtype=np.bool_)
     steps, total, docked, hits, _, prim = _play_loop(

@@ -34,6 +34,7 @@ from connrl.envs.robot.constants import (
     SONAR_ORIGIN,
 )
 from connrl.nets import NetConfig
+from connrl.tasks import robot_play
 
 LESSON_DIR = Path(__file__).resolve().parent.parent / "data" / "lessons"
 TAUGHT_COUNTS = {"DP": 10, "DK": 10, "WFL": 5, "WFR": 5}  # lessons shipped per task (5.4.1; WFR for Ch. 6)
@@ -307,9 +308,13 @@ def teacher_score(env: RobotTaskEnv, tasks, seeds) -> tuple[float, int]:
 def evaluate(env: RobotTaskEnv, agent, tasks, seeds, max_steps: int, paths: list | None = None) -> float:
     """Greedy test on fixed tasks: total reinforcement / total steps (5.4)."""
     total, steps = 0.0, 0
+    fast = robot_play.compiled(env, agent)  # the same plays, compiled (connrl.tasks.robot_play)
     for i, (start, s) in enumerate(zip(tasks, seeds, strict=True)):
-        stats = run_trial(env, agent, trial=0, learning=False, seed=int(s), options={"start": start},
-                          max_steps=max_steps)
+        if fast:
+            stats = robot_play.greedy_play(env, agent, int(s), start, max_steps)
+        else:
+            stats = run_trial(env, agent, trial=0, learning=False, seed=int(s), options={"start": start},
+                              max_steps=max_steps)
         total += stats.total_reward
         steps += stats.steps
         if paths is not None and i < len(paths):

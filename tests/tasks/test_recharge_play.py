@@ -4,8 +4,6 @@ but the plain case plays through run_trial."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
@@ -64,13 +62,3 @@ def test_other_learners_and_worlds_play_through_run_trial():
     env = BehaviourEnv(_shipped_library())
     assert recharge_play.compiled(env, agent)
     assert not recharge_play.compiled(env, object())
-
-
-def test_hypot_is_cpythons():
-    """The partial moves' ``math.hypot``: the port equals the interpreter's on exact cases and on random moves."""
-    for a, b in [(3.0, 4.0), (0.0, 0.0), (-5.0, 12.0), (1e-300, 1e-300), (1e300, 1e300), (2.4, 0.0), (0.1, 0.2)]:
-        assert recharge_play._hypot(a, b) == math.hypot(a, b)
-    rng = np.random.default_rng(7)
-    for a, b in rng.normal(0, 12, (5000, 2)).tolist():
-        assert recharge_play._hypot(a, b) == math.hypot(a, b)
-    assert recharge_play.hypot_matches()

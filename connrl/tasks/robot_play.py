@@ -1,0 +1,169 @@
+"""Ch. 5's greedy test plays compiled whole (issue 45).
+
+Every Ch. 5 run tests its learner greedily on fixed tasks before the first trial and every few trials (5.4), and
+those test steps are most of a run's steps (``robot-dk-geometry``: four in five). Here a test play -- the learner's
+values and greedy choice, the simulator's move and scan, the task's reinforcement and its observation -- runs as one
+Numba loop with the same arithmetic and the same draws from the world's generator, step for step, as
+``run_trial(env, agent, learning=False, max_steps=...)``; tests/tasks/test_robot_play.py holds every play, and the
+world and learner it leaves, to ``run_trial``'s.
+
+Only the plain case is compiled: a ``RobotTaskEnv`` without rendering and a QCON (or Ch. 5's QCON-T) over an
+``OAON`` with no planner; anything else plays through ``run_trial``, as it does where the ported ``math.hypot`` is not
+the interpreter's (``connrl.envs.robot.step``). Not cached, as ``connrl.tasks.recharge_play``.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from connrl.agents.qcon import QCON
+from connrl.agents.teaching import TeachingQCON
+from connrl.core.exploration import boltzmann_probabilities
+from connrl.core.rollout import TrialStats
+from connrl.envs.robot.constants import _RNG_PER_SCAN, MOVE_BACKWARD, MOVE_FORWARD, N_RAYS, ROBOT_RADIUS, SEG_CHARGER
+from connrl.envs.robot.env import RobotTaskEnv
+from connrl.envs.robot.geometry import _scan
+from connrl.envs.robot.sim import Reading, RobotSim
+from connrl.envs.robot.step import _hypot, _move, _room, hypot_matches, room_table
+from connrl.envs.robot.tasks import (
+    CLEARANCE_MAX,
+    CLEARANCE_MIN,
+    R_BACKWARD,
+    R_COLLISION,
+    R_SUCCESS,
+    TASKS,
+    WF_PARALLEL_DEG,
+    WF_REWARDS,
+    _fill_obs,
+    _side_features,
+)
+from connrl.nets import OAON
+from connrl.nets.kernels import _values_any
+
+_WF_REWARDS = np.array(WF_REWARDS)
+_WF_PARALLEL = np.array(WF_PARALLEL_DEG)
+
+
+@numba.njit(cache=False)
+def _passed_door(x, y, room, start_room, doors, pass_depth):
+    """``RobotTaskEnv._passed_door``: into another room, and (``pass_depth`` > 0) that far from every doorway."""
+    if room < 0 or room == start_room:
+        return False
+    if pass_depth <= 0.0:
+        return True
+    for d in range(doors.shape[0]):
+        x0, y0, x1, y1 = doors[d, 0], doors[d, 1], doors[d, 2], doors[d, 3]
+        ex, ey = x1 - x0, y1 - y0
+        s = ((x - x0) * ex + (y - y0) * ey) / (ex * ex + ey * ey)
+        s = s if s > 0.0 else 0.0  # Python's max(0.0, s), then min(1.0, s)
+        s = s if s < 1.0 else 1.0
+        if _hypot(x0 + s * ex - x, y0 + s * ey - y) < pass_depth:
+            return False
+    return True
+
+
+@numba.njit(cache=False)
+def _wf_reward(task, a, collided, ranges, feat_true):
+    """``RobotTaskEnv._wf_reward``: wall following's reinforcement on the true ranges (5.3.1)."""
+    if collided:
+        return R_COLLISION
+    if a == MOVE_BACKWARD:
+        return R_BACKWARD
+    _side_features(ranges, ROBOT_RADIUS, feat_true)
+    j = 0 if task == 2 else 1
+    near = feat_true[3] if feat_true[3] < feat_true[2] else feat_true[2]
+    if near < CLEARANCE_MIN or feat_true[2 + j] > CLEARANCE_MAX or a != MOVE_FORWARD:
+        return 0.0
+    al = abs(feat_true[j])
+    return _WF_REWARDS[0] if al <= _WF_PARALLEL[0] else _WF_REWARDS[1] if al <= _WF_PARALLEL[1] else _WF_REWARDS[2]
+
+
+@numba.njit(cache=False)
+def _play_loop(qw1, qw2, qscale, qlinear, task, obs, pose, collision, trace, rng, segs, kinds, lights, rooms,
+               start_room, doors, pass_depth, control_noise, sensor_noise, step_scale, partial, sonar_radius,
+               edge_jump, edge_both, low, dock_tolerance, env_max_steps, max_steps, feat, feat_true, x, q, ranges,
+               sonar, light, door):
+    """The play from the world's state on (module docstring). Returns (steps, total reward, success, truncated,
+    the last action); the arrays end as the world and learner leave them (``x``, ``q``: the last input acted on and
+    its values; ``ranges`` ... ``door``: the last scan)."""
+    h = np.empty(max(qw1.shape[1], 1))
+    high = low + 1.0
+    steps, total = 0, 0.0
+    while True:
+        for k in range(obs.size):
+            x[k] = obs[k]
+        _values_any(qw1, qw2, x, h, qscale, q, qlinear)
+        a, nan = 0, False  # QCON.act at T = 0: the first best; 0 when a value is NaN (np.argmax of NaNs)
+        for k in range(q.size):
+            nan = nan or np.isnan(q[k])
+            if q[k] > q[a]:
+                a = k
+        if nan:
+            a = 0
+        collided, kind, rel = _move(pose, a, rng.random(), control_noise, step_scale, partial, segs, kinds, collision)
+        u = rng.random(_RNG_PER_SCAN)
+        _scan(pose[0], pose[1], pose[2], segs, kinds, lights[0], lights[1], ROBOT_RADIUS, sonar_radius, u,
+              sensor_noise, edge_jump, edge_both, ranges, sonar, light, door)
+        steps += 1
+        success = False
+        if task == 0:
+            success = collided and a == MOVE_FORWARD and kind == SEG_CHARGER and abs(rel) <= dock_tolerance
+            reward = R_SUCCESS if success else (R_COLLISION if collided else 0.0)
+        elif task == 1:
+            success = not collided and _passed_door(pose[0], pose[1], _room(pose[0], pose[1], rooms), start_room,
+                                                    doors, pass_depth)
+            reward = R_SUCCESS if success else (R_COLLISION if collided else 0.0)
+        else:
+            reward = _wf_reward(task, a, collided, ranges, feat_true)
+        trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
+        if task >= 2:
+            _side_features(sonar if sonar_radius == ROBOT_RADIUS else sonar - (ROBOT_RADIUS - sonar_radius),
+                           ROBOT_RADIUS, feat)
+            _fill_obs(1, sonar, light, collision, low, high, feat, obs)
+        else:
+            _fill_obs(0, sonar, light if task == 0 else door, collision, low, high, feat, obs)
+        total += reward
+        truncated = not success and (steps >= env_max_steps or steps >= max_steps)
+        if success or truncated:
+            return steps, total, success, truncated, a
+
+
+def compiled(env, agent) -> bool:
+    """Whether a test play of ``agent`` in ``env`` runs compiled (the plain case of the module docstring)."""
+    return (type(env) is RobotTaskEnv and env.render_mode is None and type(env.sim) is RobotSim
+            and type(agent) in (QCON, TeachingQCON) and agent.planner is None and type(agent.q) is OAON
+            and hypot_matches())
+
+
+def greedy_play(env: RobotTaskEnv, agent, seed: int, start, max_steps: int) -> TrialStats:
+    """``run_trial(env, agent, trial=0, learning=False, seed=seed, options={"start": start}, max_steps=max_steps)``
+    with ``compiled(env, agent)``; its stats' info holds "success" only."""
+    obs, info = env.reset(seed=seed, options={"start": start})
+    agent.begin_trial(obs, info, trial=0, learning=False)
+    sim, layout = env.sim, env.layout
+    obs = np.array(obs, dtype=np.float32)
+    pose = np.array(sim.pose, dtype=np.float64)
+    trace = np.empty((env.max_steps + 1, 3))
+    trace[0] = pose
+    collision = np.zeros(4, dtype=np.uint8)
+    start_room = list(layout.rooms).index(env._start_room) if env._start_room is not None else -1
+    doors = np.array([d.segment for d in layout.doors.values()], dtype=np.float64).reshape(-1, 4)
+    x, q = np.empty(obs.size), np.empty(agent.q.n_nets)
+    ranges, sonar = np.empty(N_RAYS), np.empty(N_RAYS)
+    light, door = np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8)
+    steps, total, success, truncated, a = _play_loop(
+        agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output, TASKS.index(env.task), obs, pose,
+        collision, trace, sim.rng, np.ascontiguousarray(layout.segments), np.ascontiguousarray(layout.kinds),
+        np.array(layout.light, dtype=np.float64), room_table(layout), start_room, doors, env.pass_depth,
+        sim.control_noise, sim.sensor_noise, sim.step_scale, sim.partial_moves, sim.sonar_radius, sim.edge_jump,
+        sim.edge_both, env.binary_low, env.dock_tolerance, env.max_steps, max_steps, env._feat, env._feat_true, x, q,
+        ranges, sonar, light, door)
+    # leave the world and the learner as run_trial does
+    sim.x, sim.y, sim.heading = (float(v) for v in pose)
+    sim.last_collision, sim.last_action = collision, int(a)
+    env._steps, env._trace = steps, [tuple(p) for p in trace[:steps + 1].tolist()]
+    env._reading = Reading(sonar, ranges, light, door, collision.copy(), sim.heading, sim.room, sim.sonar_radius)
+    agent._x, agent.last_probabilities = x, boltzmann_probabilities(q, 0.0)
+    agent.end_trial()
+    return TrialStats(steps, total, bool(success), bool(truncated), {"success": bool(success)})
