@@ -187,6 +187,7 @@ class LessonAgent:
         self._x: np.ndarray | None = None
         self.last_probabilities: np.ndarray | None = None
         r = config.replay
+        self._made_params: tuple = (None, None, {})  # replay_params' (base params, temperature, {P_t: params})
         self._replay = ReplayParams(gamma=config.gamma, lam=config.lam, clip=config.target_clip,
                                     batch=(r is not None and r.batch) if batch is None else batch)
 
@@ -204,9 +205,16 @@ class LessonAgent:
 
     def replay_params(self, p_threshold: float) -> ReplayParams:
         """How the next lesson is replayed (Fig. 5.1): the non-policy test at this trial's temperature (on the
-        ``merit_scale`` the choice used) with threshold ``p_threshold``."""
-        return dataclasses.replace(self._replay, temperature=self.explore.base * self.merit_scale,
-                                   p_threshold=p_threshold)
+        ``merit_scale`` the choice used) with threshold ``p_threshold``. Kept for the next lesson asking the same:
+        a trial replays up to 1000 lessons at one temperature and a few thresholds (issue 45)."""
+        t, (replay, cached_t, made) = self.explore.base * self.merit_scale, self._made_params
+        if replay is not self._replay or cached_t != t:
+            made = {}
+            self._made_params = (self._replay, t, made)
+        params = made.get(p_threshold)
+        if params is None:
+            params = made[p_threshold] = dataclasses.replace(self._replay, temperature=t, p_threshold=p_threshold)
+        return params
 
     def encode(self, obs) -> np.ndarray:
         """Network input for an observation; memoryless agents feed the observation as it is."""

@@ -314,7 +314,7 @@ class RecurrentModelQ(LessonAgent):
     def q_lesson(self, lesson: Lesson) -> Lesson:
         """The lesson with Q-net inputs ``[x_t, c_t]``, contexts recomputed by the current model."""
         _, cs = self.model.forward_checked(*self._arrays(lesson)[4:])
-        return Lesson(np.hstack([lesson.inputs, cs[:-1]]), lesson.actions, lesson.rewards,
+        return Lesson(np.concatenate((lesson.inputs, cs[:-1]), axis=1), lesson.actions, lesson.rewards,
                       terminated=lesson.terminated, truncated=lesson.truncated, taught=lesson.taught)
 
     def _predictions(self, lesson: Lesson) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
+import numba
 import numpy as np
 
 from connrl.core.exploration import boltzmann_probabilities, weighted_boltzmann_probabilities
@@ -184,6 +185,8 @@ def replay_q_reference(q: QFunction, lesson: Lesson, params: ReplayParams, repai
 
 
 def _check_step_arrays(lesson: Lesson, weights, allowed, discounts) -> None:
+    if weights is None and allowed is None and discounts is None:
+        return
     n = len(lesson)
     for name, arr, rows in (("weights", weights, n), ("allowed", allowed, n + 1), ("discounts", discounts, n)):
         if arr is not None and len(arr) != rows:
@@ -218,11 +221,22 @@ def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "
     return replay_q_reference(q, lesson, params, repair, weights, allowed, discounts) if used is None else used
 
 
+@numba.njit(cache=True)
+def _actions_fit(actions, n_actions):
+    """Every action in 0..n_actions - 1: one compiled pass (issue 45: a tenth of the two reductions it replaces,
+    on every one of up to 150,000 lessons a run)."""
+    for a in actions:
+        if a < 0 or a >= n_actions:
+            return False
+    return True
+
+
 def check_lesson_fits(lesson: Lesson, n_actions: int, n_inputs: int) -> None:
     """Refuse a lesson whose actions or input width do not fit the nets: the compiled kernels index without bounds
     (a loaded file is checked before it gets here; this keeps a lesson built by hand from corrupting memory)."""
     a = lesson.actions
-    if len(a) and (a.min() < 0 or a.max() >= n_actions) or lesson.inputs.shape[1] != n_inputs:
+    fits = _actions_fit(a, n_actions) if a.dtype == np.int64 else not len(a) or (a.min() >= 0 and a.max() < n_actions)
+    if not fits or lesson.inputs.shape[1] != n_inputs:
         raise ValueError(f"a lesson with actions in [{a.min()}, {a.max()}] and {lesson.inputs.shape[1]} inputs does "
                          f"not fit nets of actions 0..{n_actions - 1} on {n_inputs} inputs")
 

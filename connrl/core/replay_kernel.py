@@ -22,14 +22,37 @@ def _lesson_arrays(lesson) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             np.ascontiguousarray(lesson.rewards, dtype=np.float64))
 
 
+# Arrays the kernels only read, made once (issue 45: a run replays up to 150,000 lessons): gamma per step, and the
+# empty (0, A) arrays that mean "no per-step weights / allowed choices". Never written: they are shared.
+_GAMMAS: dict[float, np.ndarray] = {}
+_NONE: dict[tuple, np.ndarray] = {}
+
+
+def _gammas(n: int, gamma: float) -> np.ndarray:
+    """``np.full(n, gamma)``: a view of a kept array (writable, so the kernels' signature is the one they were
+    compiled and cached for; they never write it)."""
+    d = _GAMMAS.get(gamma)
+    if d is None or d.size < n:
+        d = _GAMMAS[gamma] = np.full(max(n, 256, 0 if d is None else 2 * d.size), gamma)
+    return d[:n]
+
+
+def _none(a: int, dtype) -> np.ndarray:
+    """``np.zeros((0, a), dtype)``, kept."""
+    z = _NONE.get((a, dtype))
+    if z is None:
+        z = _NONE[(a, dtype)] = np.zeros((0, a), dtype=dtype)
+    return z
+
+
 def replay_oaon(net: OAON, lesson, params, repair: int = 0, weights=None, allowed=None, discounts=None) -> int:
     """Compiled incremental backward replay of one lesson into an OAON Q-function: the registered fast path
     of ``connrl.core.replay.replay_q`` (its arguments). ``repair`` 1/2 adds the lower/raise repairs of 5.4.3 after
     each experience."""
     n, a = len(lesson), net.n_nets
-    d = np.full(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
-    w = np.zeros((0, a)) if weights is None else np.ascontiguousarray(weights, dtype=np.float64)
-    m = np.zeros((0, a), dtype=np.bool_) if allowed is None else np.ascontiguousarray(allowed, dtype=np.bool_)
+    d = _gammas(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
+    w = _none(a, np.float64) if weights is None else np.ascontiguousarray(weights, dtype=np.float64)
+    m = _none(a, np.bool_) if allowed is None else np.ascontiguousarray(allowed, dtype=np.bool_)
     return int(_replay_q_kernel(net.w1, net.w2, net.d1, net.d2, net._h, np.empty(a), *_lesson_arrays(lesson),
                                 bool(lesson.terminated), d, float(params.lam), float(params.temperature),
                                 float(params.p_threshold), 0.0 if params.clip is None else float(params.clip),
@@ -46,7 +69,7 @@ def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=Non
     if repair or weights is not None or allowed is not None:
         return None
     n, o = len(lesson), net.net
-    d = np.full(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
+    d = _gammas(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
     return int(_replay_rotated_kernel(o.w1, o.w2, o.d1, o.d2, o._h, net._xr, np.empty(net.n_actions), net.perms,
                                       *_lesson_arrays(lesson), bool(lesson.terminated), d, float(params.lam),
                                       float(params.temperature), float(params.p_threshold),

@@ -572,3 +572,34 @@ def test_grouped_replay_targets_are_lambda_returns_with_per_step_discounts(batch
     assert not np.allclose(expected, lambda_returns(g.lesson.rewards, u, 0.99, 0.8))  # the discounts mattered
     with pytest.raises(ValueError, match="repairs are defined for incremental replay only"):
         replay_q_reference(q, g.lesson, ReplayParams(gamma=0.99, batch=True), repair="lower")
+
+
+@pytest.mark.parametrize("dtype", [np.int64, np.int32])
+def test_a_lesson_whose_actions_do_not_fit_is_refused_before_the_kernel(dtype):
+    """``check_lesson_fits`` (compiled for int64 actions) refuses an action outside 0..A-1 wherever it sits."""
+    from connrl.core.replay import check_lesson_fits
+    x = np.zeros((5, 3))
+    check_lesson_fits(Lesson(x, np.array([0, 1, 2, 1], dtype=dtype), np.zeros(4), True), 3, 3)
+    check_lesson_fits(Lesson(x[:1], np.array([], dtype=dtype), np.zeros(0), True), 3, 3)
+    for bad in ([0, 1, 3, 1], [-1, 0, 0, 0], [0, 0, 0, 7]):
+        with pytest.raises(ValueError, match="does not fit nets of actions 0..2"):
+            check_lesson_fits(Lesson(x, np.array(bad, dtype=dtype), np.zeros(4), True), 3, 3)
+    with pytest.raises(ValueError, match="on 4 inputs"):
+        check_lesson_fits(Lesson(x, np.array([0, 1, 2, 1], dtype=dtype), np.zeros(4), True), 3, 4)
+
+
+def test_replay_params_are_kept_per_temperature_and_threshold():
+    """A trial's replays share their parameters; a new temperature, threshold or base gives new ones."""
+    from connrl.agents.base import ReplayConfig
+    from connrl.agents.qcon import QCON, QCONConfig
+    from connrl.core.exploration import TemperatureSchedule
+    agent = QCON(QCONConfig(NetConfig(3, 2), TemperatureSchedule.direct(0.5, 0.1, 5), replay=ReplayConfig()), 2,
+                 np.random.default_rng(0))
+    agent.explore.begin(0)
+    p = agent.replay_params(0.1)
+    assert agent.replay_params(0.1) is p and (p.temperature, p.p_threshold) == (0.5, 0.1)
+    assert agent.replay_params(0.2).p_threshold == 0.2 and agent.replay_params(0.1) is p
+    agent.explore.begin(4)
+    assert agent.replay_params(0.1).temperature == pytest.approx(0.1) and agent.replay_params(0.1) is not p
+    agent._replay = ReplayParams(gamma=0.5)
+    assert agent.replay_params(0.1).gamma == 0.5
