@@ -16,7 +16,9 @@ the loop adds on top of it.
   against ``_forward_sequence`` (vector lanes over units);
 - state grouping (Ch. 6): ``group_lesson``'s plain loops (``group_states_reference``,
   ``centres_and_rewards_reference``) against its compiled paths;
-- Boltzmann selection at T > 0: ``boltzmann_probabilities`` + cumsum + searchsorted against ``boltzmann_select``.
+- Boltzmann selection at T > 0: ``boltzmann_probabilities`` + cumsum + searchsorted against ``boltzmann_select``;
+- greedy test plays over behaviours (Chs. 6, 8) and of Ch. 5's tasks: ``run_trial`` against
+  ``connrl.tasks.recharge_play.greedy_play`` and ``connrl.tasks.robot_play.greedy_play``.
 Each time is the best of --repeat rounds.
 """
 
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -36,12 +39,18 @@ from connrl.core.grouping import group_lesson
 from connrl.core.lessons import Lesson
 from connrl.core.replay import ReplayParams, replay_ahc, replay_ahc_reference, replay_q, replay_q_reference
 from connrl.core.rollout import run_trial
+from connrl.envs.robot.recharge import ROOMS, sample_in_room
 from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv
+from connrl.experiments.recharge import RechargeParams
+from connrl.experiments.robot import RobotParams
 from connrl.nets import OAON, NetConfig
 from connrl.nets.kernels import _rotated_values
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
 from connrl.nets.recurrent_kernels import _forward_sequence
 from connrl.nets.rotated import RotatedNet
+from connrl.tasks import recharge_play, robot_play
+from connrl.tasks.recharge import make_high_level_agent, make_recharge_env
+from connrl.tasks.robot import make_agent, make_env
 from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 from connrl.tasks.survival_play import greedy_play
 
@@ -125,6 +134,31 @@ def later_rows(repeat: int, rng) -> list[tuple[str, float, float]]:
 
     out.append(("Boltzmann selection of 4 actions at T = 0.05 (every training step)",
                 best_time(plain, 50000, repeat), best_time(lambda: boltzmann_select(merits, 0.05, g), 50000, repeat)))
+    return out + robot_rows(repeat)
+
+
+def robot_rows(repeat: int) -> list[tuple[str, float, float]]:
+    """The robot's greedy test plays: over behaviours (Chs. 6, 8), and Ch. 5's door passing."""
+    p = dataclasses.replace(RechargeParams(), max_steps=1000, step_scale=0.2, success_reward=500.0, xy_scale=8.0)
+    env, agent = make_recharge_env(p), make_high_level_agent(p, np.random.default_rng(3))  # Exp. 4's world (6.6.4)
+    for k in range(5):
+        run_trial(env, agent, trial=k, learning=True, seed=k)
+    rng = np.random.default_rng(7)
+    tasks = [(sample_in_room(rng, env.world.layout, ROOMS[k % 3]), int(rng.integers(2**31))) for k in range(6)]
+    assert recharge_play.compiled(env, agent)
+    out = [("6 greedy test plays over behaviours, fifth-size steps (Chs. 6, 8)",
+            best_time(lambda: [run_trial(env, agent, trial=0, learning=False, seed=s, options={"start": start})
+                               for start, s in tasks], 1, repeat),
+            best_time(lambda: [recharge_play.greedy_play(env, agent, s, start) for start, s in tasks], 1, repeat))]
+    p = RobotParams(task="DP")
+    renv, ragent = make_env(p), make_agent(p, np.random.default_rng(4))
+    assert robot_play.compiled(renv, ragent)
+    starts = [(renv.sample_task(rng), int(rng.integers(2**31))) for _ in range(20)]
+    out.append(("20 greedy test plays of DP, 30 steps at most (Ch. 5)",
+                best_time(lambda: [run_trial(renv, ragent, trial=0, learning=False, seed=s, options={"start": start},
+                                             max_steps=30) for start, s in starts], 1, repeat),
+                best_time(lambda: [robot_play.greedy_play(renv, ragent, s, start, 30) for start, s in starts], 1,
+                          repeat)))
     return out
 
 

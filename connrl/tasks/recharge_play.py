@@ -9,10 +9,10 @@ same draws from the world's generator, step for step, as ``run_trial(env, agent,
 tests/tasks/test_recharge_play.py holds every play, and the world and learner it leaves, to ``run_trial``'s.
 
 Only the plain case is compiled: a ``BehaviourEnv`` over a ``RechargeEnv`` with the 16 (or 14) high-level inputs,
-stored behaviours (``Behaviour`` over an ``OAON``) and Ch. 6's ``BehaviourQCON`` with an ``OAON``; anything else
-plays through ``run_trial``. The robot's partial moves divide by ``math.hypot``, whose CPython algorithm
-``connrl.envs.robot.step`` ports and checks against the running interpreter's once per process (``hypot_matches``);
-where they differ, every play goes through ``run_trial``.
+behaviours that are a ``Behaviour`` over an ``OAON`` (the shipped library's, or Exp. 5's as they stand when tested)
+and Ch. 6's ``BehaviourQCON`` with an ``OAON``; anything else plays through ``run_trial``. The robot's partial
+moves divide by ``math.hypot``, whose CPython algorithm ``connrl.envs.robot.step`` ports and checks against the
+running interpreter's once per process (``hypot_matches``); where they differ, every play goes through ``run_trial``.
 
 The loop is not cached: it calls kernels of other files, and a cached kernel may only call its own file's
 (tests/nets/test_kernel_cache.py); it compiles once per process, in a few seconds.
@@ -23,14 +23,22 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from connrl.agents.behaviour_level import BehaviourQCON
+from connrl.agents.behaviour_level import BehaviourChoice, BehaviourQCON
 from connrl.core.rollout import TrialStats
-from connrl.envs.robot.constants import _RNG_PER_SCAN, MOVE_FORWARD, N_RAYS, ROBOT_RADIUS, SEG_CHARGER, SONAR_MAX
+from connrl.envs.robot.constants import (
+    _RNG_PER_SCAN,
+    MOVE_FORWARD,
+    N_ACTIONS,
+    N_RAYS,
+    ROBOT_RADIUS,
+    SEG_CHARGER,
+    SONAR_MAX,
+)
 from connrl.envs.robot.geometry import _scan
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, RechargeEnv, _scan_units
 from connrl.envs.robot.sim import RobotSim
 from connrl.envs.robot.step import _move, _room, hypot_matches, room_table
-from connrl.envs.robot.tasks import _fill_obs, _side_features
+from connrl.envs.robot.tasks import OBS_SIZE, _fill_obs, _side_features
 from connrl.nets import OAON
 from connrl.nets.kernels import _values_any
 from connrl.tasks.behaviours import APPLICABLE_ABOVE, Behaviour
@@ -50,10 +58,10 @@ def _first_max(q):
 
 
 @numba.njit(cache=False)
-def _observe(pose, room, collision, sonar, light, door, low, xy_scale, size, room_bits, dk, dp, wf, top, feat):
+def _observe(pose, room, collision, sonar, sonar_radius, light, door, low, xy_scale, size, room_bits, dk, dp, wf, top,
+             feat):
     """``RechargeEnv._observe`` in "high" mode: the 16 high-level units into ``top``, Ch. 5's observations into
-    ``dk``, ``dp`` and ``wf`` (float32, as the world hands them out); the sonar is read from the centre, so the body
-    clearances are the readings less the radius (``Reading.body_sonar``)."""
+    ``dk``, ``dp`` and ``wf`` (float32, as the world hands them out)."""
     high = low + 1.0
     _scan_units(sonar, pose[2], collision, light, door, low, high, float(SONAR_MAX), top)
     code = room_bits[room] if room >= 0 else -1
@@ -65,7 +73,8 @@ def _observe(pose, room, collision, sonar, light, door, low, xy_scale, size, roo
         feat[k] = 0.0
     _fill_obs(0, sonar, light, collision, low, high, feat, dk)
     _fill_obs(0, sonar, door, collision, low, high, feat, dp)
-    _side_features(sonar - (ROBOT_RADIUS - 0.0), ROBOT_RADIUS, feat)
+    body = sonar if sonar_radius == ROBOT_RADIUS else sonar - (ROBOT_RADIUS - sonar_radius)  # Reading.body_sonar
+    _side_features(body, ROBOT_RADIUS, feat)
     _fill_obs(1, sonar, light, collision, low, high, feat, wf)
 
 
@@ -79,18 +88,19 @@ def _as_input(obs, x):
 
 @numba.njit(cache=False)
 def _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, out):
-    """6.4.3 for the state of ``dk``/``dp``: a behaviour applies where its largest value exceeds its threshold
+    """6.4.3 for the state of ``dk``/``dp``: DK and DP apply where their largest value exceeds their threshold
     (``Behaviour.applicable``; NaN never does), wall following everywhere. DK's and DP's values are left in ``qdk``
     and ``qdp``: the nets do not change, so a choice of DK or DP in this state acts on them."""
     _values_any(w1s[0], w2s[0], _as_input(dk, xdk), h, scales[0], qdk, linears[0])
     _values_any(w1s[1], w2s[1], _as_input(dp, xdp), h, scales[1], qdp, linears[1])
-    for b in range(4):
+    for b in range(2):
         qb = qdk if b == 0 else qdp
         ok, top = True, qb[0]
         for k in range(qb.size):
             ok = ok and not np.isnan(qb[k])
             top = max(top, qb[k])
-        out[b] = thresholds[b] == -np.inf or (ok and top > thresholds[b])
+        out[b] = ok and top > thresholds[b]
+    out[2] = out[3] = True
 
 
 @numba.njit(cache=False)
@@ -135,8 +145,8 @@ def _play_loop(qw1, qw2, qscale, qlinear, w1s, w2s, scales, linears, thresholds,
         docked = collided and prim == MOVE_FORWARD and kind == SEG_CHARGER and abs(rel) <= dock_tolerance
         reward = success_reward if docked else (collision_penalty if collided else 0.0)
         trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
-        _observe(pose, _room(pose[0], pose[1], rooms), collision, sonar, light, door, low, xy_scale, size, room_bits,
-                 dk, dp, wf, top, feat)
+        _observe(pose, _room(pose[0], pose[1], rooms), collision, sonar, sonar_radius, light, door, low, xy_scale,
+                 size, room_bits, dk, dp, wf, top, feat)
         for k in range(obs.size):
             obs[k] = top[k]
         _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)
@@ -147,21 +157,28 @@ def _play_loop(qw1, qw2, qscale, qlinear, w1s, w2s, scales, linears, thresholds,
 
 
 def compiled(env, agent) -> bool:
-    """Whether a test play of ``agent`` in ``env`` runs compiled (the plain case of the module docstring)."""
+    """Whether a test play of ``agent`` in ``env`` runs compiled: the plain case of the module docstring, with every
+    shape the loop indexes without bounds checked here (``run_trial`` would refuse a mismatch with a ValueError)."""
     if type(env) is not BehaviourEnv or type(agent) is not BehaviourQCON or type(agent.q) is not OAON:
         return False
     world = env.world
     if type(world) is not RechargeEnv or world.obs_mode != "high" or type(world.sim) is not RobotSim:
         return False
-    lib = [env.library[t] for t in BEHAVIOUR_TASKS]
-    if any(type(b) is not Behaviour or type(b.q) is not OAON or b.q.n_nets != lib[0].q.n_nets for b in lib):
+    if type(agent.choice) is not BehaviourChoice or agent.q.n_nets != len(BEHAVIOUR_TASKS) or (
+            agent.q.config.n_inputs != world.observation_space.shape[0]):
         return False
-    return world.sim.sonar_radius == 0.0 and world.binary_low == lib[0].binary_low and hypot_matches()
+    for t in BEHAVIOUR_TASKS:
+        b = env.library[t]
+        if type(b) is not Behaviour or type(b.q) is not OAON or b.task != t or b.q.n_nets != N_ACTIONS or (
+                b.q.config.n_inputs != OBS_SIZE[t]):
+            return False
+    return hypot_matches()
 
 
 def greedy_play(env: BehaviourEnv, agent: BehaviourQCON, seed: int, start) -> tuple[TrialStats, int]:
     """``run_trial(env, agent, trial=0, learning=False, seed=seed, options={"start": start})`` with
-    ``compiled(env, agent)``; returns its stats and the number of steps with a collision."""
+    ``compiled(env, agent)``; returns its stats (their info holds "success" only) and the number of steps with a
+    collision."""
     obs, info = env.reset(seed=seed, options={"start": start})
     agent.begin_trial(obs, info, trial=0, learning=False)
     world, sim = env.world, env.world.sim
@@ -182,8 +199,8 @@ def greedy_play(env: BehaviourEnv, agent: BehaviourQCON, seed: int, start) -> tu
         agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output,
         tuple(b.q.w1 for b in lib), tuple(b.q.w2 for b in lib), np.array([b.q.scale for b in lib]),
         np.array([b.q.config.linear_output for b in lib]), np.array([APPLICABLE_ABOVE[t] for t in BEHAVIOUR_TASKS]),
-        obs, dk, dp, wf, applicable, pose, collision, trace, sim.rng, np.ascontiguousarray(layout.segments),
-        np.ascontiguousarray(layout.kinds), np.array(layout.light, dtype=np.float64), rooms, room_bits,
+        obs, dk, dp, wf, applicable, pose, collision, trace, sim.rng, sim._segs, sim._kinds,
+        np.array(sim._light, dtype=np.float64), rooms, room_bits,
         np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
         sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, world.binary_low, world.xy_scale,
         world.dock_tolerance, world.success_reward, world.collision_penalty, world.max_steps, x, q, acted)

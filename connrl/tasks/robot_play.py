@@ -21,7 +21,15 @@ from connrl.agents.qcon import QCON
 from connrl.agents.teaching import TeachingQCON
 from connrl.core.exploration import boltzmann_probabilities
 from connrl.core.rollout import TrialStats
-from connrl.envs.robot.constants import _RNG_PER_SCAN, MOVE_BACKWARD, MOVE_FORWARD, N_RAYS, ROBOT_RADIUS, SEG_CHARGER
+from connrl.envs.robot.constants import (
+    _RNG_PER_SCAN,
+    MOVE_BACKWARD,
+    MOVE_FORWARD,
+    N_ACTIONS,
+    N_RAYS,
+    ROBOT_RADIUS,
+    SEG_CHARGER,
+)
 from connrl.envs.robot.env import RobotTaskEnv
 from connrl.envs.robot.geometry import _scan
 from connrl.envs.robot.sim import Reading, RobotSim
@@ -29,6 +37,7 @@ from connrl.envs.robot.step import _hypot, _move, _room, hypot_matches, room_tab
 from connrl.envs.robot.tasks import (
     CLEARANCE_MAX,
     CLEARANCE_MIN,
+    OBS_SIZE,
     R_BACKWARD,
     R_COLLISION,
     R_SUCCESS,
@@ -130,10 +139,11 @@ def _play_loop(qw1, qw2, qscale, qlinear, task, obs, pose, collision, trace, rng
 
 
 def compiled(env, agent) -> bool:
-    """Whether a test play of ``agent`` in ``env`` runs compiled (the plain case of the module docstring)."""
+    """Whether a test play of ``agent`` in ``env`` runs compiled: the plain case of the module docstring, with the
+    shapes the loop indexes without bounds checked here (``run_trial`` would refuse a mismatch with a ValueError)."""
     return (type(env) is RobotTaskEnv and env.render_mode is None and type(env.sim) is RobotSim
             and type(agent) in (QCON, TeachingQCON) and agent.planner is None and type(agent.q) is OAON
-            and hypot_matches())
+            and agent.q.n_nets == N_ACTIONS and agent.q.config.n_inputs == OBS_SIZE[env.task] and hypot_matches())
 
 
 def greedy_play(env: RobotTaskEnv, agent, seed: int, start, max_steps: int) -> TrialStats:
@@ -154,11 +164,10 @@ def greedy_play(env: RobotTaskEnv, agent, seed: int, start, max_steps: int) -> T
     light, door = np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8)
     steps, total, success, truncated, a = _play_loop(
         agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output, TASKS.index(env.task), obs, pose,
-        collision, trace, sim.rng, np.ascontiguousarray(layout.segments), np.ascontiguousarray(layout.kinds),
-        np.array(layout.light, dtype=np.float64), room_table(layout), start_room, doors, env.pass_depth,
-        sim.control_noise, sim.sensor_noise, sim.step_scale, sim.partial_moves, sim.sonar_radius, sim.edge_jump,
-        sim.edge_both, env.binary_low, env.dock_tolerance, env.max_steps, max_steps, env._feat, env._feat_true, x, q,
-        ranges, sonar, light, door)
+        collision, trace, sim.rng, sim._segs, sim._kinds, np.array(sim._light, dtype=np.float64), room_table(layout),
+        start_room, doors, env.pass_depth, sim.control_noise, sim.sensor_noise, sim.step_scale, sim.partial_moves,
+        sim.sonar_radius, sim.edge_jump, sim.edge_both, env.binary_low, env.dock_tolerance, env.max_steps, max_steps,
+        env._feat, env._feat_true, x, q, ranges, sonar, light, door)
     # leave the world and the learner as run_trial does
     sim.x, sim.y, sim.heading = (float(v) for v in pose)
     sim.last_collision, sim.last_action = collision, int(a)

@@ -603,3 +603,18 @@ def test_replay_params_are_kept_per_temperature_and_threshold():
     assert agent.replay_params(0.1).temperature == pytest.approx(0.1) and agent.replay_params(0.1) is not p
     agent._replay = ReplayParams(gamma=0.5)
     assert agent.replay_params(0.1).gamma == 0.5
+
+
+def test_the_kept_discounts_and_empty_arrays_stay_what_they_stand_for():
+    """Replays of long and short lessons under two gammas leave the shared arrays as ``np.full`` / ``np.zeros``."""
+    from connrl.core import replay_kernel
+    rng = np.random.default_rng(9)
+    net = OAON(NetConfig(3, 2), 2, rng)
+    for n, gamma in ((300, 0.9), (5, 0.9), (700, 0.5), (3, 0.5), (400, 0.9)):
+        lesson = Lesson(rng.normal(size=(n + 1, 3)), rng.integers(0, 2, n), rng.normal(size=n), False)
+        replay_oaon(net, lesson, ReplayParams(gamma=gamma, lam=0.5))
+        np.testing.assert_array_equal(replay_kernel._gammas(n, gamma), np.full(n, gamma))
+    for gamma, d in replay_kernel._GAMMAS.items():
+        np.testing.assert_array_equal(d, np.full(d.size, gamma))
+    for (a, dtype), z in replay_kernel._NONE.items():
+        assert z.shape == (0, a) and z.dtype == dtype

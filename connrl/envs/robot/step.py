@@ -38,15 +38,16 @@ def _dl_mul(x, y):
 
 @numba.njit(cache=False)
 def _hypot(a, b):
-    """``math.hypot(a, b)`` of CPython 3.10+ for finite a, b (its ``vector_norm``: lossless scaling, squaring and
-    summing, then a square root with one differential correction); Numba's own calls libm, whose last bit differs."""
+    """``math.hypot(a, b)`` for finite a, b, as CPython 3.12 writes its ``vector_norm`` (lossless scaling, squaring
+    and summing, then a square root with one differential correction); older versions write it differently, so
+    ``hypot_matches`` checks the running interpreter. Numba's own hypot calls libm, whose last bit differs."""
     a, b = abs(a), abs(b)
     m = max(a, b)
     if m == 0.0:
         return m
     _, e = math.frexp(m)
     if e < -1023:
-        return math.hypot(a, b)  # subnormal: never reached by a robot's move; the check below would flag it
+        return math.hypot(a, b)  # subnormal (libm's, not CPython's): a robot's move is never this small
     scale = math.ldexp(1.0, -e)
     csum, frac1, frac2 = 1.0, 0.0, 0.0
     for v in (a, b):
@@ -66,7 +67,7 @@ def _hypot(a, b):
     return h / scale
 
 
-@functools.lru_cache(maxsize=1)
+@functools.cache
 def hypot_matches() -> bool:
     """Whether ``_hypot`` is this interpreter's ``math.hypot``, bit for bit, on 20,000 pairs of move sizes."""
     rng = np.random.default_rng(45)
