@@ -1,6 +1,10 @@
 """The recurrent OAON's Numba kernels (7.4, 7.5): forward passes, BPTT with momentum, and the whole batch replay of a
 lesson into a recurrent Q-net. They call one another, so they share this file (a cached kernel may only call its own
 file's: tests/nets/test_kernel_cache.py); ``connrl.nets.recurrent`` holds the net that uses them.
+
+The helpers that run per step or per lesson are inlined into their callers (``inline="always"``: a fifth off Ch. 8's
+recurrent replay, issue 45). That cannot move a number: these kernels are compiled without fastmath, so LLVM keeps
+every operation and its order wherever the code lands.
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ def _output(w2, s, h, o):
         o[k] = 1.0 / (1.0 + math.exp(-z)) - 0.5
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _transposed(w1):
     """w1 (A, H, I+C+1) as (I+C+1, A*H): a row per input (x, c, then the bias), every net's hidden units side by
     side, so that ``_hidden_lanes`` reads each input's weights to many units at once."""
@@ -54,7 +58,7 @@ def _transposed(w1):
     return wt
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _hidden_lanes(wt, lo, hi, x, c, h):
     """``_hidden``'s sums, not yet squashed (``_squash_output`` does that), for the hidden units lo..hi-1 of
     ``_transposed``'s columns (net a's are a*H..a*H+H-1), into h (hi - lo,). Each unit sums its bias, inputs, then
@@ -74,7 +78,7 @@ def _hidden_lanes(wt, lo, hi, x, c, h):
             h[u - lo] += wt[n_in + k, u] * ck
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _squash_output(w2, s, h, o):
     """Squash ``_hidden_lanes``' sums h (H,) in place into ``_hidden``'s activations, then ``_output``. Each unit is
     squashed inside the output's chain of additions, a loop the compiler cannot vectorise, so its ``exp`` is libm's
@@ -101,7 +105,7 @@ def _forward_all(w1, w2, x, c, scale, h_all, y):
             y[a, k] *= scale
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _forward_sequence(w1, w2, xs, actions, feedback, scale, ys, cs, hs=None, os=None):
     """Run a trial from c_0 = 0: ys (T, A, O) outputs of all nets, cs (T+1, C) the contexts seen. Given ``hs`` (K, H)
     and ``os`` (K, O), the taken action's hidden layer and output before scaling at the first K steps go there too:
@@ -149,7 +153,7 @@ def _bptt(w1, w2, xs, actions, targets, weights, feedback, decay, scale, g1, g2)
     return _bptt_backward(w1, w2, xs, actions, targets, weights, feedback, decay, scale, g1, g2, hs, os, cs)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _bptt_backward(w1, w2, xs, actions, targets, weights, feedback, decay, scale, g1, g2, hs, os, cs):
     """``_bptt``'s backward pass from the taken actions' hidden layers hs (T, H), raw outputs os (T, O) and contexts
     cs (T+1, C) of its forward pass."""
@@ -195,7 +199,7 @@ def _bptt_backward(w1, w2, xs, actions, targets, weights, feedback, decay, scale
     return loss
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _momentum_step(w, d, g, lr, momentum):
     """``d <- momentum * d - lr * g``; ``w <- w + d`` on flat views."""
     for i in range(w.shape[0]):
@@ -204,7 +208,7 @@ def _momentum_step(w, d, g, lr, momentum):
         w[i] += step
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _policy_weights(ys, actions, temperature, p_threshold, bweights, weights):
     """The non-policy test (3.5.1) at every step, into ``weights`` (1 replayed, 0 not): the taken action's probability
     by Eq. 3.6, or by Eq. 6.6 with each step's W (``bweights`` (n, A); 0 rows: none), against P_t; greedy ties share
