@@ -34,18 +34,21 @@ class PerfectSurvivalModel:
         self.scratch = SurvivalEnv(action_representation=env.action_representation)
         self.scratch.reset(seed=int(rng.integers(2**31 - 1)))
 
-    def _step_from(self, state: dict, a: int):
+    def steps_from(self, state: dict, actions):
+        """(y, r, terminated, info) of each action taken from ``state``: the state is checked and set once, then
+        restored from the scratch env's own arrays before each further action (issue 45: as ``set_state`` leaves
+        them, without its checks)."""
         self.scratch.set_state(state)
-        y, r, terminated, _, info = self.scratch.step(int(a))
-        return y, r, terminated, info
+        snapshot = self.scratch._snapshot()
+        for k, a in enumerate(actions):
+            if k:
+                self.scratch._restore(snapshot)
+            y, r, terminated, _, info = self.scratch.step(int(a))
+            yield y, r, terminated, info
 
     def simulate(self, x: np.ndarray, actions) -> list[tuple[np.ndarray, float, bool]]:
-        state = self.env.get_state()
-        out = []
-        for a in actions:
-            y, r, terminated, _ = self._step_from(state, a)
-            out.append((y, float(r), bool(terminated)))
-        return out
+        return [(y, float(r), bool(terminated))
+                for y, r, terminated, _ in self.steps_from(self.env.get_state(), actions)]
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -73,6 +76,42 @@ def _single_layer_train(w, d, x, lo, hi, target, scale, lr, momentum, out):
         s = lr * delta + momentum * d[k, n]
         d[k, n] = s
         w[k, n] += s
+
+
+@numba.njit(cache=True)
+def _predict(w_r, w_e, x, perm, start, lo, hi, xr, out_r, out_e, enemy):
+    """``LearnedSurvivalModel.predict`` whole: the input rotated by ``perm`` (4.2.4), the reinforcement net on all of
+    it (from ``start``, 0, an argument: as a constant, LLVM would compile the fastmath sum inlined here in another
+    order) and the enemy nets on the maps ``lo:hi``; ``enemy`` gets the most likely enemy units of y in the world's
+    frame (unit i of the rotated map is unit perm[52 + i] of y). Returns the predicted r (the net's range is +-1)."""
+    for i in range(perm.size):
+        xr[i] = x[perm[i]]
+    _single_layer(w_r, xr, start, xr.shape[0], out_r)
+    _single_layer(w_e, xr, lo, hi, out_e)
+    for i in range(32):
+        enemy[perm[52 + i] - 52] = 0.5 if out_e[i] > 0 else -0.5
+    return 2.0 * out_r[0]
+
+
+@numba.njit(cache=True)
+def _train_row(w_r, d_r, w_e, d_e, row, perm, start, lo, hi, lr, momentum, xr, yr, out_r, out_e):
+    """``LearnedSurvivalModel._train`` of one queued experience (x, y, a, r): both nets one momentum step toward r
+    and the rotated next enemy units (``start`` 0, as ``_predict``'s)."""
+    n_in = perm.size
+    for i in range(n_in):
+        xr[i] = row[perm[i]]
+        yr[i] = row[n_in + perm[i]]
+    _single_layer_train(w_r, d_r, xr, start, n_in, row[-1:], 2.0, lr, momentum, out_r)
+    _single_layer_train(w_e, d_e, xr, lo, hi, yr[52:84], 1.0, lr, momentum, out_e)
+
+
+@numba.njit(cache=True)
+def _wrong_share(enemy, actual):
+    """``float(np.mean(enemy != actual))``: the share of enemy units predicted wrong (a count over 32, exact)."""
+    wrong = 0
+    for i in range(enemy.size):
+        wrong += enemy[i] != actual[i]
+    return wrong / enemy.size
 
 
 @dataclass(frozen=True)
@@ -120,6 +159,7 @@ class LearnedSurvivalModel:
         self._q = np.zeros((config.queue, 2 * N_INPUTS + 2))  # rows: x, y, a, r
         self._n = 0
         self._out_r, self._out_e = np.empty(1), np.empty(32)
+        self._xr, self._yr = np.empty(N_INPUTS), np.empty(N_INPUTS)  # an input and a next input, rotated
         self.errors = self._no_errors()  # prediction errors before training
 
     @staticmethod
@@ -131,20 +171,14 @@ class LearnedSurvivalModel:
 
     def predict(self, x: np.ndarray, a: int) -> tuple[float, np.ndarray]:
         """(predicted r, predicted enemy units of y) for action a from input x."""
-        xr = np.ascontiguousarray(x[self.perms[a]])
-        m = self._net(a)
-        _single_layer(self.w_r[m], xr, 0, xr.shape[0], self._out_r)
-        _single_layer(self.w_e[m], xr, self.MAPS[0], self.MAPS[1], self._out_e)
-        enemy = np.empty(32)
-        # the nets work in the rotated frame; unit i of the rotated map is unit perms[a][52 + i] of y
-        enemy[self.perms[a][52:84] - 52] = np.where(self._out_e > 0, 0.5, -0.5)
-        return 2.0 * float(self._out_r[0]), enemy
+        m, enemy = self._net(a), np.empty(32)
+        r = _predict(self.w_r[m], self.w_e[m], np.ascontiguousarray(x, dtype=np.float64), self.perms[a], 0,
+                     self.MAPS[0], self.MAPS[1], self._xr, self._out_r, self._out_e, enemy)
+        return r, enemy
 
     def simulate(self, x: np.ndarray, actions) -> list[tuple[np.ndarray, float, bool]]:
-        state = self.sim.env.get_state()
         out = []
-        for a in actions:
-            y, _, _, info = self.sim._step_from(state, a)
+        for a, (y, _, _, info) in zip(actions, self.sim.steps_from(self.sim.env.get_state(), actions), strict=True):
             r, enemy = self.predict(x, int(a))
             y = y.copy()
             y[self.ENEMY] = enemy
@@ -153,15 +187,10 @@ class LearnedSurvivalModel:
         return out
 
     def _train(self, row: np.ndarray) -> None:
-        n_in = (row.shape[0] - 2) // 2
-        x, y, a, r = row[:n_in], row[n_in:2 * n_in], int(row[-2]), row[-1]
-        perm = self.perms[a]
-        xr, yr = np.ascontiguousarray(x[perm]), y[perm]
-        m, c = self._net(a), self.config
-        _single_layer_train(self.w_r[m], self.d_r[m], xr, 0, n_in, np.array([r]), 2.0, c.lr, c.momentum,
-                            self._out_r)
-        _single_layer_train(self.w_e[m], self.d_e[m], xr, self.MAPS[0], self.MAPS[1],
-                            np.ascontiguousarray(yr[52:84]), 1.0, c.lr, c.momentum, self._out_e)
+        a, c = int(row[-2]), self.config
+        m = self._net(a)
+        _train_row(self.w_r[m], self.d_r[m], self.w_e[m], self.d_e[m], row, self.perms[a], 0, self.MAPS[0],
+                   self.MAPS[1], c.lr, c.momentum, self._xr, self._yr, self._out_r, self._out_e)
 
     def learn(self, x, a, r, y, terminated) -> None:
         """Present a real experience, then ``replays`` random ones from the queue (4.2.5)."""
@@ -185,7 +214,7 @@ class LearnedSurvivalModel:
     def prediction_error(self, x, a, r, y) -> tuple[float, float]:
         """(|predicted r - r|, fraction of the 32 enemy units of y predicted wrong) for one experience."""
         pr, enemy = self.predict(x, int(a))
-        return abs(pr - r), float(np.mean(enemy != y[self.ENEMY]))
+        return abs(pr - r), _wrong_share(enemy, np.ascontiguousarray(y[self.ENEMY], dtype=np.float64))
 
     def probe_errors(self, probes) -> dict[str, float]:
         """Mean prediction errors on fixed experiences (``probe_experiences``), without learning from them: the

@@ -4,7 +4,14 @@ import numpy as np
 import pytest
 
 from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv, rotate_observation
-from connrl.tasks.survival_models import LearnedModelConfig, LearnedSurvivalModel, PerfectSurvivalModel
+from connrl.tasks.survival_models import (
+    LearnedModelConfig,
+    LearnedSurvivalModel,
+    PerfectSurvivalModel,
+    _single_layer,
+    _single_layer_train,
+    probe_experiences,
+)
 
 PERMS = np.stack([ROTATION_PERMUTATIONS[ACTION_ROTATION[a]] for a in range(4)])
 
@@ -156,3 +163,66 @@ def test_pop_errors_by_hand_and_reset():
     assert errs["reward_abs"] == pytest.approx((0.4 + 1.0) / 2)
     assert errs["reward_sq"] == pytest.approx((0.16 + 1.0) / 2)  # the mean of squares, not the squared mean
     assert model.pop_errors()["reward_sq"] == 0.0 and model.errors["n"] == 0
+
+
+def _predict_as_it_was(model, x, a):
+    """``LearnedSurvivalModel.predict`` before issue 45 compiled it whole: NumPy around the two net kernels."""
+    xr = np.ascontiguousarray(x[model.perms[a]])
+    m = model._net(a)
+    out_r, out_e = np.empty(1), np.empty(32)
+    _single_layer(model.w_r[m], xr, 0, xr.shape[0], out_r)
+    _single_layer(model.w_e[m], xr, model.MAPS[0], model.MAPS[1], out_e)
+    enemy = np.empty(32)
+    enemy[model.perms[a][52:84] - 52] = np.where(out_e > 0, 0.5, -0.5)
+    return 2.0 * float(out_r[0]), enemy
+
+
+def _train_as_it_was(model, row):
+    n_in = (row.shape[0] - 2) // 2
+    x, y, a, r = row[:n_in], row[n_in:2 * n_in], int(row[-2]), row[-1]
+    perm = model.perms[a]
+    xr, yr = np.ascontiguousarray(x[perm]), y[perm]
+    m, c = model._net(a), model.config
+    _single_layer_train(model.w_r[m], model.d_r[m], xr, 0, n_in, np.array([r]), 2.0, c.lr, c.momentum, np.empty(1))
+    _single_layer_train(model.w_e[m], model.d_e[m], xr, model.MAPS[0], model.MAPS[1],
+                        np.ascontiguousarray(yr[52:84]), 1.0, c.lr, c.momentum, np.empty(32))
+
+
+@pytest.mark.parametrize("representation", ["global", "local"])
+def test_the_compiled_model_is_the_numpy_one(representation):
+    """predict, the training step and the error measure, compiled, give the code's former numbers bit for bit."""
+    env = SurvivalEnv(representation)
+    model, ref = (LearnedSurvivalModel(env, np.random.default_rng(8)) for _ in range(2))
+    for x, a, r, y in probe_experiences(representation, 5, 300):
+        got, want = model.predict(x, a), _predict_as_it_was(ref, x, a)
+        assert got[0] == want[0]
+        np.testing.assert_array_equal(got[1], want[1])
+        assert model.prediction_error(x, a, r, y)[1] == float(np.mean(want[1] != y[model.ENEMY]))
+        row = np.concatenate([x, y, [a, r]])
+        model._train(row)
+        _train_as_it_was(ref, row)
+        for w, w_ref in ((model.w_r, ref.w_r), (model.w_e, ref.w_e), (model.d_r, ref.d_r), (model.d_e, ref.d_e)):
+            np.testing.assert_array_equal(w, w_ref)
+
+
+def test_the_perfect_model_restores_rather_than_resets_with_the_same_outcomes():
+    """Each simulated action starts from the true state: the same outcomes and draws as ``set_state`` before each."""
+    env = SurvivalEnv("global")
+    env.reset(seed=3)
+    for a in (0, 1, 2, 0, 3):
+        env.step(a)
+    model = PerfectSurvivalModel(env, np.random.default_rng(4))
+    ref = PerfectSurvivalModel(env, np.random.default_rng(4))
+    got = model.simulate(None, [0, 1, 2, 3, 1])
+    state, want = env.get_state(), []
+    for a in [0, 1, 2, 3, 1]:
+        ref.scratch.set_state(state)
+        y, r, terminated, _, _ = ref.scratch.step(a)
+        want.append((y, float(r), bool(terminated)))
+    for (y, r, t), (y_ref, r_ref, t_ref) in zip(got, want, strict=True):
+        np.testing.assert_array_equal(y, y_ref)
+        assert (r, t) == (r_ref, t_ref)
+    got_state, ref_state = model.scratch.get_state(include_rng=True), ref.scratch.get_state(include_rng=True)
+    assert got_state.keys() == ref_state.keys()
+    for key, value in ref_state.items():
+        np.testing.assert_equal(got_state[key], value)

@@ -237,6 +237,17 @@ class SurvivalEnv(gym.Env):
         if "rng" in state:
             self.np_random.bit_generator.state = state["rng"]
 
+    def _snapshot(self) -> tuple:
+        """The simulator's own arrays, copied: ``_restore`` puts them back as ``set_state`` would (a model that
+        simulates several actions from one state sets it once, then restores it; the random stream is not kept)."""
+        return (self._agent.copy(), self._enemies.copy(), self._food.copy(), self._enemy_count.copy(),
+                self._s.copy(), self._done)
+
+    def _restore(self, snapshot: tuple) -> None:
+        agent, enemies, food, count, s, done = snapshot
+        self._agent[:], self._food[:], self._enemy_count[:], self._s[:] = agent, food, count, s
+        self._enemies, self._done = enemies.copy(), done
+
     def observe(self) -> np.ndarray:
         """The current observation (as returned by the last reset/step, recomputed)."""
         return self._observe()
