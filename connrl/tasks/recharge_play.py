@@ -1,12 +1,12 @@
 """Chs. 6 and 8's greedy test plays over behaviours, compiled whole (issue 45).
 
 Ch. 6's protocol tests the high-level learner greedily on fixed tasks before the first trial and every few trials,
-and with Experiment 4's fifth-size steps the tests are most of a run's primitive steps (``recharge-long-delay``:
-three in four), each going through a dozen Python calls: the learner's values and its Eq. 6.6 choice at T = 0, the
-chosen behaviour's greedy primitive, the simulator's move and scan, the sensors' encodings and the applicability of
-DK and DP (6.4.3). Here a test play runs as one Numba loop over the same kernels with the same arithmetic and the
-same draws from the world's generator, step for step, as ``run_trial(env, agent, learning=False)``;
-tests/tasks/test_recharge_play.py holds every play, and the world and learner it leaves, to ``run_trial``'s.
+and with Experiment 4's fifth-size steps the tests are most of a run's primitive steps, each going through a dozen
+Python calls: the learner's values and its Eq. 6.6 choice at T = 0, the chosen behaviour's greedy primitive, the
+simulator's move and scan, the sensors' encodings and the applicability of DK and DP (6.4.3). Here a test play runs
+as one Numba loop over the same kernels with the same arithmetic and the same draws from the world's generator, step
+for step, as ``run_trial(env, agent, learning=False)``; tests/tasks/test_recharge_play.py holds every play, and the
+world and learner it leaves, to ``run_trial``'s.
 
 Only the plain case is compiled: a ``BehaviourEnv`` over a ``RechargeEnv`` with the 16 (or 14) high-level inputs,
 behaviours that are a ``Behaviour`` over an ``OAON`` (the shipped library's, or Exp. 5's as they stand when tested)
