@@ -8,6 +8,9 @@ as one Numba loop over the same kernels with the same arithmetic and the same dr
 for step, as ``run_trial(env, agent, learning=False)``; tests/tasks/test_recharge_play.py holds every play, and the
 world and learner it leaves, to ``run_trial``'s.
 
+Exp. 1's plays without the hierarchy (a QCON over the primitive actions on the flat input, 6.6.1) are compiled the
+same way (``greedy_play_flat``).
+
 Only the plain case is compiled: a ``BehaviourEnv`` over a ``RechargeEnv`` with the 16 (or 14) high-level inputs,
 behaviours that are a ``Behaviour`` over an ``OAON`` (the shipped library's, or Exp. 5's as they stand when tested)
 and Ch. 6's ``BehaviourQCON`` with an ``OAON``; anything else plays through ``run_trial``. The robot's partial
@@ -24,6 +27,9 @@ import numba
 import numpy as np
 
 from connrl.agents.behaviour_level import BehaviourChoice, BehaviourQCON
+from connrl.agents.qcon import QCON
+from connrl.agents.teaching import TeachingQCON
+from connrl.core.exploration import boltzmann_probabilities
 from connrl.core.rollout import TrialStats
 from connrl.envs.robot.constants import (
     _RNG_PER_SCAN,
@@ -104,6 +110,21 @@ def _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk,
 
 
 @numba.njit(cache=False)
+def _chg_step(pose, a, rng, collision, segs, kinds, lights, control_noise, sensor_noise, step_scale, partial,
+              sonar_radius, edge_jump, edge_both, dock_tolerance, success_reward, collision_penalty, ranges, sonar,
+              light, door):
+    """``RechargeEnv.step``'s world part for primitive ``a``: the move after its draw, the scan after its 26, then
+    docking (a forward move stopped head-on by the charger) and the reinforcement. Returns (collided, docked,
+    reward)."""
+    collided, kind, rel = _move(pose, a, rng.random(), control_noise, step_scale, partial, segs, kinds, collision)
+    u = rng.random(_RNG_PER_SCAN)
+    _scan(pose[0], pose[1], pose[2], segs, kinds, lights[0], lights[1], ROBOT_RADIUS, sonar_radius, u, sensor_noise,
+          edge_jump, edge_both, ranges, sonar, light, door)
+    docked = collided and a == MOVE_FORWARD and kind == SEG_CHARGER and abs(rel) <= dock_tolerance
+    return collided, docked, success_reward if docked else (collision_penalty if collided else 0.0)
+
+
+@numba.njit(cache=False)
 def _play_loop(qw1, qw2, qscale, qlinear, w1s, w2s, scales, linears, thresholds, obs, dk, dp, wf, applicable, pose,
                collision, trace, rng, segs, kinds, lights, rooms, room_bits, size, control_noise, sensor_noise,
                step_scale, partial, sonar_radius, edge_jump, edge_both, low, xy_scale, dock_tolerance, success_reward,
@@ -136,14 +157,11 @@ def _play_loop(qw1, qw2, qscale, qlinear, w1s, w2s, scales, linears, thresholds,
         if b >= 2:
             _values_any(w1s[b], w2s[b], _as_input(wf, xwf), h, scales[b], qwf, linears[b])
         prim = _first_max(qdk if b == 0 else qdp if b == 1 else qwf)
-        collided, kind, rel = _move(pose, prim, rng.random(), control_noise, step_scale, partial, segs, kinds,
-                                    collision)
-        u = rng.random(_RNG_PER_SCAN)
-        _scan(pose[0], pose[1], pose[2], segs, kinds, lights[0], lights[1], ROBOT_RADIUS, sonar_radius, u,
-              sensor_noise, edge_jump, edge_both, ranges, sonar, light, door)
+        collided, docked, reward = _chg_step(pose, prim, rng, collision, segs, kinds, lights, control_noise,
+                                             sensor_noise, step_scale, partial, sonar_radius, edge_jump, edge_both,
+                                             dock_tolerance, success_reward, collision_penalty, ranges, sonar, light,
+                                             door)
         steps += 1
-        docked = collided and prim == MOVE_FORWARD and kind == SEG_CHARGER and abs(rel) <= dock_tolerance
-        reward = success_reward if docked else (collision_penalty if collided else 0.0)
         trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
         _observe(pose, _room(pose[0], pose[1], rooms), collision, sonar, sonar_radius, light, door, low, xy_scale,
                  size, room_bits, dk, dp, wf, top, feat)
@@ -221,3 +239,87 @@ def _leave(env, agent, steps, pose, collision, prim, trace, dk, dp, wf, x, q, ac
     best = acted & (q == q[acted].max())
     agent.last_probabilities = best / best.sum()
     agent.end_trial()
+
+
+# ------------------------------------------------------------------ Exp. 1: QCON over primitives on the flat input
+
+@numba.njit(cache=False)
+def _greedy_choice(q):
+    """QCON's action at T = 0 (``boltzmann_select``): the first best; 0 when a value is NaN (np.argmax of NaNs)."""
+    a, nan = 0, False
+    for k in range(q.size):
+        nan = nan or np.isnan(q[k])
+        if q[k] > q[a]:
+            a = k
+    return 0 if nan else a
+
+
+@numba.njit(cache=False)
+def _flat_loop(qw1, qw2, qscale, qlinear, obs, dk, dp, wf, pose, collision, trace, rng, segs, kinds, lights, rooms,
+               room_bits, size, control_noise, sensor_noise, step_scale, partial, sonar_radius, edge_jump, edge_both,
+               low, xy_scale, dock_tolerance, success_reward, collision_penalty, max_steps, x, q):
+    """Exp. 1's test play (6.6.1): the learner's greedy primitive on the flat input, the world's step, the flat
+    input again (``RechargeEnv._observe``: DK's sonar and light, DP's door edges, the collision bits, wall following's
+    parallelism and clearance bits, then the high-level units). Returns (steps, total reward, docked, collided steps,
+    the last action)."""
+    h = np.empty(max(qw1.shape[1], 1))
+    ranges, sonar = np.empty(N_RAYS), np.empty(N_RAYS)
+    light, door = np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8)
+    top, feat = np.empty(16, dtype=np.float32), np.zeros(4)
+    steps, total, hits = 0, 0.0, 0
+    while True:
+        _values_any(qw1, qw2, _as_input(obs, x), h, qscale, q, qlinear)
+        a = _greedy_choice(q)
+        collided, docked, reward = _chg_step(pose, a, rng, collision, segs, kinds, lights, control_noise,
+                                             sensor_noise, step_scale, partial, sonar_radius, edge_jump, edge_both,
+                                             dock_tolerance, success_reward, collision_penalty, ranges, sonar, light,
+                                             door)
+        steps += 1
+        trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
+        _observe(pose, _room(pose[0], pose[1], rooms), collision, sonar, sonar_radius, light, door, low, xy_scale,
+                 size, room_bits, dk, dp, wf, top, feat)
+        obs[0:48], obs[48:72], obs[72:76], obs[76:84] = dk[0:48], dp[24:48], dk[48:52], wf[28:36]
+        for k in range(84, obs.size):
+            obs[k] = top[k - 84]
+        total += reward
+        hits += collided
+        if docked or steps >= max_steps:
+            return steps, total, docked, hits, a
+
+
+def compiled_flat(env, agent) -> bool:
+    """Whether Exp. 1's test play of ``agent`` in ``env`` runs compiled: a plain ``RechargeEnv`` with the flat input
+    and a QCON (or QCON-T) over an ``OAON`` with no planner whose nets fit it."""
+    return (type(env) is RechargeEnv and env.obs_mode == "flat" and type(env.sim) is RobotSim
+            and type(agent) in (QCON, TeachingQCON) and agent.planner is None and type(agent.q) is OAON
+            and agent.q.n_nets == N_ACTIONS and agent.q.config.n_inputs == env.observation_space.shape[0]
+            and hypot_matches())
+
+
+def greedy_play_flat(env: RechargeEnv, agent, seed: int, start) -> tuple[TrialStats, int]:
+    """``run_trial(env, agent, trial=0, learning=False, seed=seed, options={"start": start})`` with
+    ``compiled_flat(env, agent)``; returns its stats (their info holds "success" only) and the steps with a
+    collision."""
+    obs, info = env.reset(seed=seed, options={"start": start})
+    agent.begin_trial(obs, info, trial=0, learning=False)
+    sim, layout, tasks = env.sim, env.layout, info["task_obs"]
+    obs = np.array(obs, dtype=np.float32)
+    dk, dp, wf = (np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL"))
+    pose = np.array(sim.pose, dtype=np.float64)
+    trace = np.empty((env.max_steps + 1, 3))
+    trace[0] = pose
+    collision = np.zeros(4, dtype=np.uint8)
+    room_bits = np.array([ROOMS.index(r) if r in ROOMS else -1 for r in layout.rooms], dtype=np.int64)
+    x, q = np.empty(obs.size), np.empty(agent.q.n_nets)
+    steps, total, docked, hits, a = _flat_loop(
+        agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output, obs, dk, dp, wf, pose, collision, trace,
+        sim.rng, sim._segs, sim._kinds, np.array(sim._light, dtype=np.float64), room_table(layout), room_bits,
+        np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
+        sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, env.binary_low, env.xy_scale,
+        env.dock_tolerance, env.success_reward, env.collision_penalty, env.max_steps, x, q)
+    sim.x, sim.y, sim.heading = (float(v) for v in pose)
+    sim.last_collision, sim.last_action = collision, int(a)
+    env._steps, env._trace = steps, [tuple(p) for p in trace[:steps + 1].tolist()]
+    agent._x, agent.last_probabilities = x, boltzmann_probabilities(q, 0.0)
+    agent.end_trial()
+    return TrialStats(steps, total, bool(docked), not docked, {"success": bool(docked)}), hits

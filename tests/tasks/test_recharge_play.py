@@ -4,6 +4,7 @@ but the plain case plays through run_trial."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -12,8 +13,9 @@ import pytest
 from connrl.core.rollout import run_trial
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, sample_in_room
 from connrl.experiments.recharge import RechargeParams, _test
+from connrl.experiments.recharge_flat import FlatParams
 from connrl.tasks import recharge_play
-from connrl.tasks.recharge import BehaviourEnv, _shipped_library, make_high_level_agent
+from connrl.tasks.recharge import BehaviourEnv, _shipped_library, make_flat_agent, make_flat_env, make_high_level_agent
 
 
 def _agent(n_inputs: int, xy: bool, prefer: int | None = None):
@@ -98,3 +100,34 @@ def test_other_learners_and_worlds_play_through_run_trial(monkeypatch):
     assert not recharge_play.compiled(BehaviourEnv(_shipped_library(), xy=False), agent)  # 16 inputs on a 14-unit world
     monkeypatch.setattr(recharge_play, "hypot_matches", lambda: False)  # an interpreter whose hypot is not the port's
     assert not recharge_play.compiled(env, agent)
+
+
+@pytest.mark.parametrize("collision_penalty", [0.0, -5.0])
+def test_the_compiled_flat_play_is_run_trials_play(collision_penalty):
+    """Exp. 1's plays (QCON over primitives on the flat input) too: stats, collisions, trace, pose, stream."""
+    p = dataclasses.replace(FlatParams(), collision_penalty=collision_penalty)
+    agent = make_flat_agent(p, np.random.default_rng(5))
+    train = make_flat_env(p)
+    for k in range(3):
+        run_trial(train, agent, trial=k, learning=True, seed=400 + k)
+    env, ref_env = make_flat_env(p), make_flat_env(p)
+    assert recharge_play.compiled_flat(env, agent) and not recharge_play.compiled(env, agent)
+    rng, collided, ended = np.random.default_rng(2), 0, set()
+    for start in _starts(BehaviourEnv(_shipped_library()), rng, 8):
+        seed, hits = int(rng.integers(2**31)), []
+        got, got_hits = recharge_play.greedy_play_flat(env, agent, seed, start)
+        got_agent = (agent._x.copy(), agent.last_probabilities.copy())
+        agent._x = agent.last_probabilities = None
+        ref = run_trial(ref_env, agent, trial=0, learning=False, seed=seed, options={"start": start},
+                        on_step=lambda info, hits=hits: hits.append(info["collision"]))
+        assert (got.steps, got.total_reward, got.terminated, got.truncated, got.info["success"], got_hits) == (
+            ref.steps, ref.total_reward, ref.terminated, ref.truncated, ref.info["success"], sum(hits))
+        np.testing.assert_array_equal(got_agent[0], agent._x)
+        np.testing.assert_array_equal(got_agent[1], agent.last_probabilities)
+        assert (env.trace, env.sim.pose, env.sim.last_action, env._steps) == (
+            ref_env.trace, ref_env.sim.pose, ref_env.sim.last_action, ref_env._steps)
+        np.testing.assert_array_equal(env.sim.last_collision, ref_env.sim.last_collision)
+        assert env.np_random.bit_generator.state == ref_env.np_random.bit_generator.state
+        collided += got_hits
+        ended.add(got.terminated)
+    assert collided > 0 and False in ended
