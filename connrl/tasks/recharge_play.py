@@ -1,12 +1,11 @@
 """Chs. 6 and 8's greedy test plays over behaviours, compiled whole (issue 45).
 
 Ch. 6's protocol tests the high-level learner greedily on fixed tasks before the first trial and every few trials,
-and with Experiment 4's fifth-size steps the tests are most of a run's primitive steps, each going through a dozen
-Python calls: the learner's values and its Eq. 6.6 choice at T = 0, the chosen behaviour's greedy primitive, the
-simulator's move and scan, the sensors' encodings and the applicability of DK and DP (6.4.3). Here a test play runs
-as one Numba loop over the same kernels with the same arithmetic and the same draws from the world's generator, step
-for step, as ``run_trial(env, agent, learning=False)``; tests/tasks/test_recharge_play.py holds every play, and the
-world and learner it leaves, to ``run_trial``'s.
+each step of a test going through a dozen Python calls: the learner's values and its Eq. 6.6 choice at T = 0, the
+chosen behaviour's greedy primitive, the simulator's move and scan, the sensors' encodings and the applicability of
+DK and DP (6.4.3). Here a test play runs as one Numba loop over the same kernels with the same arithmetic and the
+same draws from the world's generator, step for step, as ``run_trial(env, agent, learning=False)``;
+tests/tasks/test_recharge_play.py holds every play, and the world and learner it leaves, to ``run_trial``'s.
 
 Exp. 1's plays without the hierarchy (a QCON over the primitive actions on the flat input, 6.6.1) are compiled the
 same way (``greedy_play_flat``).
@@ -18,7 +17,7 @@ moves divide by ``math.hypot``, whose CPython algorithm ``connrl.envs.robot.step
 running interpreter's once per process (``hypot_matches``); where they differ, every play goes through ``run_trial``.
 
 The loop is not cached: it calls kernels of other files, and a cached kernel may only call its own file's
-(tests/nets/test_kernel_cache.py); it compiles once per process, in a few seconds.
+(tests/nets/test_kernel_cache.py); it compiles once per process.
 """
 
 from __future__ import annotations

@@ -1,11 +1,10 @@
 """Ch. 5's greedy test plays compiled whole (issue 45).
 
-Every Ch. 5 run tests its learner greedily on fixed tasks before the first trial and every few trials (5.4), and
-those test steps are most of a run's steps. Here a test play -- the learner's values and greedy choice, the
-simulator's move and scan, the task's reinforcement and its observation -- runs as one Numba loop with the same
-arithmetic and the same draws from the world's generator, step for step, as ``run_trial(env, agent,
-learning=False, max_steps=...)``; tests/tasks/test_robot_play.py holds every play, and the world and learner it
-leaves, to ``run_trial``'s.
+Every Ch. 5 run tests its learner greedily on fixed tasks before the first trial and every few trials (5.4). Here
+a test play -- the learner's values and greedy choice, the simulator's move and scan, the task's reinforcement and its
+observation -- runs as one Numba loop with the same arithmetic and the same draws from the world's generator, step for
+step, as ``run_trial(env, agent, learning=False, max_steps=...)``; tests/tasks/test_robot_play.py holds every play,
+and the world and learner it leaves, to ``run_trial``'s.
 
 Only the plain case is compiled: a ``RobotTaskEnv`` without rendering and a QCON (or Ch. 5's QCON-T) over an
 ``OAON`` with no planner; anything else plays through ``run_trial``, as it does where the ported ``math.hypot`` is not
