@@ -31,23 +31,20 @@ from connrl.agents.teaching import TeachingQCON
 from connrl.core.exploration import boltzmann_probabilities
 from connrl.core.rollout import TrialStats
 from connrl.envs.robot.constants import (
-    _RNG_PER_SCAN,
-    MOVE_FORWARD,
     N_ACTIONS,
     N_RAYS,
     ROBOT_RADIUS,
-    SEG_CHARGER,
     SONAR_MAX,
 )
-from connrl.envs.robot.geometry import _scan
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, RechargeEnv, _scan_units
 from connrl.envs.robot.sim import RobotSim
-from connrl.envs.robot.step import _move, _room, hypot_matches, room_table
+from connrl.envs.robot.step import _act_and_sense, _docked, _room, hypot_matches, leave, room_table
 from connrl.envs.robot.tasks import OBS_SIZE, _fill_obs, _side_features
 from connrl.nets import OAON
 from connrl.nets.kernels import _values_any
 from connrl.tasks.behaviours import APPLICABLE_ABOVE, Behaviour
 from connrl.tasks.recharge import BehaviourEnv
+from connrl.tasks.robot_play import _as_input, _greedy_choice
 
 
 @numba.njit(cache=False)
@@ -84,14 +81,6 @@ def _observe(pose, room, collision, sonar, sonar_radius, light, door, low, xy_sc
 
 
 @numba.njit(cache=False)
-def _as_input(obs, x):
-    """``np.asarray(obs, dtype=np.float64)`` into ``x``, which it returns."""
-    for k in range(obs.size):
-        x[k] = obs[k]
-    return x
-
-
-@numba.njit(cache=False)
 def _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, out):
     """6.4.3 for the state of ``dk``/``dp``: DK and DP apply where their largest value exceeds their threshold
     (``Behaviour.applicable``; NaN never does), wall following everywhere. DK's and DP's values are left in ``qdk``
@@ -115,11 +104,10 @@ def _chg_step(pose, a, rng, collision, segs, kinds, lights, control_noise, senso
     """``RechargeEnv.step``'s world part for primitive ``a``: the move after its draw, the scan after its 26, then
     docking (a forward move stopped head-on by the charger) and the reinforcement. Returns (collided, docked,
     reward)."""
-    collided, kind, rel = _move(pose, a, rng.random(), control_noise, step_scale, partial, segs, kinds, collision)
-    u = rng.random(_RNG_PER_SCAN)
-    _scan(pose[0], pose[1], pose[2], segs, kinds, lights[0], lights[1], ROBOT_RADIUS, sonar_radius, u, sensor_noise,
-          edge_jump, edge_both, ranges, sonar, light, door)
-    docked = collided and a == MOVE_FORWARD and kind == SEG_CHARGER and abs(rel) <= dock_tolerance
+    collided, kind, rel = _act_and_sense(pose, a, rng, collision, segs, kinds, lights, control_noise, sensor_noise,
+                                         step_scale, partial, sonar_radius, edge_jump, edge_both, ranges, sonar, light,
+                                         door)
+    docked = _docked(collided, a, kind, rel, dock_tolerance)
     return collided, docked, success_reward if docked else (collision_penalty if collided else 0.0)
 
 
@@ -229,10 +217,7 @@ def greedy_play(env: BehaviourEnv, agent: BehaviourQCON, seed: int, start) -> tu
 def _leave(env, agent, steps, pose, collision, prim, trace, dk, dp, wf, x, q, acted) -> None:
     """Leave the world and the learner as ``run_trial`` does (but for the learner's record of the trial's choices,
     ``agent.choice``, which a test trial never reads and the next trial begins anew)."""
-    world, sim = env.world, env.world.sim
-    sim.x, sim.y, sim.heading = (float(v) for v in pose)
-    sim.last_collision, sim.last_action = collision, int(prim)
-    world._steps, world._trace = steps, [tuple(p) for p in trace[:steps + 1].tolist()]
+    leave(env.world, pose, collision, prim, steps, trace)
     env._task_obs = {"DK": dk, "DP": dp, "WFL": wf, "WFR": wf.copy()}
     agent._x, agent.last_q = x, q
     best = acted & (q == q[acted].max())
@@ -241,17 +226,6 @@ def _leave(env, agent, steps, pose, collision, prim, trace, dk, dp, wf, x, q, ac
 
 
 # ------------------------------------------------------------------ Exp. 1: QCON over primitives on the flat input
-
-@numba.njit(cache=False)
-def _greedy_choice(q):
-    """QCON's action at T = 0 (``boltzmann_select``): the first best; 0 when a value is NaN (np.argmax of NaNs)."""
-    a, nan = 0, False
-    for k in range(q.size):
-        nan = nan or np.isnan(q[k])
-        if q[k] > q[a]:
-            a = k
-    return 0 if nan else a
-
 
 @numba.njit(cache=False)
 def _flat_loop(qw1, qw2, qscale, qlinear, obs, dk, dp, wf, pose, collision, trace, rng, segs, kinds, lights, rooms,
@@ -316,9 +290,7 @@ def greedy_play_flat(env: RechargeEnv, agent, seed: int, start) -> tuple[TrialSt
         np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
         sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, env.binary_low, env.xy_scale,
         env.dock_tolerance, env.success_reward, env.collision_penalty, env.max_steps, x, q)
-    sim.x, sim.y, sim.heading = (float(v) for v in pose)
-    sim.last_collision, sim.last_action = collision, int(a)
-    env._steps, env._trace = steps, [tuple(p) for p in trace[:steps + 1].tolist()]
+    leave(env, pose, collision, a, steps, trace)
     agent._x, agent.last_probabilities = x, boltzmann_probabilities(q, 0.0)
     agent.end_trial()
     return TrialStats(steps, total, bool(docked), not docked, {"success": bool(docked)}), hits

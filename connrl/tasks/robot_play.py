@@ -21,18 +21,15 @@ from connrl.agents.teaching import TeachingQCON
 from connrl.core.exploration import boltzmann_probabilities
 from connrl.core.rollout import TrialStats
 from connrl.envs.robot.constants import (
-    _RNG_PER_SCAN,
     MOVE_BACKWARD,
     MOVE_FORWARD,
     N_ACTIONS,
     N_RAYS,
     ROBOT_RADIUS,
-    SEG_CHARGER,
 )
 from connrl.envs.robot.env import RobotTaskEnv
-from connrl.envs.robot.geometry import _scan
 from connrl.envs.robot.sim import Reading, RobotSim
-from connrl.envs.robot.step import _hypot, _move, _room, hypot_matches, room_table
+from connrl.envs.robot.step import _act_and_sense, _docked, _hypot, _room, hypot_matches, leave, room_table
 from connrl.envs.robot.tasks import (
     CLEARANCE_MAX,
     CLEARANCE_MIN,
@@ -51,6 +48,25 @@ from connrl.nets.kernels import _values_any
 
 _WF_REWARDS = np.array(WF_REWARDS)
 _WF_PARALLEL = np.array(WF_PARALLEL_DEG)
+
+
+@numba.njit(cache=False)
+def _as_input(obs, x):
+    """``np.asarray(obs, dtype=np.float64)`` into ``x``, which it returns."""
+    for k in range(obs.size):
+        x[k] = obs[k]
+    return x
+
+
+@numba.njit(cache=False)
+def _greedy_choice(q):
+    """QCON's action at T = 0 (``boltzmann_select``): the first best; 0 when a value is NaN (np.argmax of NaNs)."""
+    a, nan = 0, False
+    for k in range(q.size):
+        nan = nan or np.isnan(q[k])
+        if q[k] > q[a]:
+            a = k
+    return 0 if nan else a
 
 
 @numba.njit(cache=False)
@@ -99,24 +115,15 @@ def _play_loop(qw1, qw2, qscale, qlinear, task, obs, pose, collision, trace, rng
     high = low + 1.0
     steps, total = 0, 0.0
     while True:
-        for k in range(obs.size):
-            x[k] = obs[k]
-        _values_any(qw1, qw2, x, h, qscale, q, qlinear)
-        a, nan = 0, False  # QCON.act at T = 0: the first best; 0 when a value is NaN (np.argmax of NaNs)
-        for k in range(q.size):
-            nan = nan or np.isnan(q[k])
-            if q[k] > q[a]:
-                a = k
-        if nan:
-            a = 0
-        collided, kind, rel = _move(pose, a, rng.random(), control_noise, step_scale, partial, segs, kinds, collision)
-        u = rng.random(_RNG_PER_SCAN)
-        _scan(pose[0], pose[1], pose[2], segs, kinds, lights[0], lights[1], ROBOT_RADIUS, sonar_radius, u,
-              sensor_noise, edge_jump, edge_both, ranges, sonar, light, door)
+        _values_any(qw1, qw2, _as_input(obs, x), h, qscale, q, qlinear)
+        a = _greedy_choice(q)
+        collided, kind, rel = _act_and_sense(pose, a, rng, collision, segs, kinds, lights, control_noise,
+                                             sensor_noise, step_scale, partial, sonar_radius, edge_jump, edge_both,
+                                             ranges, sonar, light, door)
         steps += 1
         success = False
         if task == 0:
-            success = collided and a == MOVE_FORWARD and kind == SEG_CHARGER and abs(rel) <= dock_tolerance
+            success = _docked(collided, a, kind, rel, dock_tolerance)
             reward = R_SUCCESS if success else (R_COLLISION if collided else 0.0)
         elif task == 1:
             success = not collided and _passed_door(pose[0], pose[1], _room(pose[0], pose[1], rooms), start_room,
@@ -167,10 +174,7 @@ def greedy_play(env: RobotTaskEnv, agent, seed: int, start, max_steps: int) -> T
         start_room, doors, env.pass_depth, sim.control_noise, sim.sensor_noise, sim.step_scale, sim.partial_moves,
         sim.sonar_radius, sim.edge_jump, sim.edge_both, env.binary_low, env.dock_tolerance, env.max_steps, max_steps,
         env._feat, env._feat_true, x, q, ranges, sonar, light, door)
-    # leave the world and the learner as run_trial does
-    sim.x, sim.y, sim.heading = (float(v) for v in pose)
-    sim.last_collision, sim.last_action = collision, int(a)
-    env._steps, env._trace = steps, [tuple(p) for p in trace[:steps + 1].tolist()]
+    leave(env, pose, collision, a, steps, trace)  # the world and the learner as run_trial leaves them
     env._reading = Reading(sonar, ranges, light, door, collision.copy(), sim.heading, sim.room, sim.sonar_radius)
     agent._x, agent.last_probabilities = x, boltzmann_probabilities(q, 0.0)
     agent.end_trial()

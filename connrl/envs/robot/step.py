@@ -1,7 +1,7 @@
 """The robot's move and position as compiled kernels, for plays run as one Numba loop (``connrl.tasks.recharge_play``,
-``connrl.tasks.robot_play``): ``RobotSim.apply`` after its draw and ``Layout.room_at``, the same arithmetic in the same
-order, and CPython's ``math.hypot``, which the partial moves divide by (Numba's own calls libm, whose last bit
-differs). tests/envs/test_robot_step.py holds them to the Python they mirror.
+``connrl.tasks.robot_play``): ``RobotSim.apply`` after its draw (and with ``sense``), docking and ``Layout.room_at``,
+the same arithmetic in the same order, and CPython's ``math.hypot``, which the partial moves divide by (Numba's own
+calls libm, whose last bit differs). tests/envs/test_robot_step.py holds them to the Python they mirror.
 
 Not cached: ``_move`` calls the geometry's kernels, and a cached kernel may only call its own file's
 (tests/nets/test_kernel_cache.py).
@@ -15,8 +15,16 @@ import math
 import numba
 import numpy as np
 
-from connrl.envs.robot.constants import ACTION_MOVE_IN, ACTION_TURN_DEG, CONTROL_ERROR, ROBOT_RADIUS
-from connrl.envs.robot.geometry import _time_of_impact
+from connrl.envs.robot.constants import (
+    _RNG_PER_SCAN,
+    ACTION_MOVE_IN,
+    ACTION_TURN_DEG,
+    CONTROL_ERROR,
+    MOVE_FORWARD,
+    ROBOT_RADIUS,
+    SEG_CHARGER,
+)
+from connrl.envs.robot.geometry import _scan, _time_of_impact
 from connrl.envs.robot.sim import CONTACT_GAP
 
 _TURN = np.array(ACTION_TURN_DEG)
@@ -106,6 +114,33 @@ def _move(pose, action, u, control_noise, step_scale, partial, segs, kinds, coll
     side = 0 if a <= 45.0 else 1 if a >= 135.0 else 2 if rel > 0 else 3  # FRONT, BACK, LEFT, RIGHT
     collision[side] = 1
     return True, kinds[i], rel
+
+
+@numba.njit(cache=False)
+def _act_and_sense(pose, a, rng, collision, segs, kinds, lights, control_noise, sensor_noise, step_scale, partial,
+                   sonar_radius, edge_jump, edge_both, ranges, sonar, light, door):
+    """``RobotSim.apply(a)`` then ``RobotSim.sense()``, with their draws from ``rng`` (one, then 26): moves ``pose``,
+    sets ``collision`` and the sweep's arrays; returns ``_move``'s (collided, kind, contact direction)."""
+    collided, kind, rel = _move(pose, a, rng.random(), control_noise, step_scale, partial, segs, kinds, collision)
+    u = rng.random(_RNG_PER_SCAN)
+    _scan(pose[0], pose[1], pose[2], segs, kinds, lights[0], lights[1], ROBOT_RADIUS, sonar_radius, u, sensor_noise,
+          edge_jump, edge_both, ranges, sonar, light, door)
+    return collided, kind, rel
+
+
+@numba.njit(cache=False)
+def _docked(collided, a, kind, rel, dock_tolerance):
+    """Docking, as DK and CHG score it: a forward move stopped head-on by the charger box."""
+    return collided and a == MOVE_FORWARD and kind == SEG_CHARGER and abs(rel) <= dock_tolerance
+
+
+def leave(world, pose, collision, action: int, steps: int, trace) -> None:
+    """Leave a world (``RobotTaskEnv`` or ``RechargeEnv``) and its simulator as the steps of a compiled play would:
+    the pose, the last action's collision bits, the step count and the poses visited."""
+    sim = world.sim
+    sim.x, sim.y, sim.heading = (float(v) for v in pose)
+    sim.last_collision, sim.last_action = collision, int(action)
+    world._steps, world._trace = steps, [tuple(p) for p in trace[:steps + 1].tolist()]
 
 
 @numba.njit(cache=False)
