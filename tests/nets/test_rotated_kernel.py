@@ -13,6 +13,8 @@ import pytest
 from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS
 from connrl.nets.kernels import _dot_in_lanes, _fma, _rotated_values
 
+from .lanes import lanes_one_at_a_time
+
 PERMS = np.ascontiguousarray(ROTATION_PERMUTATIONS[list(ACTION_ROTATION)])
 
 
@@ -32,33 +34,12 @@ def _gathered_fastmath(w1, w2, x, perms, scale, q):  # the kernel as it was befo
 @numba.njit(cache=False)
 def _lanes_one_at_a_time(w, x, n, start):
     """The order of ``_dot_in_lanes``, lane by lane in scalars."""
-    acc = np.zeros(32)
-    s, i = start, 0
-    if n >= 32:
-        acc[0] = start
-        while i < (n & ~31):
-            for lane in range(32):
-                acc[lane] = _fma(x[i + lane], w[i + lane], acc[lane])
-            i += 32
-        v = np.array([(acc[k] + acc[8 + k]) + (acc[16 + k] + acc[24 + k]) for k in range(8)])
-        s = ((v[0] + v[4]) + (v[2] + v[6])) + ((v[1] + v[5]) + (v[3] + v[7]))
-    if n - i >= 8:
-        acc[:8] = 0.0
-        acc[0] = s
-        while i < (n & ~7):
-            for lane in range(8):
-                acc[lane] = _fma(x[i + lane], w[i + lane], acc[lane])
-            i += 8
-        s = ((acc[0] + acc[4]) + (acc[2] + acc[6])) + ((acc[1] + acc[5]) + (acc[3] + acc[7]))
-    while i < n:
-        s = _fma(x[i], w[i], s)
-        i += 1
-    return s
+    return lanes_one_at_a_time(w, x, n, start, 8)
 
 
 @numba.njit(cache=False)
 def _dot(w, x, n, start):  # an intrinsic runs inside compiled code only
-    return _dot_in_lanes(w, x, n, start)
+    return _dot_in_lanes(w, 0, x, 0, n, start)
 
 
 def _stored_results_cpu() -> bool:
