@@ -119,91 +119,22 @@ _dot_in_lanes = _dot_kernel(8)
 _dot_in_fours = _dot_kernel(4)
 
 
-# 2^(k/128) for k = 0..127 as glibc's exp (2.28 and later) keeps it: the double nearest, less k << 45 in its bits (so
-# that adding the exponent's bits gives the scale), and that double's relative error as a double (the tail).
-def _exp_table() -> np.ndarray:
-    from decimal import Decimal, getcontext
-
-    getcontext().prec = 60
-    ln2 = Decimal(2).ln()
-    table = np.empty(256, dtype=np.int64)
-    for k in range(128):
-        v = (ln2 * k / 128).exp()
-        scale = float(v)
-        table[2 * k] = np.float64(float((v - Decimal(scale)) / Decimal(scale))).view(np.int64)
-        table[2 * k + 1] = np.float64(scale).view(np.int64) - (k << 45)
-    return table
-
-
-_EXP_TAB = _exp_table()
-_EXP_INV_LN2_N = float.fromhex("0x1.71547652b82fep0") * 128
-_EXP_NEG_LN2_HI_N = -float.fromhex("0x1.62e42fefa0000p-8")
-_EXP_NEG_LN2_LO_N = -float.fromhex("0x1.cf79abc9e3b3ap-47")
-_EXP_SHIFT = float.fromhex("0x1.8p52")
-_EXP_C2, _EXP_C3, _EXP_C4, _EXP_C5 = (np.int64(c).view(np.float64).item() for c in (
-    0x3FDFFFFFFFFFFDBD, 0x3FC555555555543C, 0x3FA55555CF172B91, 0x3F81111167A4D017))
-
-
-@intrinsic
-def _bits(typingctx, x):
-    """The bits of a float64 as an int64."""
-    return types.int64(types.float64), lambda context, builder, signature, args: builder.bitcast(
-        args[0], ir.IntType(64))
-
-
-@intrinsic
-def _float(typingctx, i):
-    """The float64 with these bits."""
-    return types.float64(types.int64), lambda context, builder, signature, args: builder.bitcast(
-        args[0], ir.DoubleType())
-
-
-@numba.njit(cache=True)
-def _sigmoids_of_negated(v, n):
-    """``v[j] = 1 / (1 + exp(v[j])) - 0.5`` for j < n: the symmetric sigmoid of ``-v[j]``, eight lanes at a time.
-
-    ``math.exp`` in a kernel is libm's, one call per unit, and those calls were two fifths of a small net's replay
-    (issue 45). This is glibc's exp (2.28 and later, the build for CPUs with FMA) written out step for step, so LLVM
-    can run it in vector lanes: the same result bit for bit where libm is that exp (tests/nets/test_mlp_kernel.py),
-    and an exp as accurate (within an ulp of it) anywhere else. Inputs outside glibc's main range (|x| < 2^-54 or
-    >= 512, inf, nan) send the whole call to ``math.exp``."""
-    special = False
-    for j in range(n):
-        top = (_bits(v[j]) >> 52) & 0x7FF
-        special |= (top < 0x3C9) | (top >= 0x408)
-    if special:
-        for j in range(n):
-            v[j] = 1.0 / (1.0 + math.exp(v[j])) - 0.5
-        return
-    for j in range(n):
-        x = v[j]
-        kd = _fma(x, _EXP_INV_LN2_N, _EXP_SHIFT)  # x / (ln2 / 128) rounded to an integer, in the low bits
-        ki = _bits(kd)
-        kd = kd - _EXP_SHIFT
-        r = _fma(kd, _EXP_NEG_LN2_HI_N, x)
-        r = _fma(kd, _EXP_NEG_LN2_LO_N, r)  # x - kd ln2 / 128, |r| <= ln2 / 256
-        k2 = 2 * (ki & 127)
-        r2 = r * r
-        p = _fma(r2, _fma(_EXP_C3, r, _EXP_C2), _float(_EXP_TAB[k2]) + r)
-        tmp = _fma(r2 * r2, _fma(r, _EXP_C5, _EXP_C4), p)
-        scale = _float(_EXP_TAB[k2 + 1] + (ki << 45))
-        v[j] = 1.0 / (1.0 + _fma(scale, tmp, scale)) - 0.5
-
-
 # ------------------------------------------------------------------------------- one net: forward and update
 
 @numba.njit(cache=True)
 def _forward_at(w1, w2, a, x, xo, h):
     """Forward pass of net a on the input at flat offset ``xo`` of x; fills h (H,) with hidden activations and
     returns the raw output f(net). The arithmetic of the fastmath loop it replaced (issue 45), bit for bit on the
-    CPU the stored results were made on (znver5): each hidden sum in ``_dot_in_fours``'s order, the sigmoids by
-    ``_sigmoids_of_negated``, the output a chain of fused multiply-adds from its bias."""
+    CPU the stored results were made on (znver5): each hidden sum in ``_dot_in_fours``'s order, the output a chain
+    of fused multiply-adds from its bias (tests/nets/test_mlp_kernel.py). Compiled without fastmath, so it is that
+    order wherever it is inlined."""
     n_h, n_in1 = w1.shape[1], w1.shape[2]
     n_in = n_in1 - 1
     row = a * n_h * n_in1
+    for j in range(n_h):  # the sums first: with no call between them they overlap in the CPU
+        h[j] = _dot_in_fours(w1, row + j * n_in1, x, xo, n_in, w1[a, j, n_in])
     for j in range(n_h):
-        h[j] = -_dot_in_fours(w1, row + j * n_in1, x, xo, n_in, w1[a, j, n_in])
-    _sigmoids_of_negated(h, n_h)
+        h[j] = 1.0 / (1.0 + math.exp(-h[j])) - 0.5
     out = w2[a, n_h]
     for j in range(n_h):
         out = _fma(h[j], w2[a, j], out)
