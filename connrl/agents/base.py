@@ -241,6 +241,20 @@ class LessonAgent:
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
         raise NotImplementedError
 
+    # The ``replay_lesson`` functions that a class's ``replay_lessons`` does the work of, in one call.
+    one_call_reproduces: tuple = ()
+
+    def replays_in_one_call(self) -> bool:
+        """Whether ``replay_lessons`` replays a trial's lessons in one compiled call, drawing nothing from the
+        agent's generator (so a trial's lesson draws may all come first). Never when ``replay_lesson`` is not one
+        it reproduces: replaced on the instance, or by a subclass the one call would bypass."""
+        return "replay_lesson" not in vars(self) and type(self).replay_lesson in self.one_call_reproduces
+
+    def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
+        """Replay ``lessons`` in turn, lesson k at P_t ``thresholds[k]``: ``replay_lesson`` on each, or one call."""
+        for lesson, p_threshold in zip(lessons, thresholds, strict=True):
+            self.replay_lesson(lesson, p_threshold)
+
     def learn(self) -> None:
         """After a trial: replay n experienced lessons chosen by App. A.2 and the taught lessons (3.5, 3.7), the
         taught ones after the others or, with ``taught_order="shuffled"``, at random places among them (the
@@ -254,9 +268,13 @@ class LessonAgent:
             n = min(n, len(mem))
         p_taught = r.taught_probability(self.trial)
         if r.taught_order == "after":  # draws interleaved with replays, as the streams of stored runs expect
-            for _ in range(n):
-                age, lesson = mem.sample(self.rng)
-                self.replay_lesson(lesson, r.threshold_for_age(age))
+            if self.replays_in_one_call():  # its replays draw nothing: the same stream with the draws first
+                picks = [mem.sample(self.rng) for _ in range(n)]
+                self.replay_lessons([lesson for _, lesson in picks], [r.threshold_for_age(age) for age, _ in picks])
+            else:
+                for _ in range(n):
+                    age, lesson = mem.sample(self.rng)
+                    self.replay_lesson(lesson, r.threshold_for_age(age))
             for lesson in self.book.taught:
                 if p_taught >= 1 or self.rng.random() < p_taught:
                     self.replay_lesson(lesson, r.taught_p_threshold)

@@ -155,6 +155,11 @@ class BehaviourQCON(QCON):
         behaviours, both kept with the lesson."""
         super().replay_lesson(lesson, p_threshold, *self.choice.replay_options(lesson, weights, allowed))
 
+    one_call_reproduces = (replay_lesson,)  # replay_lessons' one call does its work
+
+    def lesson_options(self, lesson: Lesson) -> tuple[np.ndarray | None, np.ndarray | None]:
+        return self.choice.replay_options(lesson, None, None)
+
 
 class BehaviourRecurrentQ(RecurrentQ):
     """Recurrent-Q over behaviours (Ch. 8, 8.3; see the module docstring): no on-line learning, batch replay."""
@@ -189,3 +194,8 @@ class BehaviourRecurrentQ(RecurrentQ):
     def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
         w, ok = self.choice.replay_options(lesson, weights, allowed)
         replay_recurrent_q(self.net, lesson, self.replay_params(p_threshold), w, ok)
+
+    one_call_reproduces = (replay_lesson,)  # replay_lessons' one call does its work
+
+    def lesson_options(self, lesson: Lesson) -> tuple[np.ndarray | None, np.ndarray | None]:
+        return self.choice.replay_options(lesson, None, None)

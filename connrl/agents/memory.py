@@ -156,6 +156,14 @@ def replay_recurrent_q(net: RecurrentOAON, lesson: Lesson, params: ReplayParams,
     return int(policy.sum())
 
 
+def replay_recurrent_q_lessons(net: RecurrentOAON, lessons: list[Lesson], thresholds: list[float],
+                               params: ReplayParams, options) -> int:
+    """``replay_recurrent_q`` (compiled) on each of ``lessons`` in turn, lesson k at P_t ``thresholds[k]`` and with
+    ``options(lesson)`` = its (weights, allowed), in one compiled call (issue 45)."""
+    return net.replay_q_lessons(lessons, thresholds, options, gamma=params.gamma, lam=params.lam,
+                                temperature=params.temperature, clip=params.clip)
+
+
 @dataclass(frozen=True)
 class RecurrentQConfig:
     """Recurrent-Q (7.3, Fig. 7.1b); Table B.1 gives the thesis's values."""
@@ -202,6 +210,16 @@ class RecurrentQ(LessonAgent):
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
         replay_recurrent_q(self.net, lesson, self.replay_params(p_threshold))
+
+    one_call_reproduces = (replay_lesson,)  # replay_lessons' one call does its work
+
+    def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
+        params = self.replay_params(thresholds[0] if thresholds else 0.0)
+        replay_recurrent_q_lessons(self.net, lessons, thresholds, params, self.lesson_options)
+
+    def lesson_options(self, lesson: Lesson) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """The (weights, allowed) a lesson is replayed with (``replay_recurrent_q``'s): none here."""
+        return None, None
 
 
 # ------------------------------------------------------------------------------------- recurrent-model

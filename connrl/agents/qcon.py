@@ -14,7 +14,7 @@ from connrl.agents.base import LessonAgent, ReplayConfig
 from connrl.core.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
 from connrl.core.grouping import group_lesson
 from connrl.core.lessons import Lesson
-from connrl.core.replay import QFunction, replay_q
+from connrl.core.replay import QFunction, replay_q, replay_q_lessons
 from connrl.nets import OAON, NetConfig
 
 
@@ -80,6 +80,22 @@ class QCON(LessonAgent):
         """The on-line target's max_a Q(y, a) (Fig. 3.4 step 4); a subclass may restrict the actions it ranges over."""
         return float(self.q.values(y).max())
 
+    def replays_in_one_call(self) -> bool:
+        r = self.config.replay  # state grouping draws from the generator; batch mode is not compiled
+        return (r is not None and r.grouping is None and not r.batch and type(self.q) is OAON
+                and super().replays_in_one_call())
+
+    def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
+        if not self.replays_in_one_call():
+            super().replay_lessons(lessons, thresholds)
+            return
+        params = self.replay_params(thresholds[0] if thresholds else 0.0)
+        replay_q_lessons(self.q, lessons, thresholds, params, self.lesson_options)
+
+    def lesson_options(self, lesson: Lesson) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """The (weights, allowed) a lesson is replayed with (``connrl.core.replay.replay_q``'s): none here."""
+        return None, None
+
     def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
         """Replay one lesson (Fig. 5.1), over its groups of similar states when ``replay.grouping`` is set (6.6.4);
         ``weights`` / ``allowed`` as ``connrl.core.replay.replay_q``'s."""
@@ -92,3 +108,4 @@ class QCON(LessonAgent):
         self.groups += len(g.lesson)
         replay_q(self.q, g.lesson, params, weights=g.weights, allowed=g.allowed, discounts=g.discounts)
 
+    one_call_reproduces = (replay_lesson,)  # replay_lessons' one call does its work

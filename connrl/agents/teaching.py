@@ -60,7 +60,12 @@ class TeachingQCON(QCON):
         self.teaching = teaching or TeachingConfig()
         super().__init__(config, n_actions, rng, q=q, merit_scale=self.teaching.merit_scale)
 
+    def replays_in_one_call(self) -> bool:  # experienced lessons take no repairs: QCON's one call, when compiled
+        return self.teaching.fast and super().replays_in_one_call()
+
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
         params = self.replay_params(p_threshold)
         repair = self.teaching.repair if lesson.taught else "none"
         replay_q(self.q, lesson, params, repair, fast=self.teaching.fast)
+
+    one_call_reproduces = (replay_lesson,)  # for experienced lessons, which take no repairs

@@ -119,3 +119,56 @@ class LessonMemory:
         """One lesson chosen by App. A.2; returns (age, lesson) with age 0 for the latest."""
         k = recency_index(len(self.lessons), float(rng.random()))
         return len(self.lessons) - 1 - k, self.lessons[k]
+
+
+@dataclass(frozen=True)
+class LessonPack:
+    """Lessons laid end to end for one compiled call over many replays (issue 45): ``order[k]`` is the k-th replay's
+    lesson among the distinct ones, whose steps are rows ``step_start[i]..step_start[i+1]`` of ``actions``,
+    ``rewards`` and ``weights``, and whose n_i + 1 states start at row ``in_start[i]`` of ``inputs`` and
+    ``allowed`` (0-row ``weights`` / ``allowed``: none)."""
+
+    distinct: list[Lesson]
+    order: np.ndarray  # (k,) int64
+    inputs: np.ndarray  # (sum n_i + 1, d) float64
+    actions: np.ndarray  # (sum n_i,) int64
+    rewards: np.ndarray  # (sum n_i,) float64
+    terminated: np.ndarray  # (distinct,) bool
+    in_start: np.ndarray  # (distinct,) int64
+    step_start: np.ndarray  # (distinct + 1,) int64
+    weights: np.ndarray  # (sum n_i, A) float64 or (0, A)
+    allowed: np.ndarray  # (sum n_i + 1, A) bool or (0, A)
+
+
+def pack_lessons(lessons: list[Lesson], options, n_actions: int, check) -> LessonPack:
+    """Pack ``lessons`` (the same lesson may come again), each distinct one with ``options(lesson)`` = its (weights,
+    allowed) or (None, None), after ``check(lesson, weights, allowed)``, the refusals of a single replay."""
+    slot: dict[int, int] = {}
+    distinct: list[Lesson] = []
+    order = np.empty(len(lessons), dtype=np.int64)
+    for k, lesson in enumerate(lessons):
+        i = slot.get(id(lesson))
+        if i is None:
+            i = slot[id(lesson)] = len(distinct)
+            distinct.append(lesson)
+        order[k] = i
+    opts = [options(lesson) for lesson in distinct]
+    for lesson, (w, m) in zip(distinct, opts, strict=True):
+        check(lesson, w, m)
+    has_w, has_m = (opts[0][0] is not None, opts[0][1] is not None) if opts else (False, False)
+    if any((w is not None) != has_w or (m is not None) != has_m for w, m in opts):
+        raise ValueError("the lessons of one call must all have per-step weights / allowed choices, or none")
+    step_start = np.zeros(len(distinct) + 1, dtype=np.int64)
+    np.cumsum([len(lesson) for lesson in distinct], out=step_start[1:])
+
+    def joined(arrays, dtype, width):
+        return np.concatenate(arrays).astype(dtype, copy=False) if arrays else np.zeros((0, width), dtype)
+
+    return LessonPack(
+        distinct, order, joined([x.inputs for x in distinct], np.float64, 0),
+        joined([x.actions for x in distinct], np.int64, 0).reshape(-1),
+        joined([x.rewards for x in distinct], np.float64, 0).reshape(-1),
+        np.array([bool(x.terminated) for x in distinct], dtype=np.bool_),
+        step_start[:-1] + np.arange(len(distinct)), step_start,
+        joined([o[0] for o in opts] if has_w else [], np.float64, n_actions),
+        joined([o[1] for o in opts] if has_m else [], np.bool_, n_actions))

@@ -12,6 +12,7 @@ whole lesson in one Numba kernel, ``connrl.core.replay_kernel``), and the refere
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
@@ -20,8 +21,11 @@ import numba
 import numpy as np
 
 from connrl.core.exploration import boltzmann_probabilities, weighted_boltzmann_probabilities
-from connrl.core.lessons import Lesson
+from connrl.core.lessons import Lesson, pack_lessons
+from connrl.core.replay_kernel import replay_ahc_rotated, replay_oaon, replay_oaon_lessons, replay_rotated
 from connrl.core.returns import lambda_returns, td_lambda_target
+from connrl.nets.mlp import OAON
+from connrl.nets.rotated import RotatedNet
 
 REPAIRS = ("none", "lower", "raise")  # 5.4.3; "none" = plain replay
 
@@ -221,6 +225,26 @@ def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "
     return replay_q_reference(q, lesson, params, repair, weights, allowed, discounts) if used is None else used
 
 
+def replay_q_lessons(q, lessons: list[Lesson], thresholds: list[float], params: ReplayParams, options) -> int:
+    """``replay_q`` on each of ``lessons`` in turn (the same lesson may come again): lesson k at P_t
+    ``thresholds[k]`` and with ``options(lesson)`` = its (weights, allowed), no repairs, incremental mode. An OAON
+    replays them all in one compiled call (issue 45: a thousand calls from Python a trial cost Ch. 8 as much as
+    its small nets' replays), each distinct lesson checked once; any other Q-function one by one."""
+    if type(q) is not OAON or params.batch or FAST_PATHS.get(OAON) is not replay_oaon:
+        return sum(replay_q(q, lesson, dataclasses.replace(params, p_threshold=p), "none", True, *options(lesson))
+                   for lesson, p in zip(lessons, thresholds, strict=True))
+    if len(lessons) != len(thresholds):
+        raise ValueError(f"{len(lessons)} lessons and {len(thresholds)} thresholds")
+    if not lessons:
+        return 0
+
+    def check(lesson, weights, allowed):
+        _check_step_arrays(lesson, weights, allowed, None)
+        check_lesson_fits(lesson, q.n_actions, q.config.n_inputs)
+
+    return replay_oaon_lessons(q, pack_lessons(lessons, options, q.n_actions, check), thresholds, params)
+
+
 @numba.njit(cache=True)
 def _actions_fit(actions, n_actions):
     """Every action in 0..n_actions - 1: one compiled pass (issue 45: a tenth of the two reductions it replaces,
@@ -309,14 +333,6 @@ def replay_ahc_reference(v_net, policy_net, lesson: Lesson, params: ReplayParams
     return used
 
 
-def _register_compiled() -> None:
-    from connrl.core.replay_kernel import replay_ahc_rotated, replay_oaon, replay_rotated
-    from connrl.nets.mlp import OAON
-    from connrl.nets.rotated import RotatedNet
-
-    register_fast_path(OAON, replay_oaon)
-    register_fast_path(RotatedNet, replay_rotated)
-    AHC_FAST_PATHS[(OAON, RotatedNet)] = replay_ahc_rotated
-
-
-_register_compiled()
+register_fast_path(OAON, replay_oaon)
+register_fast_path(RotatedNet, replay_rotated)
+AHC_FAST_PATHS[(OAON, RotatedNet)] = replay_ahc_rotated

@@ -11,7 +11,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from connrl.nets.kernels import _replay_ahc_rotated_kernel, _replay_q_kernel, _replay_rotated_kernel
+from connrl.core.lessons import LessonPack
+from connrl.nets.kernels import (
+    _replay_ahc_rotated_kernel,
+    _replay_q_kernel,
+    _replay_q_lessons,
+    _replay_rotated_kernel,
+)
 from connrl.nets.mlp import OAON
 from connrl.nets.rotated import RotatedNet
 
@@ -58,6 +64,19 @@ def replay_oaon(net: OAON, lesson, params, repair: int = 0, weights=None, allowe
                                 float(params.p_threshold), 0.0 if params.clip is None else float(params.clip),
                                 params.clip is not None, net.scale, net.lr, net.config.momentum, int(repair),
                                 net.config.linear_output, w, m))
+
+
+def replay_oaon_lessons(net: OAON, pack: LessonPack, thresholds: np.ndarray, params) -> int:
+    """Compiled ``replay_oaon`` on ``pack.order``'s lessons in turn, the k-th at P_t ``thresholds[k]``, in one call:
+    the fast path of ``connrl.core.replay.replay_q_lessons`` (its checks made)."""
+    return int(_replay_q_lessons(net.w1, net.w2, net.d1, net.d2, net._h, np.empty(net.n_nets), pack.inputs,
+                                 pack.actions, pack.rewards, pack.terminated,
+                                 _gammas(int(pack.step_start[-1]), float(params.gamma)), pack.in_start,
+                                 pack.step_start, pack.order, np.asarray(thresholds, dtype=np.float64),
+                                 float(params.lam), float(params.temperature),
+                                 0.0 if params.clip is None else float(params.clip), params.clip is not None,
+                                 net.scale, net.lr, net.config.momentum, net.config.linear_output, pack.weights,
+                                 pack.allowed))
 
 
 def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=None, allowed=None,

@@ -477,6 +477,28 @@ def _replay_q_steps(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, 
     return used
 
 
+@numba.njit(cache=True)
+def _replay_q_lessons(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, discounts, in_start, step_start,
+                      order, thresholds, lam, temperature, clip, has_clip, scale, lr, momentum, linear, weights,
+                      allowed):
+    """``_replay_q_kernel`` on lessons ``order[0]``, ``order[1]``, ... in turn, each at its own P_t
+    (``thresholds[k]``; no repairs): the lessons stored end to end, lesson i's n_i steps at rows
+    ``step_start[i]..step_start[i+1]`` of actions, rewards, discounts and weights and its n_i + 1 states at rows
+    ``in_start[i]..`` of inputs and allowed (0-row weights / allowed: none). One call for a trial's replays:
+    a thousand calls from Python cost as much as the replays of Ch. 8's small nets (issue 45)."""
+    used = 0
+    for k in range(order.shape[0]):
+        i = order[k]
+        s0, s1, x0 = step_start[i], step_start[i + 1], in_start[i]
+        x1 = x0 + (s1 - s0) + 1
+        w = weights[s0:s1] if weights.shape[0] > 0 else weights
+        m = allowed[x0:x1] if allowed.shape[0] > 0 else allowed
+        used += _replay_q_kernel(w1, w2, d1, d2, h, q, inputs[x0:x1], actions[s0:s1], rewards[s0:s1],
+                                 terminated[i], discounts[s0:s1], lam, temperature, thresholds[k], clip, has_clip,
+                                 scale, lr, momentum, 0, linear, w, m)
+    return used
+
+
 # ------------------------------------------ whole-lesson backward replay into a rotated net (4.2.4, Fig. 5.1a)
 
 @numba.njit(cache=True)

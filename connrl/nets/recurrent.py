@@ -46,6 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from connrl.core.lessons import pack_lessons
 from connrl.nets.recurrent_kernels import (  # noqa: F401 (tests and benchmarks reach the kernels here too)
     _bptt,
     _forward_all,
@@ -55,6 +56,7 @@ from connrl.nets.recurrent_kernels import (  # noqa: F401 (tests and benchmarks 
     _output,
     _policy_weights,
     _replay_q_lesson,
+    _replay_q_lessons,
 )
 
 
@@ -321,6 +323,33 @@ class RecurrentOAON:
                                     bool(terminated), float(gamma), float(lam), float(temperature),
                                     float(p_threshold), 0.0 if clip is None else float(clip), clip is not None,
                                     c.feedback, c.decay, self.scale, self.lr, c.momentum, w, ok))
+
+    def replay_q_lessons(self, lessons: list, thresholds: list[float], options, *, gamma: float, lam: float,
+                         temperature: float, clip: float | None = None) -> int:
+        """``replay_q_lesson`` on each of ``lessons`` in turn (the same lesson may come again), lesson k at P_t
+        ``thresholds[k]`` and with ``options(lesson)`` = its (weights, allowed), in one compiled call (issue 45).
+        Each distinct lesson is checked as ``replay_q_lesson`` checks it, once."""
+        c = self.config
+        if c.n_outputs != 1:
+            raise ValueError(f"replay_q_lessons is for Q-nets (n_outputs=1); this net has {c.n_outputs}")
+        if temperature < 0:
+            raise ValueError(f"temperature must be >= 0, got {temperature}")
+
+        def check(lesson, weights, allowed):
+            check_sequence(np.asarray(lesson.inputs)[:-1], lesson.actions, None, None, c.n_inputs, self.n_nets, 1)
+            if np.shape(lesson.rewards) != np.shape(lesson.actions):
+                raise ValueError(f"rewards must have shape {np.shape(lesson.actions)}, got {np.shape(lesson.rewards)}")
+            _check_choices(weights, allowed, len(lesson.actions), self.n_nets)
+
+        if not lessons:
+            return 0
+        p = pack_lessons(lessons, options, self.n_nets, check)
+        self._fresh = False
+        return int(_replay_q_lessons(self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, p.inputs, p.actions,
+                                     p.rewards, p.terminated, p.in_start, p.step_start, p.order,
+                                     np.asarray(thresholds, dtype=np.float64), float(gamma), float(lam),
+                                     float(temperature), 0.0 if clip is None else float(clip), clip is not None,
+                                     c.feedback, c.decay, self.scale, self.lr, c.momentum, p.weights, p.allowed))
 
     # -- plain-format persistence (NPZ, no pickle)
     def state_dict(self) -> dict[str, np.ndarray]:

@@ -292,3 +292,24 @@ def _replay_q_lesson(w1, w2, d1, d2, g1, g2, xs, actions, rewards, terminated, g
         _momentum_step(w1.reshape(-1), d1.reshape(-1), g1.reshape(-1), lr, momentum)
         _momentum_step(w2.reshape(-1), d2.reshape(-1), g2.reshape(-1), lr, momentum)
     return used
+
+
+@numba.njit(cache=True)
+def _replay_q_lessons(w1, w2, d1, d2, g1, g2, inputs, actions, rewards, terminated, in_start, step_start, order,
+                      thresholds, gamma, lam, temperature, clip, has_clip, feedback, decay, scale, lr, momentum,
+                      bweights, allowed):
+    """``_replay_q_lesson`` on lessons ``order[0]``, ``order[1]``, ... in turn, each at its own P_t
+    (``thresholds[k]``): the lessons stored end to end as ``connrl.nets.kernels._replay_q_lessons`` takes them
+    (lesson i's steps at rows ``step_start[i]..step_start[i+1]``, its states from row ``in_start[i]``). One call
+    for a trial's replays (issue 45)."""
+    used = 0
+    for k in range(order.shape[0]):
+        i = order[k]
+        s0, s1, x0 = step_start[i], step_start[i + 1], in_start[i]
+        x1 = x0 + (s1 - s0) + 1
+        w = bweights[s0:s1] if bweights.shape[0] > 0 else bweights
+        m = allowed[x0:x1] if allowed.shape[0] > 0 else allowed
+        used += _replay_q_lesson(w1, w2, d1, d2, g1, g2, inputs[x0:x1], actions[s0:s1], rewards[s0:s1],
+                                 terminated[i], gamma, lam, temperature, thresholds[k], clip, has_clip, feedback,
+                                 decay, scale, lr, momentum, w, m)
+    return used

@@ -13,7 +13,7 @@ import pytest
 import connrl.core.replay as core_replay
 from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
 from connrl.agents.behaviour_level import BehaviourQCON, BehaviourRecurrentQ
-from connrl.agents.memory import RecurrentQConfig, replay_recurrent_q
+from connrl.agents.memory import RecurrentQConfig, replay_recurrent_q, replay_recurrent_q_lessons
 from connrl.core.exploration import TemperatureSchedule
 from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
@@ -21,18 +21,20 @@ from connrl.nets.recurrent import RecurrentNetConfig
 T, MERIT_SCALE = 0.05, 40.0
 
 
-def capture(monkeypatch, original):
-    """Replace the replay function ``original`` wherever a connrl module holds it (so a move of the caller keeps the
-    test meaningful); returns the list of the ReplayParams it is called with."""
+def capture(monkeypatch, *originals):
+    """Replace the replay functions ``originals`` (one lesson, or a trial's lessons in one call) wherever a connrl
+    module holds them (so a move of the caller keeps the test meaningful); returns the list of the ReplayParams they
+    are called with."""
     seen = []
 
-    def fake(q, lesson, params, *args, **kw):
-        seen.append(params)
+    def fake(*args, **kw):
+        seen.extend(a for a in args if isinstance(a, core_replay.ReplayParams))
         return 0
 
-    for name, module in list(sys.modules.items()):
-        if name.startswith("connrl") and getattr(module, original.__name__, None) is original:
-            monkeypatch.setattr(module, original.__name__, fake)
+    for original in originals:
+        for name, module in list(sys.modules.items()):
+            if name.startswith("connrl") and getattr(module, original.__name__, None) is original:
+                monkeypatch.setattr(module, original.__name__, fake)
     return seen
 
 
@@ -48,7 +50,7 @@ def test_behaviour_replay_uses_the_acting_temperature_times_merit_scale(monkeypa
     acting_p = agent.last_probabilities
     agent.observe(0, 0.0, x, True, False, app)
     agent.end_trial()
-    seen = capture(monkeypatch, core_replay.replay_q)
+    seen = capture(monkeypatch, core_replay.replay_q, core_replay.replay_q_lessons)
     agent.learn()
     assert len(seen) == 1
     assert seen[0].temperature == pytest.approx(T * MERIT_SCALE)
@@ -76,7 +78,7 @@ def test_recurrent_behaviour_replay_uses_the_acting_temperature_times_merit_scal
     q, acting_p = agent.last_q, agent.last_probabilities
     agent.observe(0, 0.0, x, True, False, app)
     agent.end_trial()
-    seen = capture(monkeypatch, replay_recurrent_q)
+    seen = capture(monkeypatch, replay_recurrent_q, replay_recurrent_q_lessons)
     agent.learn()
     assert len(seen) == 1
     assert seen[0].temperature == pytest.approx(T * MERIT_SCALE)
