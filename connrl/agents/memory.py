@@ -37,7 +37,7 @@ from connrl.agents.base import LessonAgent, ReplayConfig
 from connrl.agents.qcon import QCON, QCONConfig
 from connrl.core.exploration import TemperatureSchedule, boltzmann_select
 from connrl.core.lessons import Lesson
-from connrl.core.replay import ReplayParams, batch_targets, replay_q
+from connrl.core.replay import ReplayParams, batch_targets, replay_q, replay_q_lessons
 from connrl.nets import OAON, NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON, check_sequence
 
@@ -367,3 +367,15 @@ class RecurrentModelQ(LessonAgent):
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float) -> None:
         replay_q(self.q, self.q_lesson(lesson), self.replay_params(p_threshold))
+
+    one_call_reproduces = (replay_lesson,)  # replay_lessons' one call does its work
+
+    def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
+        """One call, and one pass of the model over each distinct lesson: the model does not change while the
+        Q-net replays, so a lesson drawn twice has the same Q-net inputs both times."""
+        made: dict[int, Lesson] = {}
+        for lesson in lessons:
+            if id(lesson) not in made:
+                made[id(lesson)] = self.q_lesson(lesson)
+        params = self.replay_params(thresholds[0] if thresholds else 0.0)
+        replay_q_lessons(self.q, [made[id(x)] for x in lessons], thresholds, params, lambda _: (None, None))

@@ -11,7 +11,7 @@ import pytest
 
 from connrl.agents import QCON, QCONConfig
 from connrl.agents.base import LinearSchedule, ReplayConfig
-from connrl.agents.memory import RecurrentQ, RecurrentQConfig
+from connrl.agents.memory import RecurrentModelConfig, RecurrentModelQ, RecurrentQ, RecurrentQConfig
 from connrl.core.exploration import TemperatureSchedule
 from connrl.core.lessons import Lesson, pack_lessons
 from connrl.core.replay import ReplayParams, replay_q_lessons
@@ -115,7 +115,7 @@ def _trained(agent, rng, trials=6):
     return agent
 
 
-@pytest.mark.parametrize("make", ["qcon", "recurrent"])
+@pytest.mark.parametrize("make", ["qcon", "recurrent", "model"])
 def test_an_agents_trial_replays_give_the_same_nets_and_stream_in_one_call(make, monkeypatch):
     replay = ReplayConfig(capacity=4, lessons_per_trial=LinearSchedule(5, 5, 1), p_threshold=0.01,
                           p_threshold_oldest=0.001)
@@ -125,6 +125,11 @@ def test_an_agents_trial_replays_give_the_same_nets_and_stream_in_one_call(make,
             cfg = QCONConfig(NetConfig(D, 5, lr=0.1), TemperatureSchedule.direct(0.5, 0.1, 10), lam=0.8,
                              replay=replay)
             return QCON(cfg, A, np.random.default_rng(5))
+        if make == "model":
+            cfg = RecurrentModelConfig(RecurrentNetConfig(n_inputs=D, n_hidden=6, n_context=3, n_outputs=D + 1),
+                                       NetConfig(D + 3, 5, lr=0.1), TemperatureSchedule.direct(0.5, 0.1, 10),
+                                       lam=0.8, replay=replay, model_lessons_per_trial=2)
+            return RecurrentModelQ(cfg, A, np.random.default_rng(5))
         cfg = RecurrentQConfig(RecurrentNetConfig(n_inputs=D, n_hidden=4, n_context=2, lr=0.1),
                                TemperatureSchedule.direct(0.5, 0.1, 10), replay=dataclasses.replace(replay, batch=True))
         return RecurrentQ(cfg, A, np.random.default_rng(5))
@@ -134,7 +139,7 @@ def test_an_agents_trial_replays_give_the_same_nets_and_stream_in_one_call(make,
     _trained(one, np.random.default_rng(6))
     monkeypatch.setattr(type(one), "replays_in_one_call", lambda self: False)
     each = _trained(agent(), np.random.default_rng(6))
-    net_one, net_each = (one.q, each.q) if make == "qcon" else (one.net, each.net)
+    net_one, net_each = (one.net, each.net) if make == "recurrent" else (one.q, each.q)
     for name in ("w1", "w2", "d1", "d2"):
         np.testing.assert_array_equal(getattr(net_one, name), getattr(net_each, name))
     assert one.rng.random() == each.rng.random()  # the lesson draws came in the same order
