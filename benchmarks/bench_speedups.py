@@ -18,7 +18,12 @@ the loop adds on top of it.
   ``centres_and_rewards_reference``) against its compiled paths;
 - Boltzmann selection at T > 0: ``boltzmann_probabilities`` + cumsum + searchsorted against ``boltzmann_select``;
 - greedy test plays over behaviours (Chs. 6, 8) and of Ch. 5's tasks: ``run_trial`` against
-  ``connrl.tasks.recharge_play.greedy_play`` and ``connrl.tasks.robot_play.greedy_play``.
+  ``connrl.tasks.recharge_play.greedy_play`` and ``connrl.tasks.robot_play.greedy_play``;
+- the MLP forward pass, 1000 times in a compiled loop: the fastmath loop (tests/nets/test_mlp_kernel.py keeps it)
+  against ``_mlp_forward``;
+- a lesson replay over behaviours: the kernel's step-by-step loop (``_replay_q_steps``, with the new forward pass)
+  against ``_replay_mlp``, which reuses the policy test's forward pass; a trial's 1000 replays, ``replay_q`` on
+  each against ``replay_q_lessons``.
 Each time is the best of --repeat rounds.
 """
 
@@ -30,6 +35,7 @@ import dataclasses
 import sys
 from pathlib import Path
 
+import numba
 import numpy as np
 from bench_core import best_time  # seconds per call, the best of `repeat` batches
 
@@ -37,14 +43,21 @@ from connrl.agents.memory import replay_recurrent_q
 from connrl.core.exploration import boltzmann_probabilities, boltzmann_select
 from connrl.core.grouping import group_lesson
 from connrl.core.lessons import Lesson
-from connrl.core.replay import ReplayParams, replay_ahc, replay_ahc_reference, replay_q, replay_q_reference
+from connrl.core.replay import (
+    ReplayParams,
+    replay_ahc,
+    replay_ahc_reference,
+    replay_q,
+    replay_q_lessons,
+    replay_q_reference,
+)
 from connrl.core.rollout import run_trial
 from connrl.envs.robot.recharge import ROOMS, sample_in_room
 from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv
 from connrl.experiments.recharge import RechargeParams
 from connrl.experiments.robot import RobotParams
 from connrl.nets import OAON, NetConfig
-from connrl.nets.kernels import _rotated_values
+from connrl.nets.kernels import _mlp_forward, _replay_mlp, _replay_q_steps, _rotated_values
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
 from connrl.nets.recurrent_kernels import _forward_sequence
 from connrl.nets.rotated import RotatedNet
@@ -54,9 +67,10 @@ from connrl.tasks.robot import make_agent, make_env
 from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 from connrl.tasks.survival_play import greedy_play
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "nets"))
-from test_recurrent_lanes import _forward_by_unit  # noqa: E402  (the recurrent forward as it was)
-from test_rotated_kernel import _gathered_fastmath  # noqa: E402  (the kernel as it was)
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the tests keep the code as it was
+from tests.nets.test_mlp_kernel import _fastmath_forward  # noqa: E402  (the MLP forward as it was)
+from tests.nets.test_recurrent_lanes import _forward_by_unit  # noqa: E402  (the recurrent forward as it was)
+from tests.nets.test_rotated_kernel import _gathered_fastmath  # noqa: E402  (the kernel as it was)
 
 PERMS = np.ascontiguousarray(ROTATION_PERMUTATIONS[list(ACTION_ROTATION)])
 
@@ -159,7 +173,57 @@ def robot_rows(repeat: int) -> list[tuple[str, float, float]]:
                                              max_steps=30) for start, s in starts], 1, repeat),
                 best_time(lambda: [robot_play.greedy_play(renv, ragent, s, start, 30) for start, s in starts], 1,
                           repeat)))
+    return out + mlp_rows(repeat, rng)
+
+
+def mlp_rows(repeat: int, rng) -> list[tuple[str, float, float]]:
+    """The fourth round: the MLP forward pass (its hidden sums in written-out lanes, all before the sigmoids), the
+    lesson replay that reuses the policy test's forward pass, and a trial's replays in one call."""
+    out = []
+    for n_in, n_h, where in ((14, 8, "Ch. 8's nets over behaviours"), (101, 30, "Ch. 6 Exp. 1's flat nets")):
+        w1, w2 = rng.uniform(-0.5, 0.5, (4, n_h, n_in + 1)), rng.uniform(-0.5, 0.5, (4, n_h + 1))
+        x, h = rng.choice([-0.5, 0.0, 0.5], n_in), np.empty(n_h)
+        out.append((f"1000 MLP forward passes, {n_in}-{n_h}-1, in a compiled loop ({where})",
+                    best_time(lambda w1=w1, w2=w2, x=x, h=h: _old_forwards(w1, w2, x, h, 1000), 200, repeat),
+                    best_time(lambda w1=w1, w2=w2, x=x, h=h: _new_forwards(w1, w2, x, h, 1000), 200, repeat)))
+    cfg = NetConfig(14, 8, value_range=100.0, lr=0.001)
+    nets = [OAON(cfg, 4, np.random.default_rng(8)) for _ in range(2)]
+    n = 126
+    lessons = [Lesson(rng.choice([-0.5, 0.0, 0.5], (n + 1, 14)), rng.integers(0, 4, n), rng.choice([0.0, 10.0], n),
+                      False) for _ in range(100)]
+    w, ok = np.ones((n, 4)), np.ones((n + 1, 4), dtype=np.bool_)
+
+    def kernel(fn, net, lesson, *extra):
+        return fn(net.w1, net.w2, net.d1, net.d2, net._h, np.empty(4), lesson.inputs, lesson.actions.astype(np.int64),
+                  lesson.rewards, False, np.full(n, 0.99), 0.8, 2.0, 0.005, 0.0, False, net.scale, net.lr, 0.9,
+                  *extra, w, ok)
+
+    out.append(("replay of a 126-step lesson over 4 behaviours, P_t > 0: step by step / the forward pass reused",
+                best_time(lambda: kernel(_replay_q_steps, nets[0], lessons[0], 0, False), 300, repeat),
+                best_time(lambda: kernel(_replay_mlp, nets[1], lessons[0]), 300, repeat)))
+    picks = [lessons[int(k)] for k in rng.integers(0, 100, 1000)]
+    params = ReplayParams(gamma=0.99, lam=0.8, temperature=2.0, p_threshold=0.005)
+    out.append(("a trial's 1000 replays of 126-step lessons (Ch. 8): a call each / one call",
+                best_time(lambda: [replay_q(nets[0], x, params) for x in picks], 1, repeat),
+                best_time(lambda: replay_q_lessons(nets[1], picks, [0.005] * 1000, params, lambda _: (None, None)), 1,
+                          repeat)))
     return out
+
+
+@numba.njit(cache=False)
+def _old_forwards(w1, w2, x, h, n):  # from compiled code, as the replays call it: no Python call in the time
+    s = 0.0
+    for k in range(n):
+        s += _fastmath_forward(w1, w2, k % w1.shape[0], x, h)
+    return s
+
+
+@numba.njit(cache=False)
+def _new_forwards(w1, w2, x, h, n):
+    s = 0.0
+    for k in range(n):
+        s += _mlp_forward(w1, w2, k % w1.shape[0], x, h)
+    return s
 
 
 class _PlainRng:
