@@ -131,7 +131,7 @@ def _forward_at(w1, w2, a, x, xo, h):
     n_h, n_in1 = w1.shape[1], w1.shape[2]
     n_in = n_in1 - 1
     row = a * n_h * n_in1
-    for j in range(n_h):  # the sums first: with no call between them they overlap in the CPU
+    for j in range(n_h):  # the sums, then the sigmoids (no slower than one loop in the replay)
         h[j] = _dot_in_fours(w1, row + j * n_in1, x, xo, n_in, w1[a, j, n_in])
     for j in range(n_h):
         h[j] = 1.0 / (1.0 + math.exp(-h[j])) - 0.5
