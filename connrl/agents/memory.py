@@ -36,7 +36,7 @@ import numpy as np
 from connrl.agents.base import LessonAgent, ReplayConfig
 from connrl.agents.qcon import QCON, QCONConfig
 from connrl.core.exploration import TemperatureSchedule, boltzmann_select
-from connrl.core.lessons import Lesson
+from connrl.core.lessons import Lesson, MixedOptions
 from connrl.core.replay import ReplayParams, batch_targets, replay_q, replay_q_lessons
 from connrl.nets import OAON, NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON, check_sequence
@@ -214,8 +214,14 @@ class RecurrentQ(LessonAgent):
     one_call_reproduces = (replay_lesson,)  # replay_lessons' one call does its work
 
     def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
+        if not self.replays_in_one_call():
+            super().replay_lessons(lessons, thresholds)
+            return
         params = self.replay_params(thresholds[0] if thresholds else 0.0)
-        replay_recurrent_q_lessons(self.net, lessons, thresholds, params, self.lesson_options)
+        try:
+            replay_recurrent_q_lessons(self.net, lessons, thresholds, params, self.lesson_options)
+        except MixedOptions:  # refused before any replay: one by one, as they were
+            super().replay_lessons(lessons, thresholds)
 
     def lesson_options(self, lesson: Lesson) -> tuple[np.ndarray | None, np.ndarray | None]:
         """The (weights, allowed) a lesson is replayed with (``replay_recurrent_q``'s): none here."""
@@ -373,6 +379,9 @@ class RecurrentModelQ(LessonAgent):
     def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
         """One call, and one pass of the model over each distinct lesson: the model does not change while the
         Q-net replays, so a lesson drawn twice has the same Q-net inputs both times."""
+        if not self.replays_in_one_call():
+            super().replay_lessons(lessons, thresholds)
+            return
         made: dict[int, Lesson] = {}
         for lesson in lessons:
             if id(lesson) not in made:

@@ -121,6 +121,11 @@ class LessonMemory:
         return len(self.lessons) - 1 - k, self.lessons[k]
 
 
+class MixedOptions(ValueError):
+    """Some lessons of one packed call have per-step weights or allowed choices and some not (a behaviour-level
+    trial begun without applicability, say): such lessons are replayed one by one."""
+
+
 @dataclass(frozen=True)
 class LessonPack:
     """Lessons laid end to end for one compiled call over many replays (issue 45): ``order[k]`` is the k-th replay's
@@ -157,7 +162,7 @@ def pack_lessons(lessons: list[Lesson], options, n_actions: int, check) -> Lesso
         check(lesson, w, m)
     has_w, has_m = (opts[0][0] is not None, opts[0][1] is not None) if opts else (False, False)
     if any((w is not None) != has_w or (m is not None) != has_m for w, m in opts):
-        raise ValueError("the lessons of one call must all have per-step weights / allowed choices, or none")
+        raise MixedOptions("the lessons of one call must all have per-step weights / allowed choices, or none")
     step_start = np.zeros(len(distinct) + 1, dtype=np.int64)
     np.cumsum([len(lesson) for lesson in distinct], out=step_start[1:])
 

@@ -228,8 +228,8 @@ def replay_q(q: QFunction, lesson: Lesson, params: ReplayParams, repair: str = "
 def replay_q_lessons(q, lessons: list[Lesson], thresholds: list[float], params: ReplayParams, options) -> int:
     """``replay_q`` on each of ``lessons`` in turn (the same lesson may come again): lesson k at P_t
     ``thresholds[k]`` and with ``options(lesson)`` = its (weights, allowed), no repairs, incremental mode. An OAON
-    replays them all in one compiled call (issue 45: a thousand calls from Python a trial cost Ch. 8 as much as
-    its small nets' replays), each distinct lesson checked once; any other Q-function one by one."""
+    replays them all in one compiled call (issue 45: up to a thousand a trial in Ch. 8), each distinct lesson
+    checked once; any other Q-function one by one."""
     if type(q) is not OAON or params.batch or FAST_PATHS.get(OAON) is not replay_oaon:
         return sum(replay_q(q, lesson, dataclasses.replace(params, p_threshold=p), "none", True, *options(lesson))
                    for lesson, p in zip(lessons, thresholds, strict=True))
@@ -241,6 +241,9 @@ def replay_q_lessons(q, lessons: list[Lesson], thresholds: list[float], params: 
     def check(lesson, weights, allowed):
         _check_step_arrays(lesson, weights, allowed, None)
         check_lesson_fits(lesson, q.n_actions, q.config.n_inputs)
+        for name, arr in (("weights", weights), ("allowed", allowed)):  # the kernel indexes their rows unchecked
+            if arr is not None and np.shape(arr)[1:] != (q.n_actions,):
+                raise ValueError(f"{name} must have one column per action ({q.n_actions}), got shape {np.shape(arr)}")
 
     return replay_oaon_lessons(q, pack_lessons(lessons, options, q.n_actions, check), thresholds, params)
 

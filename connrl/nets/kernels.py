@@ -42,8 +42,9 @@ def _dot_kernel(width: int):
     sums it under fastmath: four 8-lane accumulators of fused multiply-adds over blocks of 32 (``start`` in lane 0),
     added (0 + 1) + (2 + 3) and then lane halves (4, 2, 1); one ``width``-lane accumulator over the blocks of
     ``width`` left (the sum so far in lane 0), added the same way; fused multiply-adds over the last few. Written
-    here in vector IR, it is that order on every CPU (issue 45). The offsets spare a kernel the row views whose
-    reference counts cost more than a small net's sums."""
+    here in vector IR, it is that order on every CPU (issue 45), as long as the caller is compiled without fastmath
+    (a fastmath caller's flags could reach the inlined code). The offsets spare a kernel the row views, each
+    reference-counted."""
 
     def dot(typingctx, w, wo, x, xo, n, start):
         for arr in (w, x):  # read in a straight line: C-contiguous float64 only (else a typing error)
@@ -336,7 +337,8 @@ def _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, disc
                 p_threshold, clip, has_clip, scale, lr, momentum, weights, allowed):
     """``_replay_q_kernel`` for nets with a hidden layer and no repairs, the same arithmetic with less work: the
     inputs read at row offsets (no views), and the update of the action replayed reusing the forward pass the
-    policy test has just run on the same weights (issue 45: a third less time a step on Ch. 8's small nets)."""
+    policy test has just run on the same weights (issue 45: about half the step-by-step loop's time on Ch. 8's small
+    nets, benchmarks/bench_speedups.py)."""
     n, n_in = actions.shape[0], inputs.shape[1]
     x = inputs.reshape(inputs.size)
     used = 0
@@ -485,7 +487,7 @@ def _replay_q_lessons(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated
     (``thresholds[k]``; no repairs): the lessons stored end to end, lesson i's n_i steps at rows
     ``step_start[i]..step_start[i+1]`` of actions, rewards, discounts and weights and its n_i + 1 states at rows
     ``in_start[i]..`` of inputs and allowed (0-row weights / allowed: none). One call for a trial's replays:
-    a thousand calls from Python cost as much as the replays of Ch. 8's small nets (issue 45)."""
+    one call instead of a thousand from Python (issue 45)."""
     used = 0
     for k in range(order.shape[0]):
         i = order[k]

@@ -341,6 +341,8 @@ class RecurrentOAON:
                 raise ValueError(f"rewards must have shape {np.shape(lesson.actions)}, got {np.shape(lesson.rewards)}")
             _check_choices(weights, allowed, len(lesson.actions), self.n_nets)
 
+        if len(lessons) != len(thresholds):
+            raise ValueError(f"{len(lessons)} lessons and {len(thresholds)} thresholds")
         if not lessons:
             return 0
         p = pack_lessons(lessons, options, self.n_nets, check)

@@ -13,7 +13,7 @@ from connrl.agents import QCON, QCONConfig
 from connrl.agents.base import LinearSchedule, ReplayConfig
 from connrl.agents.memory import RecurrentModelConfig, RecurrentModelQ, RecurrentQ, RecurrentQConfig
 from connrl.core.exploration import TemperatureSchedule
-from connrl.core.lessons import Lesson, pack_lessons
+from connrl.core.lessons import Lesson, MixedOptions, pack_lessons
 from connrl.core.replay import ReplayParams, replay_q_lessons
 from connrl.core.replay_kernel import replay_oaon
 from connrl.nets import OAON, NetConfig
@@ -94,7 +94,7 @@ def test_a_pack_holds_each_distinct_lesson_once_in_first_seen_order():
 def test_a_pack_refuses_lessons_with_and_without_options_and_checks_each():
     rng = np.random.default_rng(4)
     a, b = _lessons(rng, 2)
-    with pytest.raises(ValueError, match="all have per-step weights"):
+    with pytest.raises(MixedOptions, match="all have per-step weights"):
         pack_lessons([a, b], lambda x: (x.meta["weights"], None) if x is a else (None, None), A, lambda *_: None)
     seen = []
     pack_lessons([a, b, a], _with(True), A, lambda x, w, m: seen.append(x))
@@ -149,3 +149,33 @@ def test_replays_with_state_grouping_stay_one_by_one():
     cfg = QCONConfig(NetConfig(D, 5), TemperatureSchedule.direct(0.5, 0.1, 10),
                      replay=ReplayConfig(capacity=4, grouping=(0.5, 2.5)))
     assert not QCON(cfg, A, np.random.default_rng(0)).replays_in_one_call()  # grouping draws from the generator
+
+
+def test_a_behaviour_learner_replays_lessons_with_and_without_options_one_by_one():
+    """A behaviour-level trial begun without applicability files a lesson without W: such a mix is refused by one
+    call before any replay, and the agent replays one by one, as before."""
+    from connrl.agents.behaviour_level import BehaviourQCON
+
+    rng = np.random.default_rng(9)
+    a, b = _lessons(rng, 2)
+    del b.meta["weights"]
+    cfg = QCONConfig(NetConfig(D, 5, value_range=100.0), TemperatureSchedule.direct(0.5, 0.1, 10),
+                     replay=ReplayConfig(capacity=4))
+    one, each = (BehaviourQCON(cfg, A, np.random.default_rng(0)) for _ in range(2))
+    assert one.replays_in_one_call()
+    one.replay_lessons([a, b, a], [0.1, 0.2, 0.3])
+    for x, p in ((a, 0.1), (b, 0.2), (a, 0.3)):
+        each.replay_lesson(x, p)
+    for name in ("w1", "w2", "d1", "d2"):
+        np.testing.assert_array_equal(getattr(one.q, name), getattr(each.q, name))
+
+
+def test_the_one_call_refuses_options_of_the_wrong_width():
+    rng = np.random.default_rng(10)
+    (a,) = _lessons(rng, 1)
+    net = OAON(NetConfig(D, 3), A, rng)
+    with pytest.raises(ValueError, match="one column per action"):
+        replay_q_lessons(net, [a], [0.0], ReplayParams(gamma=0.9), lambda x: (x.meta["weights"][:, :2], None))
+    with pytest.raises(ValueError, match="thresholds"):
+        RecurrentOAON(RecurrentNetConfig(n_inputs=D, n_hidden=3, n_context=2), A, rng).replay_q_lessons(
+            [a], [], _with(False), gamma=0.9, lam=0.0, temperature=0.1)
