@@ -20,7 +20,7 @@ the loop adds on top of it.
 - greedy test plays over behaviours (Chs. 6, 8) and of Ch. 5's tasks: ``run_trial`` against
   ``connrl.tasks.recharge_play.greedy_play`` and ``connrl.tasks.robot_play.greedy_play``;
 - the MLP forward pass, 1000 times in a compiled loop: the fastmath loop (tests/nets/test_mlp_kernel.py keeps it)
-  against ``_mlp_forward``;
+  against ``_forward_at``, as the kernels call it;
 - a lesson replay over behaviours: the kernel's step-by-step loop (``_replay_q_steps``, with the new forward pass)
   against ``_replay_mlp``, which reuses the policy test's forward pass; a trial's 1000 replays, ``replay_q`` on
   each against ``replay_q_lessons``.
@@ -57,7 +57,7 @@ from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, Surviva
 from connrl.experiments.recharge import RechargeParams
 from connrl.experiments.robot import RobotParams
 from connrl.nets import OAON, NetConfig
-from connrl.nets.kernels import _mlp_forward, _replay_mlp, _replay_q_steps, _rotated_values
+from connrl.nets.kernels import _forward_at, _replay_mlp, _replay_q_steps, _rotated_values
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
 from connrl.nets.recurrent_kernels import _forward_sequence
 from connrl.nets.rotated import RotatedNet
@@ -219,10 +219,10 @@ def _old_forwards(w1, w2, x, h, n):  # from compiled code, as the replays call i
 
 
 @numba.njit(cache=False)
-def _new_forwards(w1, w2, x, h, n):
+def _new_forwards(w1, w2, x, h, n):  # as the kernels call it
     s = 0.0
     for k in range(n):
-        s += _mlp_forward(w1, w2, k % w1.shape[0], x, h)
+        s += _forward_at(w1, w2, k % w1.shape[0], x, 0, h)
     return s
 
 

@@ -144,14 +144,15 @@ def _forward_at(w1, w2, a, x, xo, h):
 
 @numba.njit(cache=True)
 def _mlp_forward(w1, w2, a, x, h):
-    """Forward pass of net a on x (I,); see ``_forward_at``."""
+    """Forward pass of net a on x (I,); see ``_forward_at``. For Python: the kernels here call ``_forward_at``
+    itself: a call through this one made a small net's forward pass slower than the old fastmath loop (issue 45)."""
     return _forward_at(w1, w2, a, x, 0, h)
 
 
 @numba.njit(cache=True, fastmath=True)
 def _mlp_values(w1, w2, x, h, scale, q):
     for a in range(w1.shape[0]):
-        q[a] = scale * _mlp_forward(w1, w2, a, x, h)
+        q[a] = scale * _forward_at(w1, w2, a, x, 0, h)
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -267,7 +268,7 @@ def _values_any(w1, w2, x, h, scale, q, linear):
 def _value_any(w1, w2, a, x, h, scale, linear):
     """Net a's value: the same arithmetic as entry a of ``_values_any``."""
     if w1.shape[1] > 0:
-        return scale * _mlp_forward(w1, w2, a, x, h)
+        return scale * _forward_at(w1, w2, a, x, 0, h)
     return scale * _perceptron_forward(w2, a, x, linear)
 
 
@@ -337,7 +338,7 @@ def _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, disc
                 p_threshold, clip, has_clip, scale, lr, momentum, weights, allowed):
     """``_replay_q_kernel`` for nets with a hidden layer and no repairs, the same arithmetic with less work: the
     inputs read at row offsets (no views), and the update of the action replayed reusing the forward pass the
-    policy test has just run on the same weights (issue 45: about half the step-by-step loop's time on Ch. 8's small
+    policy test has just run on the same weights (issue 45: less time than the step-by-step loop on Ch. 8's small
     nets, benchmarks/bench_speedups.py)."""
     n, n_in = actions.shape[0], inputs.shape[1]
     x = inputs.reshape(inputs.size)
@@ -581,7 +582,7 @@ def _replay_ahc_rotated_kernel(vw1, vw2, vd1, vd2, vh, v_scale, v_lr, v_momentum
     for t in range(n - 1, -1, -1):
         u = 0.0
         if not (t == n - 1 and terminated):
-            u = v_scale * _mlp_forward(vw1, vw2, 0, inputs[t + 1], vh)
+            u = v_scale * _forward_at(vw1, vw2, 0, inputs[t + 1], 0, vh)
         e = _lambda_target(rewards[t], gamma, lam if (t < n - 1 and next_policy) else 0.0, u, e_next, clip, has_clip)
         a = actions[t]
         next_policy = _rotated_policy_test(pw1, pw2, inputs[t], perms, p_scale, q, xr, a, temperature, p_threshold)
