@@ -179,3 +179,29 @@ def test_the_one_call_refuses_options_of_the_wrong_width():
     with pytest.raises(ValueError, match="thresholds"):
         RecurrentOAON(RecurrentNetConfig(n_inputs=D, n_hidden=3, n_context=2), A, rng).replay_q_lessons(
             [a], [], _with(False), gamma=0.9, lam=0.0, temperature=0.1)
+
+
+@pytest.mark.parametrize("repair", ["none", "lower"])
+def test_qcon_t_replays_its_experienced_lessons_in_one_call_and_its_taught_ones_after(repair, monkeypatch):
+    """QCON-T (5.3.4, 5.4.3): the experienced lessons go in one call, the taught ones (with their repairs and the
+    draws of the taught probability) after it, as before."""
+    from connrl.agents.teaching import TeachingConfig, TeachingQCON
+
+    replay = ReplayConfig(capacity=4, lessons_per_trial=LinearSchedule(5, 5, 1), p_threshold=0.01,
+                          taught_probability=LinearSchedule(0.5, 0.5, 1))
+
+    def agent():
+        cfg = QCONConfig(NetConfig(D, 5, value_range=100.0, lr=0.1), TemperatureSchedule.direct(0.5, 0.1, 10),
+                         lam=0.8, replay=replay)
+        a = TeachingQCON(cfg, A, np.random.default_rng(5), teaching=TeachingConfig(repair=repair))
+        a.add_taught_lessons([x for x in _lessons(np.random.default_rng(11), 3) if len(x)])
+        return a
+
+    one = agent()
+    assert one.replays_in_one_call()
+    _trained(one, np.random.default_rng(6))
+    monkeypatch.setattr(TeachingQCON, "replays_in_one_call", lambda self: False)
+    each = _trained(agent(), np.random.default_rng(6))
+    for name in ("w1", "w2", "d1", "d2"):
+        np.testing.assert_array_equal(getattr(one.q, name), getattr(each.q, name))
+    assert one.rng.random() == each.rng.random()
