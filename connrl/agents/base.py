@@ -25,7 +25,7 @@ import numpy as np
 
 from connrl.core.exploration import StuckConfig, StuckDetector
 from connrl.core.grouping import check_mu_range
-from connrl.core.lessons import Lesson, LessonMemory, LessonRecorder
+from connrl.core.lessons import Lesson, LessonMemory, LessonRecorder, MixedOptions
 from connrl.core.replay import ReplayParams
 
 
@@ -251,9 +251,27 @@ class LessonAgent:
         return "replay_lesson" not in vars(self) and type(self).replay_lesson in self.one_call_reproduces
 
     def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
-        """Replay ``lessons`` in turn, lesson k at P_t ``thresholds[k]``: ``replay_lesson`` on each, or one call."""
+        """Replay ``lessons`` in turn, lesson k at P_t ``thresholds[k]``: in one call (``replay_in_one_call``) where
+        ``replays_in_one_call``, else ``replay_lesson`` on each. A mix of lessons with and without per-step options
+        (a behaviour-level trial begun without applicability) is refused by the one call before any replay, and
+        replayed one by one."""
+        if self.replays_in_one_call():
+            try:
+                self.replay_in_one_call(lessons, thresholds, self.replay_params(thresholds[0] if thresholds else 0.0))
+                return
+            except MixedOptions:
+                pass
         for lesson, p_threshold in zip(lessons, thresholds, strict=True):
             self.replay_lesson(lesson, p_threshold)
+
+    def replay_in_one_call(self, lessons: list[Lesson], thresholds: list[float], params: ReplayParams) -> None:
+        """The one compiled call of a class whose ``one_call_reproduces`` names its ``replay_lesson``; ``params``
+        holds the trial's settings but P_t, which ``thresholds`` gives lesson by lesson."""
+        raise NotImplementedError
+
+    def lesson_options(self, lesson: Lesson) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """The per-step (weights, allowed) a lesson is replayed with (``connrl.core.replay.replay_q``'s): none here."""
+        return None, None
 
     def learn(self) -> None:
         """After a trial: replay n experienced lessons chosen by App. A.2 and the taught lessons (3.5, 3.7), the

@@ -36,7 +36,7 @@ import numpy as np
 from connrl.agents.base import LessonAgent, ReplayConfig
 from connrl.agents.qcon import QCON, QCONConfig
 from connrl.core.exploration import TemperatureSchedule, boltzmann_select
-from connrl.core.lessons import Lesson, MixedOptions
+from connrl.core.lessons import Lesson
 from connrl.core.replay import ReplayParams, batch_targets, replay_q, replay_q_lessons
 from connrl.nets import OAON, NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON, check_sequence
@@ -213,19 +213,8 @@ class RecurrentQ(LessonAgent):
 
     one_call_reproduces = (replay_lesson,)  # replay_lessons' one call does its work
 
-    def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
-        if not self.replays_in_one_call():
-            super().replay_lessons(lessons, thresholds)
-            return
-        params = self.replay_params(thresholds[0] if thresholds else 0.0)
-        try:
-            replay_recurrent_q_lessons(self.net, lessons, thresholds, params, self.lesson_options)
-        except MixedOptions:  # refused before any replay: one by one, as they were
-            super().replay_lessons(lessons, thresholds)
-
-    def lesson_options(self, lesson: Lesson) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """The (weights, allowed) a lesson is replayed with (``replay_recurrent_q``'s): none here."""
-        return None, None
+    def replay_in_one_call(self, lessons: list[Lesson], thresholds: list[float], params: ReplayParams) -> None:
+        replay_recurrent_q_lessons(self.net, lessons, thresholds, params, self.lesson_options)
 
 
 # ------------------------------------------------------------------------------------- recurrent-model
@@ -376,15 +365,11 @@ class RecurrentModelQ(LessonAgent):
 
     one_call_reproduces = (replay_lesson,)  # replay_lessons' one call does its work
 
-    def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
-        """One call, and one pass of the model over each distinct lesson: the model does not change while the
-        Q-net replays, so a lesson drawn twice has the same Q-net inputs both times."""
-        if not self.replays_in_one_call():
-            super().replay_lessons(lessons, thresholds)
-            return
+    def replay_in_one_call(self, lessons: list[Lesson], thresholds: list[float], params: ReplayParams) -> None:
+        """One pass of the model over each distinct lesson: the model does not change while the Q-net replays, so a
+        lesson drawn twice has the same Q-net inputs both times."""
         made: dict[int, Lesson] = {}
         for lesson in lessons:
             if id(lesson) not in made:
                 made[id(lesson)] = self.q_lesson(lesson)
-        params = self.replay_params(thresholds[0] if thresholds else 0.0)
-        replay_q_lessons(self.q, [made[id(x)] for x in lessons], thresholds, params, lambda _: (None, None))
+        replay_q_lessons(self.q, [made[id(x)] for x in lessons], thresholds, params, self.lesson_options)

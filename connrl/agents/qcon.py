@@ -13,7 +13,7 @@ import numpy as np
 from connrl.agents.base import LessonAgent, ReplayConfig
 from connrl.core.exploration import StuckConfig, TemperatureSchedule, boltzmann_select
 from connrl.core.grouping import group_lesson
-from connrl.core.lessons import Lesson, MixedOptions
+from connrl.core.lessons import Lesson
 from connrl.core.replay import QFunction, replay_q, replay_q_lessons
 from connrl.nets import OAON, NetConfig
 
@@ -85,19 +85,8 @@ class QCON(LessonAgent):
         return (r is not None and r.grouping is None and not self._replay.batch and type(self.q) is OAON
                 and super().replays_in_one_call())
 
-    def replay_lessons(self, lessons: list[Lesson], thresholds: list[float]) -> None:
-        if not self.replays_in_one_call():
-            super().replay_lessons(lessons, thresholds)
-            return
-        params = self.replay_params(thresholds[0] if thresholds else 0.0)
-        try:
-            replay_q_lessons(self.q, lessons, thresholds, params, self.lesson_options)
-        except MixedOptions:  # refused before any replay: one by one, as they were
-            super().replay_lessons(lessons, thresholds)
-
-    def lesson_options(self, lesson: Lesson) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """The (weights, allowed) a lesson is replayed with (``connrl.core.replay.replay_q``'s): none here."""
-        return None, None
+    def replay_in_one_call(self, lessons: list[Lesson], thresholds: list[float], params) -> None:
+        replay_q_lessons(self.q, lessons, thresholds, params, self.lesson_options)
 
     def replay_lesson(self, lesson: Lesson, p_threshold: float, weights=None, allowed=None) -> None:
         """Replay one lesson (Fig. 5.1), over its groups of similar states when ``replay.grouping`` is set (6.6.4);

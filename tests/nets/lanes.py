@@ -9,6 +9,16 @@ import numpy as np
 from connrl.nets.kernels import _fma
 
 
+def stored_results_cpu() -> bool:
+    """Whether this is the CPU the stored results were made on (znver5), where the old fastmath loops summed in the
+    written-out order, so the kernels must match them bit for bit."""
+    import os
+
+    from llvmlite import binding
+
+    return (os.environ.get("NUMBA_CPU_NAME") or binding.get_host_cpu_name()) == "znver5"
+
+
 @numba.njit(cache=False)
 def lanes_one_at_a_time(w, x, n, start, width):
     """``start + sum w[i] x[i]`` over i < n: 32 lanes over blocks of 32 (``start`` in lane 0), lane k of the four

@@ -20,15 +20,7 @@ from connrl.nets.kernels import (
     _replay_q_steps,
 )
 
-from .lanes import lanes_one_at_a_time
-
-
-def _stored_results_cpu() -> bool:
-    import os
-
-    from llvmlite import binding
-
-    return (os.environ.get("NUMBA_CPU_NAME") or binding.get_host_cpu_name()) == "znver5"
+from .lanes import lanes_one_at_a_time, stored_results_cpu
 
 
 @numba.njit(cache=False, fastmath=True)
@@ -98,7 +90,7 @@ def _random_net(rng, n_nets, n_h, n_in):
 @pytest.mark.parametrize("n_h,n_in", [(1, 1), (8, 14), (9, 33), (30, 101), (16, 145)])
 def test_the_forward_pass_is_the_fastmath_loops(n_h, n_in):
     rng = np.random.default_rng(n_h * 1000 + n_in)
-    exact = _stored_results_cpu()  # that loop's order is LLVM's there; elsewhere it may sum otherwise
+    exact = stored_results_cpu()  # that loop's order is LLVM's there; elsewhere it may sum otherwise
     for _ in range(300):
         w1, w2, x = _random_net(rng, 3, n_h, n_in)
         a = int(rng.integers(3))
@@ -115,7 +107,7 @@ def test_the_forward_pass_is_the_fastmath_loops(n_h, n_in):
 @pytest.mark.parametrize("n_h,n_in", [(8, 14), (30, 101)])
 def test_the_update_is_the_fastmath_loops(n_h, n_in):
     rng = np.random.default_rng(n_in)
-    exact = _stored_results_cpu()  # that loop's order is LLVM's there; elsewhere it may sum otherwise
+    exact = stored_results_cpu()  # that loop's order is LLVM's there; elsewhere it may sum otherwise
     for k in range(200):
         w1, w2, x = _random_net(rng, 3, n_h, n_in)
         d1, d2 = rng.normal(0, 0.01, w1.shape) * (k % 2), rng.normal(0, 0.01, w2.shape) * (k % 2)

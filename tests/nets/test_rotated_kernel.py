@@ -13,7 +13,7 @@ import pytest
 from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS
 from connrl.nets.kernels import _dot_in_lanes, _fma, _rotated_values
 
-from .lanes import lanes_one_at_a_time
+from .lanes import lanes_one_at_a_time, stored_results_cpu
 
 PERMS = np.ascontiguousarray(ROTATION_PERMUTATIONS[list(ACTION_ROTATION)])
 
@@ -42,14 +42,6 @@ def _dot(w, x, n, start):  # an intrinsic runs inside compiled code only
     return _dot_in_lanes(w, 0, x, 0, n, start)
 
 
-def _stored_results_cpu() -> bool:
-    import os
-
-    from llvmlite import binding
-
-    return (os.environ.get("NUMBA_CPU_NAME") or binding.get_host_cpu_name()) == "znver5"
-
-
 @pytest.mark.parametrize("n", [0, 1, 7, 8, 9, 31, 32, 33, 40, 63, 64, 100, 145])
 def test_the_lanes_are_those_written_out_one_at_a_time(n):
     rng = np.random.default_rng(n)
@@ -63,7 +55,7 @@ def test_the_lanes_are_those_written_out_one_at_a_time(n):
 def test_the_values_are_the_gathered_fastmath_loops():
     rng = np.random.default_rng(0)
     n_in = PERMS.shape[1]
-    exact = _stored_results_cpu()  # that loop's order is LLVM's there; elsewhere it may sum otherwise
+    exact = stored_results_cpu()  # that loop's order is LLVM's there; elsewhere it may sum otherwise
     for _ in range(2000):
         w1 = rng.uniform(-1, 1, (1, 30, n_in + 1)) * rng.choice([0.01, 1.0, 30.0])
         w2 = rng.uniform(-1, 1, (1, 31))
