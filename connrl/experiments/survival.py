@@ -27,7 +27,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from connrl.core.rollout import run_trial
 from connrl.envs.survival.world import REWARD_FOOD
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
@@ -43,6 +42,7 @@ from connrl.tasks.survival import (
 )
 from connrl.tasks.survival import test_plays as _test_plays
 from connrl.tasks.survival_models import probe_experiences
+from connrl.tasks.survival_train import learning_play
 
 # the learned model's yardstick (4.4.3): fixed experiences, the same for every run of a representation (not
 # parameters: they are measurement, and leave the runs and their folders as they were)
@@ -150,7 +150,7 @@ def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda do
 
     def do_train(k):
         nonlocal done
-        stats = run_trial(env, agent, trial=k, learning=True, options={"layout_seed": train[k]})
+        stats = learning_play(env, agent, trial=k, options={"layout_seed": train[k]})
         row = {"kind": "train", "plays": k + 1, "food": stats.info["food_eaten"], "outcome": stats.info["outcome"],
                "steps": stats.steps, "stuck_steps": agent.explore.boosted}
         if planner is not None:

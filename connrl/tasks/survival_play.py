@@ -52,10 +52,7 @@ def greedy_play(env: SurvivalEnv, agent, seed: int) -> TrialStats:
     o = net.net
     x = np.array(obs, dtype=np.float64)
     last_x, q = np.empty_like(x), np.empty(net.n_actions)
-    steps, total, terminated = _greedy_loop(
-        o.w1, o.w2, net.perms, o.scale, net._xr, q, last_x, x, _OBST_PAD, env._food, env._enemy_count,
-        env._enemies, env._agent, env._s, env._local, _FOOD_TABLE, _ENEMY_TABLE, _OBST_TABLE, _ENERGY_CODE,
-        env.np_random, -1 if env.max_steps is None else env.max_steps, _TIMEOUT)
+    steps, total, terminated = _greedy_loop(o.w1, o.w2, net.perms, o.scale, net._xr, q, last_x, x, world_of(env))
     env._done = True
     agent._x = last_x  # as act() leaves them: the input and the choice's distribution at the last step
     agent.last_probabilities = boltzmann_probabilities(q, 0.0)
@@ -63,9 +60,34 @@ def greedy_play(env: SurvivalEnv, agent, seed: int) -> TrialStats:
     return TrialStats(steps, total, bool(terminated), not terminated, env._info())
 
 
+def world_of(env: SurvivalEnv) -> tuple:
+    """What ``_world_step`` reads and moves: the world's tables and arrays (moved in place), its generator, its time
+    limit (-1: none) and local flag."""
+    return (_OBST_PAD, env._food, env._enemy_count, env._enemies, env._agent, env._s, _FOOD_TABLE, _ENEMY_TABLE,
+            _OBST_TABLE, _ENERGY_CODE, env.np_random, -1 if env.max_steps is None else env.max_steps, env._local)
+
+
 @numba.njit(cache=False)
-def _greedy_loop(w1, w2, perms, scale, xr, q, last_x, x, obst, food, enemy_count, enemies, agent, s, local, food_t,
-                 enemy_t, obst_t, energy_code, rng, max_steps, timeout):
+def _world_step(world, a, y):
+    """``SurvivalEnv.step(a)`` on ``world_of(env)``, the observation written into ``y``: returns (reward,
+    terminated, truncated)."""
+    obst, food, enemy_count, enemies, agent, s, food_t, enemy_t, obst_t, energy_code, rng, max_steps, local = world
+    direction = (s[1] + a) % 4 if local else a
+    u = rng.random(2 * enemies.shape[0])
+    reward = _step_kernel(obst, food, enemy_count, enemies, agent, s, direction, u)
+    s[2] = a
+    if local:
+        s[1] = direction
+    terminated = s[7] != 0
+    truncated = not terminated and max_steps >= 0 and s[6] >= max_steps
+    if truncated:
+        s[7] = _TIMEOUT
+    _observe_kernel(obst, food, enemy_count, agent, s, local, food_t, enemy_t, obst_t, energy_code, y)
+    return reward, terminated, truncated
+
+
+@numba.njit(cache=False)
+def _greedy_loop(w1, w2, perms, scale, xr, q, last_x, x, world):
     """The play from observation ``x`` on: QCON's / AHCON's ``act(greedy=True)`` (the first of equal maxima; net 0
     when a value is NaN, as ``np.argmax`` of the NaN distribution gives) and ``SurvivalEnv.step`` until the play
     ends. Returns (steps, total reward, terminated); ``x`` ends as the last observation, ``last_x`` as the last
@@ -81,17 +103,7 @@ def _greedy_loop(w1, w2, perms, scale, xr, q, last_x, x, obst, food, enemy_count
         if nan:
             a = 0
         last_x[:] = x
-        direction = (s[1] + a) % 4 if local else a
-        u = rng.random(2 * enemies.shape[0])
-        reward = _step_kernel(obst, food, enemy_count, enemies, agent, s, direction, u)
-        s[2] = a
-        if local:
-            s[1] = direction
-        terminated = s[7] != 0
-        truncated = not terminated and max_steps >= 0 and s[6] >= max_steps
-        if truncated:
-            s[7] = timeout
-        _observe_kernel(obst, food, enemy_count, agent, s, local, food_t, enemy_t, obst_t, energy_code, x)
+        reward, terminated, truncated = _world_step(world, a, x)
         steps += 1
         total += reward
         if terminated or truncated:

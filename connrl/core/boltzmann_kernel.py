@@ -1,0 +1,111 @@
+"""Eq. 3.4's stochastic choice inside a compiled loop, with the numbers of ``boltzmann_select`` (issue 45).
+
+A training step's choice is ``boltzmann_select(merits, T, rng)``: ``p = exp((m - max m) / T)``, ``p /= p.sum()``,
+then the first action whose cumulative probability exceeds one uniform draw. To compile a whole training trial the
+choice must be compiled too, and give the same action from the same draw, bit for bit:
+
+* NumPy computes ``exp`` with its own vector loop, which differs from libm's (what ``math.exp`` calls inside Numba)
+  in the last bit for some inputs (one in twenty here). ``_numpy_exp`` therefore calls NumPy's own loop: the
+  ``d->d`` inner loop of the ``np.exp`` ufunc, read from the ufunc's C struct and checked at import against
+  ``np.exp`` on test inputs (``numpy_exp_checked``). Where it cannot be found or does not agree, callers keep the
+  Python path.
+* ``p.sum()`` of fewer than 8 numbers is NumPy's plain loop from 0 (8 or more are summed pairwise): the kernel
+  takes fewer than 8 merits (``compiled_choice_fits``).
+* The uniform draw is the Generator's ``random()``: Numba shares the Generator's state, so the stream is the same.
+
+The kernel is not cached: it holds the address of NumPy's loop, which is only known in the running process.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from functools import cache
+
+import numba
+import numpy as np
+
+# PyUFuncObject (numpy/ufuncobject.h): after PyObject_HEAD (16 bytes) and four ints come ``functions`` (the inner
+# loops), ``data``, ``ntypes``, two more fields, then ``types`` (each loop's nargs type numbers).
+_FUNCTIONS, _NTYPES, _TYPES = 32, 48, 64
+_LOOP = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+
+
+def _ufunc_loop(ufunc: np.ufunc, signature: str):
+    """The inner loop of ``ufunc`` for ``signature`` (e.g. ``"dd"``), or None where the struct is not as read."""
+    address = id(ufunc)
+    ntypes = ctypes.c_int.from_address(address + _NTYPES).value
+    if ntypes != len(ufunc.types) or ufunc.nargs != len(signature):
+        return None
+    types = ctypes.cast(ctypes.c_void_p.from_address(address + _TYPES).value, ctypes.POINTER(ctypes.c_ubyte))
+    want = [np.dtype(c).num for c in signature]
+    for i, written in enumerate(ufunc.types):
+        found = [types[i * ufunc.nargs + j] for j in range(ufunc.nargs)]
+        if found != [np.dtype(c).num for c in written.replace("->", "")]:
+            return None  # the struct's types do not read as the ufunc's own list: another layout
+        if found == want:
+            functions = ctypes.c_void_p.from_address(address + _FUNCTIONS).value
+            return _LOOP(ctypes.c_void_p.from_address(functions + 8 * i).value)
+    return None
+
+
+_exp_loop = _ufunc_loop(np.exp, "dd")
+_EXP = _exp_loop if _exp_loop is not None else _LOOP(0)  # never called unless numpy_exp_checked()
+
+
+@numba.njit(cache=False)
+def _numpy_exp(z, out, scratch):
+    """out[:] = np.exp(z) by NumPy's own loop; ``scratch`` is int64 (5,): the loop's arguments, size and strides."""
+    scratch[0], scratch[1] = z.ctypes.data, out.ctypes.data
+    scratch[2], scratch[3], scratch[4] = z.size, 8, 8
+    base = scratch.ctypes.data
+    _EXP(base, base + 16, base + 24, 0)
+
+
+@numba.njit(cache=False)
+def _boltzmann_choice(q, temperature, rng, p, scratch):
+    """``boltzmann_select(q, temperature, rng)`` for ``temperature > 0`` and ``q.size < 8``: returns the action, p
+    its probabilities. NaN merits give action 0, as ``searchsorted`` of the NaN distribution does."""
+    n = q.size
+    top = q[0]
+    for k in range(1, n):  # np.max: a NaN propagates
+        if top != top:
+            break
+        if q[k] > top or q[k] != q[k]:
+            top = q[k]
+    for k in range(n):
+        p[k] = (q[k] - top) / temperature
+    _numpy_exp(p, p, scratch)
+    total = 0.0
+    for k in range(n):
+        total += p[k]
+    for k in range(n):
+        p[k] /= total
+    u = rng.random() * 1.0
+    acc = 0.0
+    for k in range(n):  # searchsorted(cumsum, u, "right"): the first sum above u (a NaN sorts above everything)
+        acc = p[k] if k == 0 else acc + p[k]
+        if not acc <= u:
+            return k
+    return n - 1
+
+
+def compiled_choice_fits(n_actions: int) -> bool:
+    """Whether ``_boltzmann_choice`` gives ``boltzmann_select``'s numbers for this many actions (NumPy's loop found
+    and checked, which compiles ``_numpy_exp`` on the first call)."""
+    return 1 <= n_actions < 8 and numpy_exp_checked()
+
+
+@cache
+def numpy_exp_checked() -> bool:
+    """NumPy's loop, called as the kernel calls it, against ``np.exp`` on inputs of every size the kernel takes."""
+    if _exp_loop is None:
+        return False
+    z = np.linspace(-745.0, 0.0, 7919)
+    z[1::3] = -np.geomspace(1e-300, 700.0, z[1::3].size)
+    out, scratch = np.empty_like(z), np.zeros(5, np.int64)
+    for n in (1, 4, 7, z.size):
+        _numpy_exp(z[:n], out[:n], scratch)
+        if not np.array_equal(out[:n], np.exp(z[:n])):
+            return False
+    return True
+
