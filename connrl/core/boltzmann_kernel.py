@@ -62,9 +62,9 @@ def _numpy_exp(z, out, scratch):
 
 
 @numba.njit(cache=False)
-def _boltzmann_choice(q, temperature, rng, p, scratch):
-    """``boltzmann_select(q, temperature, rng)`` for ``temperature > 0`` and ``q.size < 8``: returns the action, p
-    its probabilities. NaN merits give action 0, as ``searchsorted`` of the NaN distribution does."""
+def _boltzmann_probabilities(q, temperature, p, scratch):
+    """p[:] = ``boltzmann_probabilities(q, temperature)`` for ``temperature > 0`` and ``q.size < 8`` (NaN merits:
+    all NaN)."""
     n = q.size
     top = q[0]
     for k in range(1, n):  # np.max: a NaN propagates
@@ -80,13 +80,20 @@ def _boltzmann_choice(q, temperature, rng, p, scratch):
         total += p[k]
     for k in range(n):
         p[k] /= total
+
+
+@numba.njit(cache=False)
+def _boltzmann_choice(q, temperature, rng, p, scratch):
+    """``boltzmann_select(q, temperature, rng)`` for ``temperature > 0`` and ``q.size < 8``: returns the action, p
+    its probabilities. NaN merits give action 0, as ``searchsorted`` of the NaN distribution does."""
+    _boltzmann_probabilities(q, temperature, p, scratch)
     u = rng.random() * 1.0
     acc = 0.0
-    for k in range(n):  # searchsorted(cumsum, u, "right"): the first sum above u (a NaN sorts above everything)
+    for k in range(q.size):  # searchsorted(cumsum, u, "right"): the first sum above u (a NaN sorts above everything)
         acc = p[k] if k == 0 else acc + p[k]
         if not acc <= u:
             return k
-    return n - 1
+    return q.size - 1
 
 
 def compiled_choice_fits(n_actions: int) -> bool:

@@ -27,10 +27,21 @@ from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.robot.step import _hypot, hypot_matches
 from connrl.envs.survival.env import SurvivalEnv
 from connrl.envs.survival.world import FOOD_ENERGY, N_INPUTS
-from connrl.nets.kernels import _mlp_forward, _mlp_update, _mlp_values, _rotated_update, _rotated_values
 from connrl.nets.mlp import OAON
 from connrl.nets.rotated import RotatedNet
 from connrl.tasks.survival import SurvivalExploration
+from connrl.tasks.survival_planning import (
+    _max,
+    _model_learn,
+    _plan,
+    _update,
+    _value,
+    _values,
+    leave_planning,
+    plan_buffers,
+    plan_fits,
+    planning_of,
+)
 from connrl.tasks.survival_play import _world_step, world_of
 
 
@@ -48,7 +59,7 @@ def _net_of(net) -> tuple | None:
 
 def _compiled_nets(env, agent) -> tuple[tuple, tuple | None] | None:
     """(the choosing net, AHCON's V-net or None) when ``learning_play`` compiles this agent's play, else None."""
-    if type(env) is not SurvivalEnv or type(agent) not in (QCON, AHCON) or agent.planner is not None:
+    if type(env) is not SurvivalEnv or type(agent) not in (QCON, AHCON) or not plan_fits(agent, env):
         return None
     ex, rec = agent.explore, agent.book.recorder
     if (not agent.config.online or type(ex) is not SurvivalExploration or not ex.base > 0 or not ex.stuck.boost > 0
@@ -89,15 +100,16 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
     gamma, clip = agent.config.gamma, agent.config.target_clip
     learner = (gamma, 0.0 if clip is None else clip, clip is not None, ex.base, agent.merit_scale,
                c.window, c.radius, c.boost)
-    p = np.empty(agent.n_actions)
+    planning, bufs = planning_of(agent, env, trial), plan_buffers(agent.n_actions)
     steps, total, terminated = _learning_loop(
         net, net if v is None else v, v is not None, learner, rows, cols, stuck, agent.rng, inputs, actions, rewards,
-        np.empty(agent.n_actions), p, np.zeros(5, np.int64), world_of(env))
+        np.empty(agent.n_actions), bufs, world_of(env), planning)
     if steps < 0:
         raise RuntimeError(f"a survival play outlasted its energy bound of {cap} steps")
     env._done = True
-    _leave_as_run_trial(agent, inputs[:steps + 1], actions[:steps], rewards[:steps], p, rows, cols, stuck,
-                        terminated)
+    leave_planning(agent, planning)
+    _leave_as_run_trial(agent, inputs[:steps + 1], actions[:steps], rewards[:steps], bufs[5].copy(), rows, cols,
+                        stuck, terminated)
     agent.end_trial()
     agent.learn()
     return TrialStats(steps, total, bool(terminated), not terminated, env._info())
@@ -112,36 +124,6 @@ def _leave_as_run_trial(agent, inputs, actions, rewards, p, rows, cols, stuck, t
     agent._x, agent.last_probabilities = inputs[-1].copy(), p
     n, ex = int(stuck[0]), agent.explore
     ex._rows, ex._cols, ex._food, ex.boosted = rows[:n].tolist(), cols[:n].tolist(), int(stuck[1]), int(stuck[2])
-
-
-@numba.njit(cache=False)
-def _values(net, x, q):
-    w1, w2, d1, d2, h, xr, perms, scale, lr, momentum, rotated = net
-    if rotated:
-        _rotated_values(w1, w2, x, perms, scale, q, xr)
-    else:
-        _mlp_values(w1, w2, x, h, scale, q)
-
-
-@numba.njit(cache=False)
-def _update(net, x, a, value, is_error):
-    """``net.update(x, a, value)`` (``update_error`` when ``is_error``); returns the output before the step."""
-    w1, w2, d1, d2, h, xr, perms, scale, lr, momentum, rotated = net
-    if rotated:
-        return _rotated_update(w1, w2, d1, d2, x, perms[a], xr, h, value, is_error, scale, lr, momentum)
-    return _mlp_update(w1, w2, d1, d2, a, x, h, value, is_error, scale, lr, momentum)
-
-
-@numba.njit(cache=False)
-def _max(q):
-    """``q.max()``: a NaN propagates."""
-    top = q[0]
-    for k in range(1, q.size):
-        if top != top:
-            break
-        if q[k] > top or q[k] != q[k]:
-            top = q[k]
-    return top
 
 
 @numba.njit(cache=False)
@@ -172,24 +154,29 @@ def _stuck_factor(r, c, food_eaten, window, radius, boost, rows, cols, stuck):
 
 
 @numba.njit(cache=False)
-def _learning_loop(net, v, ahcon, learner, rows, cols, stuck, rng, inputs, actions, rewards, q, p, scratch, world):
-    """The play from ``inputs[0]`` on: QCON's (``ahcon`` False) or AHCON's act, the world's step and observe, until
-    the play ends or ``inputs`` is full (steps returned as -1). Returns (steps, total reward, terminated); the
-    experiences are left in ``inputs``/``actions``/``rewards``, the last choice's distribution in ``p``."""
+def _learning_loop(net, v, ahcon, learner, rows, cols, stuck, rng, inputs, actions, rewards, q, bufs, world,
+                   planning):
+    """The play from ``inputs[0]`` on: QCON's (``ahcon`` False) or AHCON's act (with the planner's look-ahead first,
+    when it plans), the world's step and observe, until the play ends or ``inputs`` is full (steps returned as -1).
+    Returns (steps, total reward, terminated); the experiences are left in ``inputs``/``actions``/``rewards``, the
+    last choice's distribution in ``bufs[5]``."""
     gamma, clip, has_clip, base_t, merit_scale, window, radius, boost = learner
-    pos, s = world[4], world[5]
+    pos, s, p, scratch = world[4], world[5], bufs[5], bufs[8]
     steps, total = 0, 0.0
     while steps < actions.size:
         x, y = inputs[steps], inputs[steps + 1]
         t = base_t * _stuck_factor(float(pos[0]), float(pos[1]), s[4], window, radius, boost, rows, cols, stuck)
+        t *= merit_scale
         _values(net, x, q)
-        a = _boltzmann_choice(q, t * merit_scale, rng, p, scratch)
+        if _plan(net, v, ahcon, x, q, t, gamma, clip, has_clip, world, planning, bufs):
+            _values(net, x, q)  # plan before choosing (3.6.1)
+        a = _boltzmann_choice(q, t, rng, p, scratch)
         reward, terminated, truncated = _world_step(world, a, y)
         actions[steps], rewards[steps] = a, reward
         steps += 1
         total += reward
         if ahcon:  # Fig. 3.2 steps 4-6
-            target = reward + gamma * (0.0 if terminated else v[7] * _mlp_forward(v[0], v[1], 0, y, v[4]))
+            target = reward + gamma * (0.0 if terminated else _value(v, y))
             target = clip if has_clip and clip < target else target
             e = _update(v, x, 0, target, False)
             _update(net, x, a, target - e, True)
@@ -198,9 +185,11 @@ def _learning_loop(net, v, ahcon, learner, rows, cols, stuck, rng, inputs, actio
                 target = reward + gamma * 0.0
             else:
                 _values(net, y, q)
-                target = reward + gamma * _max(q)
+                target = reward + gamma * _max(q, q.size)
             target = clip if has_clip and clip < target else target
             _update(net, x, a, target, False)
+        if planning[2]:  # a learned model trains on-line (4.2.5)
+            _model_learn(x, a, reward, y, planning, rng, bufs)
         if terminated or truncated:
             return steps, total, terminated
     return -1, total, False

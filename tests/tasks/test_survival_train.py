@@ -12,9 +12,9 @@ from connrl.tasks.survival import FoodReward, SurvivalAgentParams, make_survival
 from connrl.tasks.survival_train import _compiled_nets, learning_play
 
 
-def _pair(framework, representation="global", symmetry=True, max_steps=None):
+def _pair(framework, representation="global", symmetry=True, max_steps=None, model="learned"):
     """Two identical agents, each with its own world."""
-    params = SurvivalAgentParams(framework, representation, symmetry=symmetry, plays=20)
+    params = SurvivalAgentParams(framework, representation, model, symmetry=symmetry, plays=20, model_start=2)
     out = []
     for _ in range(2):
         env = SurvivalEnv(representation, max_steps=max_steps)
@@ -36,6 +36,8 @@ def _assert_same(agent, ref):
     np.testing.assert_array_equal(agent.last_probabilities, ref.last_probabilities)
     e, r = agent.explore, ref.explore
     assert (e._rows, e._cols, e._food, e.boosted) == (r._rows, r._cols, r._food, r.boosted)
+    if ref.planner is not None:
+        _assert_same_planner(agent.planner, ref.planner)
     mem, ref_mem = agent.book.memory, ref.book.memory
     if ref_mem is not None:
         assert len(mem) == len(ref_mem)
@@ -44,6 +46,20 @@ def _assert_same(agent, ref):
                 assert got.dtype == want.dtype
                 np.testing.assert_array_equal(got, want)
             assert (a.terminated, a.truncated) == (b.terminated, b.truncated)
+
+
+def _assert_same_planner(planner, ref):
+    assert (planner.steps, planner.hypothetical) == (ref.steps, ref.hypothetical)
+    model, ref_model = planner.model, ref.model
+    learned = hasattr(ref_model, "w_r")
+    for name in ("w_r", "w_e", "d_r", "d_e", "_q") if learned else ():
+        np.testing.assert_array_equal(getattr(model, name), getattr(ref_model, name))
+    if learned:
+        assert (model._n, model.errors) == (ref_model._n, ref_model.errors)
+    scratch, ref_scratch = (model.sim if learned else model).scratch, (ref_model.sim if learned else ref_model).scratch
+    state, ref_state = scratch.get_state(include_rng=True), ref_scratch.get_state(include_rng=True)
+    for key in ("agent", "enemies", "food", "energy", "steps", "rng"):
+        assert str(state[key]) == str(ref_state[key]), key
 
 
 def _play_both(pair, plays, start=0):
@@ -71,6 +87,16 @@ def test_the_compiled_training_play_is_run_trials_play(framework, representation
     assert _play_both(pair, 8) > 0  # the stuck detector raised T on some steps
 
 
+@pytest.mark.parametrize("framework,representation,model", [
+    ("QCON-M", "global", "perfect"), ("QCON-M", "local", "learned"), ("AHCON-M", "global", "learned"),
+    ("AHCON-M", "local", "perfect")])
+def test_the_compiled_planning_play_is_run_trials_play(framework, representation, model):
+    pair = _pair(framework, representation, model=model)
+    assert _compiled_nets(*pair[0]) is not None
+    _play_both(pair, 5)
+    assert pair[1][1].planner.hypothetical > 0  # the last play planned
+
+
 def test_plays_cut_by_the_time_limit_are_run_trials_plays():
     pair = _pair("QCON-R", max_steps=15)
     _play_both(pair, 4)
@@ -80,7 +106,7 @@ def test_plays_cut_by_the_time_limit_are_run_trials_plays():
 def test_other_agents_and_worlds_play_through_run_trial():
     env = SurvivalEnv("global")
     planner = make_survival_agent(SurvivalAgentParams("QCON-M", model="perfect"), env, np.random.default_rng(1))
-    assert _compiled_nets(env, planner) is None
+    assert _compiled_nets(SurvivalEnv("global"), planner) is None  # its model simulates another world
     agent = make_survival_agent(SurvivalAgentParams("QCON"), env, np.random.default_rng(1))
     assert _compiled_nets(FoodReward(env, 0.5), agent) is None
     stats = learning_play(FoodReward(env, 0.5), agent, trial=0, seed=3, options={"layout_seed": 3})
