@@ -23,7 +23,9 @@ the loop adds on top of it.
   against ``_forward_at``, as the kernels call it;
 - a lesson replay over behaviours: the kernel's step-by-step loop (``_replay_q_steps``, with the new forward pass)
   against ``_replay_mlp``, which reuses the policy test's forward pass; a trial's 1000 replays, ``replay_q`` on
-  each against ``replay_q_lessons``.
+  each against ``replay_q_lessons``;
+- Ch. 4's training plays (QCON-R, AHCON-R, QCON-M with the perfect model, AHCON-M with the learned one, planning
+  from the first play): ``run_trial`` against ``connrl.tasks.survival_train.learning_play``.
 Each time is the best of --repeat rounds.
 """
 
@@ -66,6 +68,7 @@ from connrl.tasks.recharge import make_high_level_agent, make_recharge_env
 from connrl.tasks.robot import make_agent, make_env
 from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
 from connrl.tasks.survival_play import greedy_play
+from connrl.tasks.survival_train import learning_play
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the tests keep the code as it was
 from tests.nets.test_mlp_kernel import _fastmath_forward  # noqa: E402  (the MLP forward as it was)
@@ -207,6 +210,29 @@ def mlp_rows(repeat: int, rng) -> list[tuple[str, float, float]]:
                 best_time(lambda: [replay_q(nets[0], x, params) for x in picks], 1, repeat),
                 best_time(lambda: replay_q_lessons(nets[1], picks, [0.005] * 1000, params, lambda _: (None, None)), 1,
                           repeat)))
+    return out + training_rows(repeat)
+
+
+def training_rows(repeat: int) -> list[tuple[str, float, float]]:
+    """The fifth round: Ch. 4's training plays, each batch from a copy of the same agent and world."""
+    out = []
+    for framework, model in (("QCON-R", "learned"), ("AHCON-R", "learned"), ("QCON-M", "perfect"),
+                             ("AHCON-M", "learned")):
+        env = SurvivalEnv("global")
+        env.reset(seed=1)
+        agent = make_survival_agent(SurvivalAgentParams(framework, model=model, model_start=0), env,
+                                    np.random.default_rng(3))
+
+        def plays(play, start=(env, agent)):
+            e, a = copy.deepcopy(start)  # together: a model's world stays the copied world
+            for k in range(5):
+                play(e, a, trial=k, options={"layout_seed": k})
+
+        name = framework + (f", {model} model" if framework.endswith("-M") else "")
+        out.append((f"5 training plays of {name} (Ch. 4): run_trial / compiled",
+                     best_time(lambda plays=plays: plays(lambda e, a, **kw: run_trial(e, a, learning=True, **kw)), 1,
+                               repeat),
+                     best_time(lambda plays=plays: plays(learning_play), 1, repeat)))
     return out
 
 

@@ -35,13 +35,14 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from connrl.core.replay import REPAIRS
-from connrl.core.rollout import TrialStats, run_trial
+from connrl.core.rollout import TrialStats
 from connrl.envs.robot import ROBOT_RADIUS, SONAR_MAX
 from connrl.envs.robot.constants import DP_FAR
 from connrl.envs.robot.sim import COLLISIONS, EDGE_MARKS, SONAR_ORIGINS
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
 from connrl.tasks.robot import SHIPPED_WORLD, TAUGHT_COUNTS, TAUGHT_ORDERS, evaluate, make_agent, make_env
+from connrl.tasks.robot_train import learning_play
 
 FRESH_DP_SEED = 6000  # issue 44's fresh seeds for the DP claims in the chosen world (docs/RECONSTRUCTION.md)
 MAX_TAUGHT = 200  # taught lessons an agent may ask for: the shipped ones, then fresh demonstrations
@@ -168,7 +169,7 @@ class RobotRun:
 
     def train(self, k: int, on_step=None, options: dict | None = None) -> TrialStats:
         """Training trial ``k`` (stochastic actions, learning on); ``options`` as for ``env.reset`` (e.g. a start)."""
-        return run_trial(self.env, self.agent, trial=k, learning=True, on_step=on_step, options=options)
+        return learning_play(self.env, self.agent, trial=k, on_step=on_step, options=options)
 
     def test(self, paths: list | None = None) -> float:
         """The greedy test of 5.4 on the run's fixed tasks: reinforcement per step."""

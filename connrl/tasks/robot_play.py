@@ -103,45 +103,79 @@ def _wf_reward(task, a, collided, ranges, feat_true):
     return _WF_REWARDS[0] if al <= _WF_PARALLEL[0] else _WF_REWARDS[1] if al <= _WF_PARALLEL[1] else _WF_REWARDS[2]
 
 
+def robot_world(env: RobotTaskEnv) -> tuple:
+    """What ``_robot_step`` reads of a world: the task, the simulator's surfaces and settings, the rooms, the start
+    room and doors (DP), the observation's settings and the time limit."""
+    sim, layout = env.sim, env.layout
+    start_room = list(layout.rooms).index(env._start_room) if env._start_room is not None else -1
+    doors = np.array([d.segment for d in layout.doors.values()], dtype=np.float64).reshape(-1, 4)
+    return (TASKS.index(env.task), sim._segs, sim._kinds, np.array(sim._light, dtype=np.float64), room_table(layout),
+            start_room, doors, env.pass_depth, sim.control_noise, sim.sensor_noise, sim.step_scale, sim.partial_moves,
+            sim.sonar_radius, sim.edge_jump, sim.edge_both, env.binary_low, env.dock_tolerance, env.max_steps)
+
+
+def sweep_arrays(n_obs: int) -> tuple:
+    """The scan's and observation's arrays the loops fill: obs, collision, ranges, sonar, light, door."""
+    return (np.empty(n_obs, dtype=np.float32), np.zeros(4, dtype=np.uint8), np.empty(N_RAYS), np.empty(N_RAYS),
+            np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8))
+
+
 @numba.njit(cache=False)
-def _play_loop(qw1, qw2, qscale, qlinear, task, obs, pose, collision, trace, rng, segs, kinds, lights, rooms,
-               start_room, doors, pass_depth, control_noise, sensor_noise, step_scale, partial, sonar_radius,
-               edge_jump, edge_both, low, dock_tolerance, env_max_steps, max_steps, feat, feat_true, x, q, ranges,
-               sonar, light, door):
+def _robot_step(world, a, pose, rng, sweep, feat, feat_true):
+    """``RobotTaskEnv.step(a)`` after its checks: moves ``pose``, fills ``sweep`` (the observation first); returns
+    (reward, success, collided, the contact's direction)."""
+    (task, segs, kinds, lights, rooms, start_room, doors, pass_depth, control_noise, sensor_noise, step_scale,
+     partial, sonar_radius, edge_jump, edge_both, low, dock_tolerance, env_max_steps) = world
+    obs, collision, ranges, sonar, light, door = sweep
+    collided, kind, rel = _act_and_sense(pose, a, rng, collision, segs, kinds, lights, control_noise, sensor_noise,
+                                         step_scale, partial, sonar_radius, edge_jump, edge_both, ranges, sonar, light,
+                                         door)
+    success = False
+    if task == 0:
+        success = _docked(collided, a, kind, rel, dock_tolerance)
+        reward = R_SUCCESS if success else (R_COLLISION if collided else 0.0)
+    elif task == 1:
+        success = not collided and _passed_door(pose[0], pose[1], _room(pose[0], pose[1], rooms), start_room,
+                                                doors, pass_depth)
+        reward = R_SUCCESS if success else (R_COLLISION if collided else 0.0)
+    else:
+        reward = _wf_reward(task, a, collided, ranges, feat_true)
+    high = low + 1.0
+    if task >= 2:
+        _side_features(sonar if sonar_radius == ROBOT_RADIUS else sonar - (ROBOT_RADIUS - sonar_radius),
+                       ROBOT_RADIUS, feat)
+        _fill_obs(1, sonar, light, collision, low, high, feat, obs)
+    else:
+        _fill_obs(0, sonar, light if task == 0 else door, collision, low, high, feat, obs)
+    return reward, success, collided, rel
+
+
+@numba.njit(cache=False)
+def _play_loop(qw1, qw2, qscale, qlinear, world, pose, trace, rng, sweep, feat, feat_true, max_steps, x, q):
     """The play from the world's state on (module docstring). Returns (steps, total reward, success, truncated,
     the last action); the arrays end as the world and learner leave them (``x``, ``q``: the last input acted on and
-    its values; ``ranges`` ... ``door``: the last scan)."""
+    its values; ``sweep``: the last observation and scan)."""
     h = np.empty(max(qw1.shape[1], 1))
-    high = low + 1.0
+    env_max_steps = world[-1]
     steps, total = 0, 0.0
     while True:
-        _values_any(qw1, qw2, _as_input(obs, x), h, qscale, q, qlinear)
+        _values_any(qw1, qw2, _as_input(sweep[0], x), h, qscale, q, qlinear)
         a = _greedy_choice(q)
-        collided, kind, rel = _act_and_sense(pose, a, rng, collision, segs, kinds, lights, control_noise,
-                                             sensor_noise, step_scale, partial, sonar_radius, edge_jump, edge_both,
-                                             ranges, sonar, light, door)
+        reward, success, _, _ = _robot_step(world, a, pose, rng, sweep, feat, feat_true)
         steps += 1
-        success = False
-        if task == 0:
-            success = _docked(collided, a, kind, rel, dock_tolerance)
-            reward = R_SUCCESS if success else (R_COLLISION if collided else 0.0)
-        elif task == 1:
-            success = not collided and _passed_door(pose[0], pose[1], _room(pose[0], pose[1], rooms), start_room,
-                                                    doors, pass_depth)
-            reward = R_SUCCESS if success else (R_COLLISION if collided else 0.0)
-        else:
-            reward = _wf_reward(task, a, collided, ranges, feat_true)
         trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
-        if task >= 2:
-            _side_features(sonar if sonar_radius == ROBOT_RADIUS else sonar - (ROBOT_RADIUS - sonar_radius),
-                           ROBOT_RADIUS, feat)
-            _fill_obs(1, sonar, light, collision, low, high, feat, obs)
-        else:
-            _fill_obs(0, sonar, light if task == 0 else door, collision, low, high, feat, obs)
         total += reward
         truncated = not success and (steps >= env_max_steps or steps >= max_steps)
         if success or truncated:
             return steps, total, success, truncated, a
+
+
+def leave_sweep(env, pose, sweep, action, steps, trace) -> None:
+    """The world and its simulator as ``run_trial`` leaves them (``leave``), with the last scan as its reading."""
+    obs, collision, ranges, sonar, light, door = sweep
+    leave(env, pose, collision, action, steps, trace)
+    sim = env.sim
+    env._reading = Reading(sonar, ranges, light, door, collision.copy(), sim.heading, sim.room, sim.sonar_radius)
 
 
 def compiled(env, agent) -> bool:
@@ -157,25 +191,17 @@ def greedy_play(env: RobotTaskEnv, agent, seed: int, start, max_steps: int) -> T
     with ``compiled(env, agent)``; its stats' info holds "success" only."""
     obs, info = env.reset(seed=seed, options={"start": start})
     agent.begin_trial(obs, info, trial=0, learning=False)
-    sim, layout = env.sim, env.layout
-    obs = np.array(obs, dtype=np.float32)
+    sim = env.sim
+    sweep = sweep_arrays(len(obs))
+    sweep[0][:] = obs
     pose = np.array(sim.pose, dtype=np.float64)
     trace = np.empty((env.max_steps + 1, 3))
     trace[0] = pose
-    collision = np.zeros(4, dtype=np.uint8)
-    start_room = list(layout.rooms).index(env._start_room) if env._start_room is not None else -1
-    doors = np.array([d.segment for d in layout.doors.values()], dtype=np.float64).reshape(-1, 4)
     x, q = np.empty(obs.size), np.empty(agent.q.n_nets)
-    ranges, sonar = np.empty(N_RAYS), np.empty(N_RAYS)
-    light, door = np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8)
     steps, total, success, truncated, a = _play_loop(
-        agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output, TASKS.index(env.task), obs, pose,
-        collision, trace, sim.rng, sim._segs, sim._kinds, np.array(sim._light, dtype=np.float64), room_table(layout),
-        start_room, doors, env.pass_depth, sim.control_noise, sim.sensor_noise, sim.step_scale, sim.partial_moves,
-        sim.sonar_radius, sim.edge_jump, sim.edge_both, env.binary_low, env.dock_tolerance, env.max_steps, max_steps,
-        env._feat, env._feat_true, x, q, ranges, sonar, light, door)
-    leave(env, pose, collision, a, steps, trace)  # the world and the learner as run_trial leaves them
-    env._reading = Reading(sonar, ranges, light, door, collision.copy(), sim.heading, sim.room, sim.sonar_radius)
+        agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output, robot_world(env), pose, trace, sim.rng,
+        sweep, env._feat, env._feat_true, max_steps, x, q)
+    leave_sweep(env, pose, sweep, a, steps, trace)
     agent._x, agent.last_probabilities = x, boltzmann_probabilities(q, 0.0)
     agent.end_trial()
     return TrialStats(steps, total, bool(success), bool(truncated), {"success": bool(success)})

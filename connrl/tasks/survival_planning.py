@@ -9,13 +9,19 @@ training after each step. Same arithmetic and draws as the Python path, bit for 
   once per promising action (``PerfectSurvivalModel.steps_from``);
 * the learned model's prediction and training (``_predict``, ``_train_row``) and its replay draws from the agent's
   generator, whose ``integers`` Numba computes as NumPy does (checked by the tests);
-* AHCON's ``mu`` as ``np.dot(p, e) / p.sum()``: for four numbers or fewer NumPy's dot is the plain loop of products
-  and sums (``plan_fits`` asks for at most four actions).
+* AHCON's ``mu`` as ``np.dot(p, e) / p.sum()``: for four numbers or fewer the plain loop of products and sums, which
+  is what NumPy's dot computes with the BLAS it was built with here (``dot_checked``, once per process; ``plan_fits``
+  asks for at most four actions);
+* the learned model's squared error ``reward_abs ** 2``: Python's ``**`` is libm's ``pow``, which for about one number
+  in a thousand is not ``x * x`` (what Numba makes of it), so the kernel keeps each step's ``reward_abs`` and
+  ``leave_planning`` squares and sums them in Python, in the same order.
 
 Not cached: it compiles in kernels of other files (tests/nets/test_kernel_cache.py).
 """
 
 from __future__ import annotations
+
+import functools
 
 import numba
 import numpy as np
@@ -40,22 +46,38 @@ def plan_fits(agent, env) -> bool:
     planner = agent.planner
     if planner is None:
         return True
-    if type(planner) is not RelaxationPlanner or agent.n_actions > 4:
+    if type(planner) is not RelaxationPlanner or agent.n_actions > 4 or not dot_checked():
         return False
     model = planner.model
     if type(model) is PerfectSurvivalModel:
         return model.env is env
-    return type(model) is LearnedSurvivalModel and model.sim.env is env and model.rng is agent.rng
+    return (type(model) is LearnedSurvivalModel and type(model.sim) is PerfectSurvivalModel and model.sim.env is env
+            and model.rng is agent.rng)
 
 
-def planning_of(agent, env, trial: int) -> tuple:
+@functools.cache
+def dot_checked() -> bool:
+    """Whether ``np.dot`` of one to four numbers is the plain loop of products and sums here (it is the BLAS's)."""
+    rng = np.random.default_rng(45)
+    for i in range(4000):
+        p, e = rng.uniform(0.0, 1.0, 1 + i % 4), rng.uniform(-1.0, 1.0, 1 + i % 4)
+        plain = 0.0
+        for a, b in zip(p.tolist(), e.tolist(), strict=True):
+            plain += a * b
+        if float(np.dot(p, e)) != plain:
+            return False
+    return True
+
+
+def planning_of(agent, env, trial: int, cap: int) -> tuple:
     """What the loop reads and moves of ``agent.planner`` (dummies without one): (whether to plan in this play, the
-    promising threshold, whether the model learns, the scratch world, the learned model, counters, errors)."""
+    promising threshold, whether the model learns, the scratch world, the learned model, counters, errors, each of
+    the play's at most ``cap`` reward errors)."""
     planner = agent.planner
     counters = np.zeros(4, np.int64)  # planner.steps, planner.hypothetical, model._n, model.errors["n"]
-    errors = np.zeros(3)  # model.errors' reward_abs, reward_sq, enemy_bits
+    errors = np.zeros(3)  # model.errors' reward_abs, (unused), enemy_bits
     if planner is None:
-        return (False, 0.0, False, world_of(env), _no_model(), counters, errors)
+        return (False, 0.0, False, world_of(env), _no_model(), counters, errors, np.empty(1))
     model = planner.model
     learned = type(model) is LearnedSurvivalModel
     counters[:2] = planner.steps, planner.hypothetical
@@ -63,13 +85,13 @@ def planning_of(agent, env, trial: int) -> tuple:
     if learned:
         c = model.config
         counters[2:] = model._n, model.errors["n"]
-        errors[:] = model.errors["reward_abs"], model.errors["reward_sq"], model.errors["enemy_bits"]
+        errors[:] = model.errors["reward_abs"], 0.0, model.errors["enemy_bits"]
         m = (model.w_r, model.w_e, model.d_r, model.d_e, model.perms, model._q, model._xr, model._yr, model._out_r,
              model._out_e, float(c.lr), float(c.momentum), float(c.death_threshold), int(c.replays),
              bool(model.global_), (0, *model.MAPS))
     scratch = (model.sim if learned else model).scratch
     return (trial >= planner.config.start_trial, float(planner.config.promising), learned, world_of(scratch), m,
-            counters, errors)
+            counters, errors, np.empty(cap if learned else 1))
 
 
 def leave_planning(agent, planning) -> None:
@@ -80,9 +102,13 @@ def leave_planning(agent, planning) -> None:
     counters, errors = planning[5], planning[6]
     planner.steps, planner.hypothetical = int(counters[0]), int(counters[1])
     if planning[2]:
-        planner.model._n = int(counters[2])
-        planner.model.errors = {"reward_abs": float(errors[0]), "reward_sq": float(errors[1]),
-                                "enemy_bits": float(errors[2]), "n": int(counters[3])}
+        model = planner.model
+        reward_sq = model.errors["reward_sq"]
+        for v in planning[7][:int(counters[3]) - model.errors["n"]].tolist():
+            reward_sq += v ** 2  # as LearnedSurvivalModel.learn squares: libm's pow, not Numba's v * v
+        model._n = int(counters[2])
+        model.errors.update(reward_abs=float(errors[0]), reward_sq=reward_sq, enemy_bits=float(errors[2]),
+                            n=int(counters[3]))
 
 
 def _no_model() -> tuple:
@@ -211,12 +237,14 @@ def _simulate(x, n, world, planning, bufs):
 
 
 @numba.njit(cache=False)
-def _model_learn(x, a, r, y, planning, rng, bufs):
+def _model_learn(x, a, r, y, planning, rng, bufs, first):
     """``LearnedSurvivalModel.learn(x, a, r, y, terminated)``: the prediction errors before, one step on the new
-    experience, then on ``replays`` queued ones drawn from ``rng``."""
+    experience, then on ``replays`` queued ones drawn from ``rng``. The reward error goes to ``planning[7]``, at its
+    count less ``first`` (the count when the play began), to be squared in Python."""
     w_r, w_e, d_r, d_e, perms, queue, xr, yr, out_r, out_e, lr, momentum, death, replays, global_, at = planning[4]
     start, lo, hi = at  # run-time values, as Python passes them: as constants LLVM would sum in another order
     counters, errors, enemy, row = planning[5], planning[6], bufs[6], bufs[7]
+    play_errors = planning[7]
     n_in = x.size
     row[:n_in] = x
     row[n_in:2 * n_in] = y
@@ -224,8 +252,8 @@ def _model_learn(x, a, r, y, planning, rng, bufs):
     j = 0 if global_ else a
     pr = _predict(w_r[j], w_e[j], x, perms[a], start, lo, hi, xr, out_r, out_e, enemy)
     reward_abs = abs(pr - r)
+    play_errors[counters[3] - first] = reward_abs
     errors[0] += reward_abs
-    errors[1] += reward_abs * reward_abs
     errors[2] += _wrong_share(enemy, y[52:84])
     counters[3] += 1
     _train_row(w_r[j], d_r[j], w_e[j], d_e[j], row, perms[a], start, lo, hi, lr, momentum, xr, yr, out_r, out_e)

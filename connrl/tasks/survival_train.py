@@ -7,10 +7,12 @@ arithmetic and the same draws from both generators as ``run_trial(env, agent, le
 learner's state and the replay after the play are then the Python path's own (``agent.end_trial()``,
 ``agent.learn()``). tests/tasks/test_survival_train.py holds the two to each other, nets and streams bit for bit.
 
-Compiled: QCON and AHCON without a planner, learning on-line, with a rotated net or one net per action (both with a
-hidden layer), on a plain ``SurvivalEnv`` -- the agents ``make_survival_agent`` builds but the -M ones. Anything
-else plays through ``run_trial``, as does everything where the choice's ``exp`` or the stuck test's ``hypot``
-cannot be had bit for bit (``compiled_choice_fits``, ``hypot_matches``).
+Compiled: QCON and AHCON learning on-line, with a rotated net or one net per action (both with a hidden layer), on a
+plain ``SurvivalEnv``, without a planner or with the relaxation planner of a survival model of that world
+(``connrl.tasks.survival_planning``) -- every agent ``make_survival_agent`` builds. Anything else (another class, a
+method replaced on the instance, a wrapped world, a temperature of 0) plays through ``run_trial``, as does
+everything where the choice's ``exp``, its sums or the stuck test's ``hypot`` cannot be had bit for bit
+(``compiled_choice_fits``, ``hypot_matches``).
 
 The loop is not cached: it compiles in kernels of other files (tests/nets/test_kernel_cache.py).
 """
@@ -57,12 +59,18 @@ def _net_of(net) -> tuple | None:
     return None
 
 
-def _compiled_nets(env, agent) -> tuple[tuple, tuple | None] | None:
+# what the loop does in place of the agent's own methods: one replaced on the instance takes the Python path
+_REPLACEABLE = ("act", "observe", "next_value", "temperature", "encode", "begin_trial", "online_target")
+
+
+def _compiled_nets(env, agent, trial: int) -> tuple[tuple, tuple | None] | None:
     """(the choosing net, AHCON's V-net or None) when ``learning_play`` compiles this agent's play, else None."""
-    if type(env) is not SurvivalEnv or type(agent) not in (QCON, AHCON) or not plan_fits(agent, env):
+    if (type(env) is not SurvivalEnv or type(agent) not in (QCON, AHCON) or not plan_fits(agent, env)
+            or any(k in vars(agent) for k in _REPLACEABLE)):
         return None
     ex, rec = agent.explore, agent.book.recorder
-    if (not agent.config.online or type(ex) is not SurvivalExploration or not ex.base > 0 or not ex.stuck.boost > 0
+    if (not agent.config.online or type(ex) is not SurvivalExploration or not ex.schedule(trial) > 0
+            or not ex.stuck.boost > 0
             or ex.stuck.window < 1 or len(rec) or rec.inputs or not compiled_choice_fits(agent.n_actions)
             or not hypot_matches()):
         return None
@@ -82,7 +90,7 @@ def _compiled_nets(env, agent) -> tuple[tuple, tuple | None] | None:
 def learning_play(env, agent, *, trial: int, seed: int | None = None, options: dict | None = None) -> TrialStats:
     """``run_trial(env, agent, trial=trial, learning=True, seed=seed, options=options)``, compiled for the agents
     and worlds the module docstring names."""
-    nets = _compiled_nets(env, agent)
+    nets = _compiled_nets(env, agent, trial)
     if nets is None:
         return run_trial(env, agent, trial=trial, learning=True, seed=seed, options=options)
     net, v = nets
@@ -100,7 +108,7 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
     gamma, clip = agent.config.gamma, agent.config.target_clip
     learner = (gamma, 0.0 if clip is None else clip, clip is not None, ex.base, agent.merit_scale,
                c.window, c.radius, c.boost)
-    planning, bufs = planning_of(agent, env, trial), plan_buffers(agent.n_actions)
+    planning, bufs = planning_of(agent, env, trial, cap), plan_buffers(agent.n_actions)
     steps, total, terminated = _learning_loop(
         net, net if v is None else v, v is not None, learner, rows, cols, stuck, agent.rng, inputs, actions, rewards,
         np.empty(agent.n_actions), bufs, world_of(env), planning)
@@ -162,6 +170,7 @@ def _learning_loop(net, v, ahcon, learner, rows, cols, stuck, rng, inputs, actio
     last choice's distribution in ``bufs[5]``."""
     gamma, clip, has_clip, base_t, merit_scale, window, radius, boost = learner
     pos, s, p, scratch = world[4], world[5], bufs[5], bufs[8]
+    first = planning[5][3]  # the learned model's experiences before this play
     steps, total = 0, 0.0
     while steps < actions.size:
         x, y = inputs[steps], inputs[steps + 1]
@@ -189,7 +198,7 @@ def _learning_loop(net, v, ahcon, learner, rows, cols, stuck, rng, inputs, actio
             target = clip if has_clip and clip < target else target
             _update(net, x, a, target, False)
         if planning[2]:  # a learned model trains on-line (4.2.5)
-            _model_learn(x, a, reward, y, planning, rng, bufs)
+            _model_learn(x, a, reward, y, planning, rng, bufs, first)
         if terminated or truncated:
             return steps, total, terminated
     return -1, total, False

@@ -24,6 +24,18 @@ def _run(task: str, **world):
     return p, agent
 
 
+def assert_same_worlds(env, ref_env):
+    """The world and simulator two plays leave: trace, pose, last action, steps, reading, features, generator."""
+    assert (env.trace, env.sim.pose, env.sim.last_action, env._steps) == (
+        ref_env.trace, ref_env.sim.pose, ref_env.sim.last_action, ref_env._steps)
+    for a, b in zip(env._reading, ref_env._reading, strict=True):
+        np.testing.assert_array_equal(a, b)
+    for a, b in ((env.sim.last_collision, ref_env.sim.last_collision), (env._feat, ref_env._feat),
+                 (env._feat_true, ref_env._feat_true)):
+        np.testing.assert_array_equal(a, b)
+    assert env.np_random.bit_generator.state == ref_env.np_random.bit_generator.state
+
+
 def _starts(env, rng, n):
     """``n`` test tasks from the task's own starts; for DK two of them face the charger from near it (plays that
     dock)."""
@@ -57,14 +69,7 @@ def test_the_compiled_play_is_run_trials_play(task, world):
             ref.steps, ref.total_reward, ref.terminated, ref.truncated, ref.info["success"])
         np.testing.assert_array_equal(got_agent[0], agent._x)
         np.testing.assert_array_equal(got_agent[1], agent.last_probabilities)
-        assert (env.trace, env.sim.pose, env.sim.last_action, env._steps) == (
-            ref_env.trace, ref_env.sim.pose, ref_env.sim.last_action, ref_env._steps)
-        for a, b in zip(env._reading, ref_env._reading, strict=True):
-            np.testing.assert_array_equal(a, b)
-        for a, b in ((env.sim.last_collision, ref_env.sim.last_collision), (env._feat, ref_env._feat),
-                     (env._feat_true, ref_env._feat_true)):
-            np.testing.assert_array_equal(a, b)
-        assert env.np_random.bit_generator.state == ref_env.np_random.bit_generator.state
+        assert_same_worlds(env, ref_env)
         ended.add(got.terminated)
     assert True in collisions  # contacts were played
     if task == "DK":

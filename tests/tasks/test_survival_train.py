@@ -58,7 +58,7 @@ def _assert_same_planner(planner, ref):
         assert (model._n, model.errors) == (ref_model._n, ref_model.errors)
     scratch, ref_scratch = (model.sim if learned else model).scratch, (ref_model.sim if learned else ref_model).scratch
     state, ref_state = scratch.get_state(include_rng=True), ref_scratch.get_state(include_rng=True)
-    for key in ("agent", "enemies", "food", "energy", "steps", "rng"):
+    for key in ref_state.keys() - {"done"}:  # the loop leaves the scratch world's done flag unset: set_state sets it
         assert str(state[key]) == str(ref_state[key]), key
 
 
@@ -71,6 +71,8 @@ def _play_both(pair, plays, start=0):
         assert (got.steps, got.total_reward, got.terminated, got.truncated, got.info) == (
             want.steps, want.total_reward, want.terminated, want.truncated, want.info)
         _assert_same(agent, ref)
+        if hasattr(getattr(ref.planner, "model", None), "pop_errors"):  # as run_survival reads them, play by play
+            assert agent.planner.model.pop_errors() == ref.planner.model.pop_errors()
         state, ref_state = env.get_state(include_rng=True), ref_env.get_state(include_rng=True)
         for key, value in ref_state.items():
             assert str(state[key]) == str(value), key
@@ -83,7 +85,7 @@ def _play_both(pair, plays, start=0):
     ("QCON", "global", False)])
 def test_the_compiled_training_play_is_run_trials_play(framework, representation, symmetry):
     pair = _pair(framework, representation, symmetry)
-    assert _compiled_nets(*pair[0]) is not None
+    assert _compiled_nets(*pair[0], 0) is not None
     assert _play_both(pair, 8) > 0  # the stuck detector raised T on some steps
 
 
@@ -92,7 +94,9 @@ def test_the_compiled_training_play_is_run_trials_play(framework, representation
     ("AHCON-M", "local", "perfect")])
 def test_the_compiled_planning_play_is_run_trials_play(framework, representation, model):
     pair = _pair(framework, representation, model=model)
-    assert _compiled_nets(*pair[0]) is not None
+    for _, agent in pair if model == "learned" else ():
+        agent.planner.model._q = np.zeros((40, agent.planner.model._q.shape[1]))  # a queue that wraps in the test
+    assert _compiled_nets(*pair[0], 0) is not None
     _play_both(pair, 5)
     assert pair[1][1].planner.hypothetical > 0  # the last play planned
 
@@ -106,8 +110,17 @@ def test_plays_cut_by_the_time_limit_are_run_trials_plays():
 def test_other_agents_and_worlds_play_through_run_trial():
     env = SurvivalEnv("global")
     planner = make_survival_agent(SurvivalAgentParams("QCON-M", model="perfect"), env, np.random.default_rng(1))
-    assert _compiled_nets(SurvivalEnv("global"), planner) is None  # its model simulates another world
+    assert _compiled_nets(SurvivalEnv("global"), planner, 0) is None  # its model simulates another world
     agent = make_survival_agent(SurvivalAgentParams("QCON"), env, np.random.default_rng(1))
-    assert _compiled_nets(FoodReward(env, 0.5), agent) is None
+    assert _compiled_nets(FoodReward(env, 0.5), agent, 0) is None
     stats = learning_play(FoodReward(env, 0.5), agent, trial=0, seed=3, options={"layout_seed": 3})
     assert stats.steps > 0
+    agent.observe = agent.observe  # a method replaced on the instance: the loop would not call it
+    assert _compiled_nets(env, agent, 1) is None
+    del agent.observe
+
+    class OwnQCON(type(agent)):
+        pass
+
+    agent.__class__ = OwnQCON
+    assert _compiled_nets(env, agent, 1) is None
