@@ -24,8 +24,9 @@ the loop adds on top of it.
 - a lesson replay over behaviours: the kernel's step-by-step loop (``_replay_q_steps``, with the new forward pass)
   against ``_replay_mlp``, which reuses the policy test's forward pass; a trial's 1000 replays, ``replay_q`` on
   each against ``replay_q_lessons``;
-- Ch. 4's training plays (QCON-R, AHCON-R, QCON-M with the perfect model, AHCON-M with the learned one, planning
-  from the first play): ``run_trial`` against ``connrl.tasks.survival_train.learning_play``.
+- Ch. 4's training plays (QCON, AHCON, QCON-M with the perfect model, AHCON-M with the learned one, planning
+  from the first play), 20 plays after 10: ``run_trial`` against ``connrl.tasks.survival_train.learning_play``, each
+  batch from a copy of the agent and world (the copy's time in both).
 Each time is the best of --repeat rounds.
 """
 
@@ -216,20 +217,22 @@ def mlp_rows(repeat: int, rng) -> list[tuple[str, float, float]]:
 def training_rows(repeat: int) -> list[tuple[str, float, float]]:
     """The fifth round: Ch. 4's training plays, each batch from a copy of the same agent and world."""
     out = []
-    for framework, model in (("QCON-R", "learned"), ("AHCON-R", "learned"), ("QCON-M", "perfect"),
+    for framework, model in (("QCON", "learned"), ("AHCON", "learned"), ("QCON-M", "perfect"),
                              ("AHCON-M", "learned")):
         env = SurvivalEnv("global")
         env.reset(seed=1)
         agent = make_survival_agent(SurvivalAgentParams(framework, model=model, model_start=0), env,
                                     np.random.default_rng(3))
+        for k in range(10):  # past a random net's short plays
+            run_trial(env, agent, trial=k, learning=True, options={"layout_seed": 100 + k})
 
         def plays(play, start=(env, agent)):
             e, a = copy.deepcopy(start)  # together: a model's world stays the copied world
-            for k in range(5):
+            for k in range(10, 30):
                 play(e, a, trial=k, options={"layout_seed": k})
 
         name = framework + (f", {model} model" if framework.endswith("-M") else "")
-        out.append((f"5 training plays of {name} (Ch. 4): run_trial / compiled",
+        out.append((f"20 training plays of {name} (Ch. 4): run_trial / compiled",
                      best_time(lambda plays=plays: plays(lambda e, a, **kw: run_trial(e, a, learning=True, **kw)), 1,
                                repeat),
                      best_time(lambda plays=plays: plays(learning_play), 1, repeat)))
