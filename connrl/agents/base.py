@@ -130,6 +130,26 @@ def position_of(info: dict | None):
     return None
 
 
+# What a compiled training loop does in place of the learner's own methods (connrl.tasks.survival_train,
+# robot_train): a method replaced on the instance of any of these parts is not called there, so that trial takes the
+# Python path.
+_LOOP_METHODS = {"": ("act", "observe", "next_value", "temperature", "encode", "begin_trial", "online_target"),
+                 "q": ("values", "value", "update", "update_error"), "policy": ("values", "update_error"),
+                 "v": ("value", "update"), "explore": ("temperature", "begin"), "explore.detector": ("factor",),
+                 "book.recorder": ("add",)}
+
+
+def methods_replaced(agent) -> bool:
+    """Whether a method a compiled training loop stands in for is replaced on the instance of the agent or its parts."""
+    for path, names in _LOOP_METHODS.items():
+        obj = agent
+        for part in path.split(".") if path else ():
+            obj = getattr(obj, part, None)
+        if obj is not None and any(n in getattr(obj, "__dict__", {}) for n in names):
+            return True
+    return False
+
+
 class Exploration:
     """Temperature of the current trial, optionally raised by stuck detection (4.2.6, 5.3.4)."""
 

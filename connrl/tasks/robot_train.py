@@ -20,7 +20,7 @@ import math
 import numba
 import numpy as np
 
-from connrl.agents.base import Exploration
+from connrl.agents.base import Exploration, methods_replaced
 from connrl.core.boltzmann_kernel import _boltzmann_choice, compiled_choice_fits
 from connrl.core.exploration import StuckDetector
 from connrl.core.rollout import TrialStats, run_trial
@@ -28,17 +28,16 @@ from connrl.envs.robot.sim import collision_side
 from connrl.nets.kernels import _mlp_update, _perceptron_update, _values_any
 from connrl.tasks.robot_play import _as_input, _robot_step, compiled, leave_sweep, robot_world, sweep_arrays
 
-# what the loop does in place of the agent's own methods: one replaced on the instance takes the Python path
-_REPLACEABLE = ("act", "observe", "next_value", "temperature", "encode", "begin_trial", "online_target")
-
 
 def compiled_learning(env, agent, trial: int) -> bool:
     """Whether ``learning_play`` compiles this trial (the module docstring's cases)."""
     ex, rec = agent.explore, agent.book.recorder
     d = ex.detector
-    return (compiled(env, agent) and type(ex) is Exploration and ex.schedule(trial) > 0
-            and not any(k in vars(agent) for k in _REPLACEABLE)
-            and (d is None or (type(d) is StuckDetector and d.config.window >= 1 and d.config.boost > 0))
+    return (compiled(env, agent) and agent.n_actions == agent.q.n_nets and type(ex) is Exploration
+            and ex.schedule(trial) > 0
+            and not methods_replaced(agent)
+            and (d is None or (type(d) is StuckDetector and type(d.config.window) is int and d.config.window >= 1
+                              and d.config.boost > 0))
             and not len(rec) and not rec.inputs and compiled_choice_fits(agent.n_actions))
 
 

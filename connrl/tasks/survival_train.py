@@ -23,6 +23,7 @@ import numba
 import numpy as np
 
 from connrl.agents.ahcon import AHCON
+from connrl.agents.base import methods_replaced
 from connrl.agents.qcon import QCON
 from connrl.core.boltzmann_kernel import _boltzmann_choice, compiled_choice_fits
 from connrl.core.rollout import TrialStats, run_trial
@@ -59,14 +60,10 @@ def _net_of(net) -> tuple | None:
     return None
 
 
-# what the loop does in place of the agent's own methods: one replaced on the instance takes the Python path
-_REPLACEABLE = ("act", "observe", "next_value", "temperature", "encode", "begin_trial", "online_target")
-
-
 def _compiled_nets(env, agent, trial: int) -> tuple[tuple, tuple | None] | None:
     """(the choosing net, AHCON's V-net or None) when ``learning_play`` compiles this agent's play, else None."""
     if (type(env) is not SurvivalEnv or type(agent) not in (QCON, AHCON) or not plan_fits(agent, env)
-            or any(k in vars(agent) for k in _REPLACEABLE)):
+            or methods_replaced(agent)):
         return None
     ex, rec = agent.explore, agent.book.recorder
     if (not agent.config.online or type(ex) is not SurvivalExploration or not ex.schedule(trial) > 0

@@ -60,3 +60,10 @@ def test_a_watched_trial_plays_through_run_trial():
     assert len(seen) == stats.steps
     agent.act = agent.act  # a method replaced on the instance: the loop would not call it
     assert not compiled_learning(env, agent, 1)
+    del agent.act
+    assert compiled_learning(env, agent, 1)
+    for part, name in ((agent.q, "update"), (agent.explore, "temperature"), (agent.explore.detector, "factor"),
+                       (agent.book.recorder, "add")):
+        setattr(part, name, getattr(part, name))  # ... or on one of its parts
+        assert not compiled_learning(env, agent, 1)
+        delattr(part, name)
