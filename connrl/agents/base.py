@@ -252,6 +252,17 @@ class LessonAgent:
         self.book.recorder.finish(False, False)
         return None
 
+    def took_compiled_trial(self, inputs: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool,
+                            probabilities: np.ndarray) -> None:
+        """The learner as ``run_trial`` leaves it before ``end_trial`` after a trial a compiled loop played
+        (``connrl.tasks.survival_train``, ``robot_train``): its n steps' n + 1 inputs, actions and rewards in the
+        recorder, the trial's end (a time limit when not terminated), its last input and its last choice's
+        distribution."""
+        rec = self.book.recorder
+        rec.inputs, rec.actions, rec.rewards = list(inputs), actions.tolist(), rewards.tolist()
+        self.book.ended = (bool(terminated), not terminated)
+        self._x, self.last_probabilities = inputs[-1].copy(), probabilities
+
     def add_taught_lessons(self, lessons: list[Lesson]) -> None:
         """Teaching (3.7): taught lessons are replayed like experienced ones, with P_t = 0 by default."""
         for lesson in lessons:

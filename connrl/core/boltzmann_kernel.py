@@ -69,16 +69,23 @@ def _numpy_exp(z, out, scratch):
 
 
 @numba.njit(cache=False)
-def _boltzmann_probabilities(q, temperature, p, scratch):
-    """p[:] = ``boltzmann_probabilities(q, temperature)`` for ``temperature > 0`` and ``q.size < 8`` (NaN merits:
-    all NaN)."""
-    n = q.size
+def _nanmax(q, n):
+    """``q[:n].max()`` as NumPy gives it: a NaN propagates."""
     top = q[0]
-    for k in range(1, n):  # np.max: a NaN propagates
+    for k in range(1, n):
         if top != top:
             break
         if q[k] > top or q[k] != q[k]:
             top = q[k]
+    return top
+
+
+@numba.njit(cache=False)
+def _boltzmann_probabilities(q, temperature, p, scratch):
+    """p[:] = ``boltzmann_probabilities(q, temperature)`` for ``temperature > 0`` and ``q.size < 8`` (NaN merits:
+    all NaN)."""
+    n = q.size
+    top = _nanmax(q, n)
     for k in range(n):
         p[k] = (q[k] - top) / temperature
     _numpy_exp(p, p, scratch)

@@ -70,6 +70,10 @@ class LessonRecorder:
     def __len__(self) -> int:
         return len(self.actions)
 
+    def empty(self) -> bool:
+        """Nothing recorded yet, not even a trial's first input."""
+        return not self.actions and not self.inputs
+
     def discard(self) -> None:
         """Drop what was recorded, even a step half-added when a signal arrived (no lesson is built from it)."""
         self.__init__()

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from connrl.agents.base import Exploration, methods_replaced
-from connrl.core.boltzmann_kernel import _boltzmann_choice, compiled_choice_fits
+from connrl.core.boltzmann_kernel import _boltzmann_choice, _nanmax, compiled_choice_fits
 from connrl.core.exploration import StuckDetector
 from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.robot.sim import collision_side
@@ -38,7 +38,7 @@ def compiled_learning(env, agent, trial: int) -> bool:
             and not methods_replaced(agent)
             and (d is None or (type(d) is StuckDetector and type(d.config.window) is int and d.config.window >= 1
                               and d.config.boost > 0))
-            and not len(rec) and not rec.inputs and compiled_choice_fits(agent.n_actions))
+            and rec.empty() and compiled_choice_fits(agent.n_actions))
 
 
 def learning_play(env, agent, *, trial: int, seed: int | None = None, options: dict | None = None,
@@ -70,10 +70,7 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
         q.w1, q.w2, q.d1, q.d2, learner, stuck, history, count, agent.rng, robot_world(env), pose, trace, sim.rng,
         sweep, env._feat, env._feat_true, inputs, actions, rewards, np.empty(agent.n_actions), p, np.zeros(5, np.int64))
     leave_sweep(env, pose, sweep, a, steps, trace)
-    rec = agent.book.recorder
-    rec.inputs, rec.actions, rec.rewards = list(inputs[:steps + 1]), actions[:steps].tolist(), rewards[:steps].tolist()
-    agent.book.ended = (bool(success), not success)
-    agent._x, agent.last_probabilities = inputs[steps].copy(), p
+    agent.took_compiled_trial(inputs[:steps + 1], actions[:steps], rewards[:steps], success, p)
     if d is not None:
         d._pos = [history[i].copy() for i in range(int(count[0]))]
     info = env._info(sim.room, success, collided, collision_side(rel) if collided else -1)
@@ -136,12 +133,7 @@ def _learning_loop(w1, w2, d1, d2, learner, stuck, history, count, agent_rng, wo
             nxt = 0.0
             if not success:
                 _values_any(w1, w2, y, h, scale, q, linear)
-                nxt = q[0]
-                for k in range(1, q.size):  # q.max(): a NaN propagates
-                    if nxt != nxt:
-                        break
-                    if q[k] > nxt or q[k] != q[k]:
-                        nxt = q[k]
+                nxt = _nanmax(q, q.size)
             target = reward + gamma * nxt
             target = clip if has_clip and clip < target else target
             if w1.shape[1] > 0:

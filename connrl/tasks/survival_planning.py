@@ -26,10 +26,10 @@ import functools
 import numba
 import numpy as np
 
-from connrl.core.boltzmann_kernel import _boltzmann_probabilities
+from connrl.core.boltzmann_kernel import _boltzmann_probabilities, _nanmax
 from connrl.core.planning import RelaxationPlanner
 from connrl.envs.survival.world import N_INPUTS
-from connrl.nets.kernels import _mlp_forward, _mlp_update, _mlp_values, _rotated_update, _rotated_values
+from connrl.nets.kernels import _forward_at, _mlp_update, _mlp_values, _rotated_update, _rotated_values
 from connrl.tasks.survival_models import (
     LearnedSurvivalModel,
     PerfectSurvivalModel,
@@ -148,20 +148,8 @@ def _update(net, x, a, value, is_error):
 
 @numba.njit(cache=False)
 def _value(v, x):
-    """AHCON's ``v.value(x, 0)``."""
-    return v[7] * _mlp_forward(v[0], v[1], 0, x, v[4])
-
-
-@numba.njit(cache=False)
-def _max(q, n):
-    """``q[:n].max()``: a NaN propagates."""
-    top = q[0]
-    for k in range(1, n):
-        if top != top:
-            break
-        if q[k] > top or q[k] != q[k]:
-            top = q[k]
-    return top
+    """AHCON's ``v.value(x, 0)`` (``_forward_at`` itself, as the kernels call it: not through ``_mlp_forward``)."""
+    return v[7] * _forward_at(v[0], v[1], 0, x, 0, v[4])
 
 
 # -------------------------------------------------------------------------------------------- the planning
@@ -191,7 +179,7 @@ def _plan(net, v, ahcon, x, q, t, gamma, clip, has_clip, world, planning, bufs):
             u = _value(v, ys[i])
         else:
             _values(net, ys[i], q)
-            u = _max(q, q.size)
+            u = _nanmax(q, q.size)
         r = rs[i] + gamma * u
         targets[i] = r if not has_clip or r <= clip else clip
     if not ahcon:
@@ -204,7 +192,7 @@ def _plan(net, v, ahcon, x, q, t, gamma, clip, has_clip, world, planning, bufs):
     for i in range(n):
         mass += p[actions[i]]
     mu = dot / mass
-    _update(v, x, 0, _max(targets, n), False)  # step 6
+    _update(v, x, 0, _nanmax(targets, n), False)  # step 6
     for i in range(n):  # step 7
         _update(net, x, actions[i], targets[i] - mu, True)
     return True

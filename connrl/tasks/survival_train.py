@@ -25,7 +25,7 @@ import numpy as np
 from connrl.agents.ahcon import AHCON
 from connrl.agents.base import methods_replaced
 from connrl.agents.qcon import QCON
-from connrl.core.boltzmann_kernel import _boltzmann_choice, compiled_choice_fits
+from connrl.core.boltzmann_kernel import _boltzmann_choice, _nanmax, compiled_choice_fits
 from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.robot.step import _hypot, hypot_matches
 from connrl.envs.survival.env import SurvivalEnv
@@ -34,7 +34,6 @@ from connrl.nets.mlp import OAON
 from connrl.nets.rotated import RotatedNet
 from connrl.tasks.survival import SurvivalExploration
 from connrl.tasks.survival_planning import (
-    _max,
     _model_learn,
     _plan,
     _update,
@@ -68,7 +67,7 @@ def _compiled_nets(env, agent, trial: int) -> tuple[tuple, tuple | None] | None:
     ex, rec = agent.explore, agent.book.recorder
     if (not agent.config.online or type(ex) is not SurvivalExploration or not ex.schedule(trial) > 0
             or not ex.stuck.boost > 0
-            or ex.stuck.window < 1 or len(rec) or rec.inputs or not compiled_choice_fits(agent.n_actions)
+            or ex.stuck.window < 1 or not rec.empty() or not compiled_choice_fits(agent.n_actions)
             or not hypot_matches()):
         return None
     if type(agent) is QCON:
@@ -113,22 +112,12 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
         raise RuntimeError(f"a survival play outlasted its energy bound of {cap} steps")
     env._done = True
     leave_planning(agent, planning)
-    _leave_as_run_trial(agent, inputs[:steps + 1], actions[:steps], rewards[:steps], bufs[5].copy(), rows, cols,
-                        stuck, terminated)
+    agent.took_compiled_trial(inputs[:steps + 1], actions[:steps], rewards[:steps], terminated, bufs[5].copy())
+    n, ex = int(stuck[0]), agent.explore  # the stuck detector's history
+    ex._rows, ex._cols, ex._food, ex.boosted = rows[:n].tolist(), cols[:n].tolist(), int(stuck[1]), int(stuck[2])
     agent.end_trial()
     agent.learn()
     return TrialStats(steps, total, bool(terminated), not terminated, env._info())
-
-
-def _leave_as_run_trial(agent, inputs, actions, rewards, p, rows, cols, stuck, terminated) -> None:
-    """The learner as ``run_trial`` leaves it before ``end_trial``: the play's experiences in its recorder, its last
-    input and choice, and the stuck detector's history."""
-    rec = agent.book.recorder
-    rec.inputs, rec.actions, rec.rewards = list(inputs), actions.tolist(), rewards.tolist()
-    agent.book.ended = (bool(terminated), not terminated)
-    agent._x, agent.last_probabilities = inputs[-1].copy(), p
-    n, ex = int(stuck[0]), agent.explore
-    ex._rows, ex._cols, ex._food, ex.boosted = rows[:n].tolist(), cols[:n].tolist(), int(stuck[1]), int(stuck[2])
 
 
 @numba.njit(cache=False)
@@ -191,7 +180,7 @@ def _learning_loop(net, v, ahcon, learner, rows, cols, stuck, rng, inputs, actio
                 target = reward + gamma * 0.0
             else:
                 _values(net, y, q)
-                target = reward + gamma * _max(q, q.size)
+                target = reward + gamma * _nanmax(q, q.size)
             target = clip if has_clip and clip < target else target
             _update(net, x, a, target, False)
         if planning[2]:  # a learned model trains on-line (4.2.5)
