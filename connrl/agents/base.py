@@ -131,12 +131,13 @@ def position_of(info: dict | None):
 
 
 # What a compiled training loop does in place of the learner's own methods (connrl.tasks.survival_train,
-# robot_train): a method replaced on the instance of any of these parts is not called there, so that trial takes the
-# Python path.
+# robot_train, recharge_train): a method replaced on the instance of any of these parts is not called there, so that
+# trial takes the Python path.
 _LOOP_METHODS = {"": ("act", "observe", "next_value", "temperature", "encode", "begin_trial", "online_target"),
                  "q": ("values", "value", "update", "update_error"), "policy": ("values", "update_error"),
                  "v": ("value", "update"), "explore": ("temperature", "begin"), "explore.detector": ("factor",),
-                 "book.recorder": ("add",)}
+                 "book.recorder": ("add",), "net": ("values", "outputs", "advance"),
+                 "choice": ("choose", "weights", "observed", "next_value")}
 
 
 def methods_replaced(agent) -> bool:

@@ -24,7 +24,7 @@ from functools import cache
 import numba
 import numpy as np
 
-from connrl.core.exploration import boltzmann_select
+from connrl.core.exploration import boltzmann_select, weighted_boltzmann_probabilities
 
 # PyUFuncObject (numpy/ufuncobject.h): after PyObject_HEAD (16 bytes) and four ints come ``functions`` (the inner
 # loops), ``data``, ``ntypes``, two more fields, then ``types`` (each loop's nargs type numbers).
@@ -110,6 +110,40 @@ def _boltzmann_choice(q, temperature, rng, p, scratch):
     return q.size - 1
 
 
+@numba.njit(cache=False)
+def _weighted_choice(q, w, temperature, rng, p, scratch):
+    """Eq. 6.6's draw as ``BehaviourChoice.choose`` makes it for ``temperature > 0`` and ``q.size < 8``:
+    ``p = weighted_boltzmann_probabilities(q, w, temperature)``, then ``rng.choice(q.size, p=p)``, i.e. the cumulative
+    sum divided by its last element and the first entry above one uniform draw. Returns the choice, or -1 without a
+    draw where ``p`` holds a NaN (``rng.choice`` refuses it: "Probabilities contain NaN")."""
+    n = q.size
+    top, seen = 0.0, False
+    for k in range(n):  # q[w > 0].max(): a NaN propagates
+        if w[k] > 0 and (not seen or q[k] > top or q[k] != q[k]) and top == top:
+            top, seen = q[k], True
+    for k in range(n):
+        p[k] = (q[k] - top) / temperature
+    _numpy_exp(p, p, scratch)
+    total = 0.0
+    for k in range(n):  # np.where(w > 0, w * exp, 0.0), summed by NumPy's plain loop
+        p[k] = w[k] * p[k] if w[k] > 0 else 0.0
+        total += p[k]
+    for k in range(n):
+        p[k] /= total
+        if p[k] != p[k]:
+            return -1
+    last = 0.0
+    for k in range(n):
+        last += p[k]
+    u = rng.random()
+    acc = 0.0
+    for k in range(n):
+        acc += p[k]
+        if acc / last > u:
+            return k
+    return n - 1
+
+
 def compiled_choice_fits(n_actions: int) -> bool:
     """Whether ``_boltzmann_choice`` gives ``boltzmann_select``'s numbers for this many actions: NumPy's loop found,
     and the choice checked against ``boltzmann_select`` once per process (which compiles the kernels)."""
@@ -132,6 +166,31 @@ def numpy_exp_checked() -> bool:
     inplace = z.copy()
     _numpy_exp(inplace, inplace, scratch)
     return np.array_equal(inplace, np.exp(z))
+
+
+def weighted_choice_fits(n_choices: int) -> bool:
+    """Whether ``_weighted_choice`` gives ``BehaviourChoice.choose``'s numbers for this many choices (as
+    ``compiled_choice_fits``)."""
+    return 1 <= n_choices < 8 and numpy_exp_checked() and weighted_checked()
+
+
+@cache
+def weighted_checked() -> bool:
+    """``_weighted_choice`` against ``weighted_boltzmann_probabilities`` and ``Generator.choice`` on 2000 draws of 1 to
+    7 choices with weights 0, 1 and 100 (Eq. 6.6's), at least one above 0."""
+    data, rng, ref = np.random.default_rng(66), np.random.default_rng(67), np.random.default_rng(67)
+    scratch = np.zeros(5, np.int64)
+    for i in range(2000):
+        n = 1 + i % 7
+        q, t, p = data.normal(0.0, 50.0, n), 10.0 ** data.uniform(-1.0, 2.0), np.empty(n)
+        w = data.choice(np.array([0.0, 1.0, 100.0]), n)
+        w[data.integers(n)] = data.choice(np.array([1.0, 100.0]))
+        b = _weighted_choice(q, w, t, rng, p, scratch)
+        with np.errstate(over="ignore", invalid="ignore"):  # an excluded choice's exp may overflow; it is not used
+            want_p = weighted_boltzmann_probabilities(q, w, t)
+        if b != int(ref.choice(n, p=want_p)) or not np.array_equal(p, want_p):
+            return False
+    return True
 
 
 @cache

@@ -26,7 +26,7 @@ from connrl.envs.robot.teachers import teach_chg
 from connrl.experiments.behaviours import THESIS_BEHAVIOUR_STEPS, budget_split, pretrain_behaviours, train_within_budget
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
-from connrl.tasks import recharge_play
+from connrl.tasks import recharge_play, recharge_train
 from connrl.tasks.behaviours import Behaviour, library_digest
 from connrl.tasks.recharge import TARGET_MAX, BehaviourEnv, make_high_level_agent, make_recharge_env
 from connrl.tasks.recharge_together import TrainingBehaviourEnv
@@ -144,7 +144,7 @@ def run_rooms(p, rng: np.random.Generator, make_env, make_agent, progress=lambda
 
     def train(k):
         nonlocal spent
-        spent += run_trial(env, agent, trial=k, learning=True).steps
+        spent += recharge_train.learning_play(env, agent, trial=k).steps
         after_trial(env)
 
     train_and_test(p.trials, train, test, test_every=p.test_every, test_first=True, progress=progress, agent=agent)

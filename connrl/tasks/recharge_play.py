@@ -164,13 +164,19 @@ def _play_loop(qw1, qw2, qscale, qlinear, w1s, w2s, scales, linears, thresholds,
 def compiled(env, agent) -> bool:
     """Whether a test play of ``agent`` in ``env`` runs compiled: the plain case of the module docstring, with every
     shape the loop indexes without bounds checked here (``run_trial`` would refuse a mismatch with a ValueError)."""
-    if type(env) is not BehaviourEnv or type(agent) is not BehaviourQCON or type(agent.q) is not OAON:
+    if type(agent) is not BehaviourQCON or type(agent.q) is not OAON or type(agent.choice) is not BehaviourChoice:
+        return False
+    return (agent.q.n_nets == len(BEHAVIOUR_TASKS) and type(env) is BehaviourEnv
+            and agent.q.config.n_inputs == env.world.observation_space.shape[0] and compiled_world(env))
+
+
+def compiled_world(env) -> bool:
+    """Whether the loops can play ``env``: a ``BehaviourEnv`` over a plain ``RechargeEnv`` with the high-level inputs
+    and a library of plain behaviours whose nets fit their tasks' observations, where the ported ``hypot`` holds."""
+    if type(env) is not BehaviourEnv:
         return False
     world = env.world
     if type(world) is not RechargeEnv or world.obs_mode != "high" or type(world.sim) is not RobotSim:
-        return False
-    if type(agent.choice) is not BehaviourChoice or agent.q.n_nets != len(BEHAVIOUR_TASKS) or (
-            agent.q.config.n_inputs != world.observation_space.shape[0]):
         return False
     for t in BEHAVIOUR_TASKS:
         b = env.library[t]

@@ -25,7 +25,7 @@ from connrl.core.boltzmann_kernel import _boltzmann_choice, _nanmax, compiled_ch
 from connrl.core.exploration import StuckDetector
 from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.robot.sim import collision_side
-from connrl.nets.kernels import _mlp_update, _perceptron_update, _values_any
+from connrl.nets.kernels import _update_any, _values_any
 from connrl.tasks.robot_play import _as_input, _robot_step, compiled, leave_sweep, robot_world, sweep_arrays
 
 
@@ -136,9 +136,6 @@ def _learning_loop(w1, w2, d1, d2, learner, stuck, history, count, agent_rng, wo
                 nxt = _nanmax(q, q.size)
             target = reward + gamma * nxt
             target = clip if has_clip and clip < target else target
-            if w1.shape[1] > 0:
-                _mlp_update(w1, w2, d1, d2, a, x, h, target, False, scale, lr, momentum)
-            else:
-                _perceptron_update(w2, d2, a, x, target, False, scale, lr, momentum, linear)
+            _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum, linear)
         if success or steps >= env_max_steps:
             return steps, total, success, a, collided, rel

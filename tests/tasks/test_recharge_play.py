@@ -30,6 +30,20 @@ def _agent(n_inputs: int, xy: bool, prefer: int | None = None):
     return agent
 
 
+def assert_same_worlds(env, ref_env):
+    """The world left as ``run_trial`` leaves it: trace, pose, last action and collision, step count, each
+    behaviour's observation, the world's generator."""
+    w, ref_w = env.world, ref_env.world
+    assert (w.trace, w.sim.pose, w.sim.last_action, w._steps) == (
+        ref_w.trace, ref_w.sim.pose, ref_w.sim.last_action, ref_w._steps)
+    np.testing.assert_array_equal(w.sim.last_collision, ref_w.sim.last_collision)
+    assert env._task_obs.keys() == ref_env._task_obs.keys()
+    for task, obs in ref_env._task_obs.items():
+        np.testing.assert_array_equal(env._task_obs[task], obs)
+        assert env._task_obs[task].dtype == obs.dtype
+    assert w.np_random.bit_generator.state == ref_w.np_random.bit_generator.state
+
+
 def _starts(env, rng, n):
     """``n`` test tasks: random starts in each room, and two facing the charger from near it (plays that dock)."""
     layout = env.world.layout
@@ -59,15 +73,7 @@ def test_the_compiled_play_is_run_trials_play(world, prefer):
             ref.steps, ref.total_reward, ref.terminated, ref.truncated, ref.info["success"], sum(hits))
         for value, ref_value in zip(got_agent, (agent._x, agent.last_q, agent.last_probabilities), strict=True):
             np.testing.assert_array_equal(value, ref_value)
-        w, ref_w = env.world, ref_env.world
-        assert (w.trace, w.sim.pose, w.sim.last_action, w._steps) == (
-            ref_w.trace, ref_w.sim.pose, ref_w.sim.last_action, ref_w._steps)
-        np.testing.assert_array_equal(w.sim.last_collision, ref_w.sim.last_collision)
-        assert env._task_obs.keys() == ref_env._task_obs.keys()
-        for task, obs in ref_env._task_obs.items():
-            np.testing.assert_array_equal(env._task_obs[task], obs)
-            assert env._task_obs[task].dtype == obs.dtype
-        assert w.np_random.bit_generator.state == ref_w.np_random.bit_generator.state
+        assert_same_worlds(env, ref_env)
         collided += got_hits
         ended.add(got.terminated)
     assert collided > 0 and (prefer is not None or ended == {True, False})  # contacts, dockings, time-outs

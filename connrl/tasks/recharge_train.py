@@ -1,0 +1,261 @@
+"""Chs. 6 and 8's training trials over behaviours compiled whole (issue 45).
+
+A training trial of the high-level learner (6.5-6.6, 8.3) is, step by step: the Q-values, Eq. 6.6's weighted choice
+(W from applicability and, in Experiment 3, persistence), the chosen behaviour's greedy primitive, the simulator's move
+and scan, the sensors' encodings and DK's and DP's applicability (6.4.3), then, for Ch. 6's ``BehaviourQCON``, the
+on-line update (its target's max over all behaviours or the applicable ones); Ch. 8's ``BehaviourRecurrentQ`` moves
+its context on instead. ``learning_play`` runs all of it as one Numba loop with the same arithmetic and the same draws
+from the learner's and the world's generators as ``run_trial(env, agent, learning=True)``; the lesson (with each
+step's W and each state's applicability), the trial's end and the replays are the Python path's own.
+tests/tasks/test_recharge_train.py holds the two to each other, nets and streams bit for bit.
+
+Compiled where a greedy test play is (``connrl.tasks.recharge_play``: a ``BehaviourEnv`` over a plain world and
+library) for a ``BehaviourQCON`` over an ``OAON`` without a planner or a ``BehaviourRecurrentQ`` over a
+``RecurrentOAON``, both with a ``BehaviourChoice``, exploring without stuck detection at a temperature above 0;
+anything else (a method replaced on the instance too), and a trial watched step by step (``on_step``), plays through
+``run_trial``. The returned stats' info holds "success" only. Not cached, as ``connrl.tasks.recharge_play``.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from connrl.agents.base import Exploration, methods_replaced
+from connrl.agents.behaviour_level import BehaviourChoice, BehaviourQCON, BehaviourRecurrentQ
+from connrl.core.boltzmann_kernel import _nanmax, _weighted_choice, weighted_choice_fits
+from connrl.core.rollout import TrialStats, run_trial
+from connrl.envs.robot.constants import N_RAYS
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS
+from connrl.envs.robot.step import _room, leave, room_table
+from connrl.nets import OAON
+from connrl.nets.kernels import _update_any, _values_any
+from connrl.nets.recurrent import RecurrentOAON
+from connrl.nets.recurrent_kernels import _forward_all
+from connrl.tasks.behaviours import APPLICABLE_ABOVE
+from connrl.tasks.recharge_play import _applicable, _chg_step, _first_max, _observe, compiled_world
+from connrl.tasks.robot_play import _as_input
+
+
+def compiled_learning(env, agent, trial: int) -> bool:
+    """Whether ``learning_play`` compiles this trial (the module docstring's cases)."""
+    ex = agent.explore
+    if type(agent) is BehaviourQCON:
+        nets = type(agent.q) is OAON and agent.planner is None and agent.q.n_nets == len(BEHAVIOUR_TASKS)
+        n_inputs = agent.q.config.n_inputs
+    elif type(agent) is BehaviourRecurrentQ:
+        net = agent.net
+        nets = type(net) is RecurrentOAON and net.config.n_outputs == 1 and net.n_nets == len(BEHAVIOUR_TASKS)
+        n_inputs = net.config.n_inputs
+    else:
+        return False
+    return (nets and compiled_world(env) and n_inputs == env.observation_space.shape[0]
+            and agent.n_actions == len(BEHAVIOUR_TASKS) and type(agent.choice) is BehaviourChoice
+            and type(ex) is Exploration and ex.detector is None and ex.schedule(trial) > 0
+            and not methods_replaced(agent) and agent.book.recorder.empty()
+            and weighted_choice_fits(len(BEHAVIOUR_TASKS)))
+
+
+def learning_play(env, agent, *, trial: int, seed: int | None = None, options: dict | None = None,
+                  on_step=None) -> TrialStats:
+    """``run_trial(env, agent, trial=trial, learning=True, seed=seed, options=options, on_step=on_step)``, compiled
+    when ``on_step`` is None and ``compiled_learning(env, agent, trial)``."""
+    if on_step is not None or not compiled_learning(env, agent, trial):
+        return run_trial(env, agent, trial=trial, learning=True, seed=seed, options=options, on_step=on_step)
+    obs, info = env.reset(seed=seed, options=options)
+    agent.begin_trial(obs, info, trial=trial, learning=True)
+    world, choice, cap = env.world, agent.choice, env.world.max_steps
+    tasks = info["task_obs"]
+    state = (np.array(obs, dtype=np.float32), *(np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL")),
+             np.array(world.sim.pose, dtype=np.float64), np.zeros(4, dtype=np.uint8), np.empty((cap + 1, 3)))
+    state[6][0] = state[4]
+    n = len(BEHAVIOUR_TASKS)
+    inputs, actions, rewards = np.empty((cap + 1, len(obs))), np.empty(cap, np.int64), np.empty(cap)
+    weights, applicable = np.empty((cap, n)), np.empty((cap + 1, n), dtype=np.bool_)
+    inputs[0], applicable[0] = agent._x, info["applicable"]
+    record = (inputs, actions, rewards, weights, applicable)
+    rule = (choice.persistence, choice.persist_weight, choice.target_max == "applicable",
+            agent.explore.base * agent.merit_scale)
+    q, p, scratch = np.empty(n), np.empty(n), np.zeros(5, np.int64)
+    if type(agent) is BehaviourQCON:
+        net, c = agent.q, agent.config
+        learner = (c.online, c.gamma, 0.0 if c.target_clip is None else c.target_clip, c.target_clip is not None,
+                   net.scale, net.lr, net.config.momentum, net.config.linear_output)
+        steps, total, docked, b, prim = _qcon_loop(net.w1, net.w2, net.d1, net.d2, learner, rule, _library(env),
+                                                   _world(env), state, record, agent.rng, world.sim.rng, q, p,
+                                                   np.empty(n), scratch)
+    else:
+        net = agent.net
+        steps, total, docked, b, prim = _recurrent_loop(net.w1, net.w2, net.scale, net.config.feedback, net.context,
+                                                        net._h_all, net._y, rule, _library(env), _world(env), state,
+                                                        record, agent.rng, world.sim.rng, q, p, scratch)
+    if steps < 0:
+        raise ValueError("Probabilities contain NaN")  # as Generator.choice refuses Eq. 6.6's NaN distribution
+    _, dk, dp, wf, pose, collision, trace = state
+    leave(world, pose, collision, prim, steps, trace)
+    env._task_obs = {"DK": dk, "DP": dp, "WFL": wf, "WFR": wf.copy()}
+    agent.took_compiled_trial(inputs[:steps + 1], actions[:steps], rewards[:steps], docked, p)
+    agent.last_q = q
+    if type(agent) is BehaviourRecurrentQ:
+        agent._x = inputs[steps - 1].copy()  # the input of its last choice: recurrent-Q's observe keeps none
+    choice._active, choice._was_applicable, choice._w = b, applicable[steps - 1].copy(), weights[steps - 1].copy()
+    choice._trial_weights, choice._trial_applicable = list(weights[:steps]), list(applicable[:steps + 1])
+    agent.end_trial()
+    agent.learn()
+    return TrialStats(steps, total, bool(docked), not docked, {"success": bool(docked)})
+
+
+def _library(env) -> tuple:
+    """The behaviours as ``recharge_play``'s kernels read them (DK, DP, WFL, WFR)."""
+    lib = [env.library[t] for t in BEHAVIOUR_TASKS]
+    return (tuple(b.q.w1 for b in lib), tuple(b.q.w2 for b in lib), np.array([b.q.scale for b in lib]),
+            np.array([b.q.config.linear_output for b in lib]), np.array([APPLICABLE_ABOVE[t] for t in BEHAVIOUR_TASKS]))
+
+
+def _world(env) -> tuple:
+    """What ``_behaviour_step`` reads of the world: the simulator's surfaces and settings, the rooms, the sensors'
+    settings, the reinforcement and the time limit."""
+    world = env.world
+    sim, layout = world.sim, world.layout
+    room_bits = np.array([ROOMS.index(r) if r in ROOMS else -1 for r in layout.rooms], dtype=np.int64)
+    return (sim._segs, sim._kinds, np.array(sim._light, dtype=np.float64), room_table(layout), room_bits,
+            np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
+            sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, world.binary_low, world.xy_scale,
+            world.dock_tolerance, world.success_reward, world.collision_penalty, world.max_steps)
+
+
+@numba.njit(cache=False)
+def _choice_weights(applicable, was, active, goal, persistence, persist, w):
+    """``BehaviourChoice.weights``: W = applicability; with persistence ``persist`` for the behaviour followed
+    (``active``, -1 at the trial's first step) unless it is inapplicable, reached its goal or another became
+    applicable (``connrl.core.exploration.persistence_weights``)."""
+    for k in range(w.size):
+        w[k] = 1.0 if applicable[k] else 0.0
+    if not persistence or active < 0 or not applicable[active] or goal:
+        return
+    for k in range(w.size):
+        if applicable[k] and not was[k]:
+            return
+    w[active] = persist
+
+
+@numba.njit(cache=False)
+def _behaviour_step(b, lib, world, state, rng, scan):
+    """``BehaviourEnv.step(b)`` after its checks: the behaviour's greedy primitive, the world's step and the new
+    state's observations and applicability (``scan[0]``). Returns (primitive, docked, reward, the behaviour's goal
+    reached: DK docked, DP into another room without a collision)."""
+    w1s, w2s, scales, linears, thresholds = lib
+    (segs, kinds, lights, rooms, room_bits, size, control_noise, sensor_noise, step_scale, partial, sonar_radius,
+     edge_jump, edge_both, low, xy_scale, dock_tolerance, success_reward, collision_penalty, _) = world
+    obs, dk, dp, wf, pose, collision, _ = state
+    applicable, xdk, xdp, xwf, h, qdk, qdp, qwf, feat, ranges, sonar, light, door, top = scan
+    if b >= 2:
+        _values_any(w1s[b], w2s[b], _as_input(wf, xwf), h, scales[b], qwf, linears[b])
+    prim = _first_max(qdk if b == 0 else qdp if b == 1 else qwf)
+    before = _room(pose[0], pose[1], rooms)
+    collided, docked, reward = _chg_step(pose, prim, rng, collision, segs, kinds, lights, control_noise, sensor_noise,
+                                         step_scale, partial, sonar_radius, edge_jump, edge_both, dock_tolerance,
+                                         success_reward, collision_penalty, ranges, sonar, light, door)
+    room = _room(pose[0], pose[1], rooms)
+    _observe(pose, room, collision, sonar, sonar_radius, light, door, low, xy_scale, size, room_bits, dk, dp, wf, top,
+             feat)
+    for k in range(obs.size):
+        obs[k] = top[k]
+    _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)
+    goal = docked if b == 0 else (b == 1 and not collided and room != before)
+    return prim, docked, reward, goal
+
+
+@numba.njit(cache=False)
+def _scan_arrays(lib, dk, dp, wf, n_hidden):
+    """The arrays ``_behaviour_step`` fills, DK's and DP's values in the first state computed (as reset's)."""
+    w1s, w2s, scales, linears, thresholds = lib
+    h = np.empty(max(n_hidden, w1s[0].shape[1], w1s[1].shape[1], w1s[2].shape[1], w1s[3].shape[1], 1))
+    scan = (np.empty(4, dtype=np.bool_), np.empty(dk.size), np.empty(dp.size), np.empty(wf.size), h,
+            np.empty(w2s[0].shape[0]), np.empty(w2s[1].shape[0]), np.empty(w2s[2].shape[0]), np.zeros(4),
+            np.empty(N_RAYS), np.empty(N_RAYS), np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8),
+            np.empty(16, dtype=np.float32))
+    _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, scan[1], scan[2], h, scan[5], scan[6], scan[0])
+    return scan
+
+
+@numba.njit(cache=False)
+def _qcon_loop(w1, w2, d1, d2, learner, rule, lib, world, state, record, agent_rng, rng, q, p, qn, scratch):
+    """Ch. 6's ``BehaviourQCON`` over the trial: its act and observe (Fig. 3.4 with Eq. 6.6's choice) around the
+    world's step, until docked or the time limit. Returns (steps, total reward, docked, the last behaviour, its
+    primitive), steps -1 where a choice met NaN values; ``q``: the last choice's values, ``p`` its distribution."""
+    online, gamma, clip, has_clip, scale, lr, momentum, linear = learner
+    persistence, persist, applicable_max, t = rule
+    inputs, actions, rewards, weights, applicables = record
+    scan = _scan_arrays(lib, state[1], state[2], state[3], w1.shape[1])
+    applicable, h = scan[0], scan[4]
+    was = np.zeros(applicable.size, dtype=np.bool_)
+    pose, trace = state[4], state[6]
+    steps, total, active, goal, max_steps = 0, 0.0, -1, False, world[-1]
+    while True:
+        x, y, w = inputs[steps], inputs[steps + 1], weights[steps]
+        _values_any(w1, w2, x, h, scale, q, linear)
+        _choice_weights(applicable, was, active, goal, persistence, persist, w)
+        b = _weighted_choice(q, w, t, agent_rng, p, scratch)
+        if b < 0:
+            return -1, total, False, active, -1
+        was[:] = applicable
+        active = b
+        prim, docked, reward, goal = _behaviour_step(b, lib, world, state, rng, scan)
+        steps += 1
+        trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
+        _as_input(state[0], y)
+        applicables[steps] = applicable
+        actions[steps - 1], rewards[steps - 1] = b, reward
+        total += reward
+        if online:
+            nxt = 0.0
+            if not docked:
+                _values_any(w1, w2, y, h, scale, qn, linear)
+                nxt = _nanmax(qn, qn.size)
+                if applicable_max and applicable.any():  # BehaviourChoice.next_value: over the applicable ones
+                    nxt, seen = 0.0, False
+                    for k in range(qn.size):
+                        if applicable[k] and (not seen or qn[k] > nxt or qn[k] != qn[k]) and nxt == nxt:
+                            nxt, seen = qn[k], True
+            target = reward + gamma * nxt
+            target = clip if has_clip and clip < target else target
+            _update_any(w1, w2, d1, d2, b, x, h, target, scale, lr, momentum, linear)
+        if docked or steps >= max_steps:
+            return steps, total, docked, b, prim
+
+
+@numba.njit(cache=False)
+def _recurrent_loop(w1, w2, scale, feedback, context, h_all, y, rule, lib, world, state, record, agent_rng, rng, q, p,
+                    scratch):
+    """Ch. 8's ``BehaviourRecurrentQ`` over the trial: values at the context, Eq. 6.6's choice, the chosen net's
+    hidden units as the next context (7.4), the world's step; no on-line learning (8.3). Returns as ``_qcon_loop``."""
+    persistence, persist, _, t = rule
+    inputs, actions, rewards, weights, applicables = record
+    scan = _scan_arrays(lib, state[1], state[2], state[3], 0)
+    applicable = scan[0]
+    was = np.zeros(applicable.size, dtype=np.bool_)
+    pose, trace = state[4], state[6]
+    steps, total, active, goal, max_steps = 0, 0.0, -1, False, world[-1]
+    while True:
+        w = weights[steps]
+        _forward_all(w1, w2, inputs[steps], context, scale, h_all, y)
+        for k in range(q.size):
+            q[k] = y[k, 0]
+        _choice_weights(applicable, was, active, goal, persistence, persist, w)
+        b = _weighted_choice(q, w, t, agent_rng, p, scratch)
+        if b < 0:
+            return -1, total, False, active, -1
+        for k in range(context.size):
+            context[k] = feedback * h_all[b, k]
+        was[:] = applicable
+        active = b
+        prim, docked, reward, goal = _behaviour_step(b, lib, world, state, rng, scan)
+        steps += 1
+        trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
+        _as_input(state[0], inputs[steps])
+        applicables[steps] = applicable
+        actions[steps - 1], rewards[steps - 1] = b, reward
+        total += reward
+        if docked or steps >= max_steps:
+            return steps, total, docked, b, prim
