@@ -137,6 +137,7 @@ _LOOP_METHODS = {"": ("act", "observe", "next_value", "temperature", "encode", "
                  "q": ("values", "value", "update", "update_error"), "policy": ("values", "update_error"),
                  "v": ("value", "update"), "explore": ("temperature", "begin"), "explore.detector": ("factor",),
                  "book.recorder": ("add",), "net": ("values", "outputs", "advance"),
+                 "model": ("step", "outputs", "advance"),
                  "choice": ("choose", "weights", "observed", "next_value")}
 
 

@@ -54,7 +54,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from connrl.core.rollout import run_trial
 from connrl.experiments.pole import train_until_satisfactory
 from connrl.experiments.protocol import train_and_test
 from connrl.experiments.spec import (
@@ -67,6 +66,7 @@ from connrl.experiments.spec import (
     check_sequence,
     check_types,
 )
+from connrl.tasks import cup_play
 from connrl.tasks.hidden_state import (
     ARCHITECTURES,
     OPTIMAL_SCORE,
@@ -74,7 +74,6 @@ from connrl.tasks.hidden_state import (
     make_cup_envs,
     model_probe,
     robustness_probe,
-    test_score,
 )
 from connrl.tasks.pole import make_envs as make_pole_envs
 
@@ -242,13 +241,13 @@ def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total:
         if isinstance(p, FrozenModelParams) and not agent.freeze_model and p.frozen(k, scores):
             agent.freeze_model = True
             frozen_after.append(k)
-        stats = run_trial(train_env, agent, trial=k, learning=True)
+        stats = cup_play.learning_play(train_env, agent, trial=k)
         last.update(train_steps=stats.steps, train_done=stats.terminated, **(getattr(agent, "last_model_error", None)
                                                                               or {}))
 
     def test(n):
         test_env.wasted = 0
-        score = test_score(test_env, agent)
+        score = cup_play.test_score(test_env, agent)
         scores.append(score)
         wasted.append(test_env.wasted)
         rows.append({"trial": n, **last, "test_steps": score, "test_wasted_pickups": test_env.wasted})

@@ -17,6 +17,7 @@ from connrl.tasks.integration import make_integration_agent, make_integration_en
 from connrl.tasks.recharge import make_high_level_agent, make_recharge_env
 from connrl.tasks.recharge_train import compiled_learning, learning_play
 from tests.tasks.test_recharge_play import assert_same_worlds
+from tests.tasks.test_robot_train import assert_same_lessons
 
 
 def _nets(agent) -> dict:
@@ -37,13 +38,7 @@ def _assert_same_agents(agent, ref):
     assert c._active == ref_c._active
     np.testing.assert_array_equal(c._was_applicable, ref_c._was_applicable)
     np.testing.assert_array_equal(c._w, ref_c._w)
-    assert len(agent.book.memory) == len(ref.book.memory)
-    for a, b in zip(agent.book.memory.lessons, ref.book.memory.lessons, strict=True):
-        for got, want in ((a.inputs, b.inputs), (a.actions, b.actions), (a.rewards, b.rewards),
-                          (a.meta["weights"], b.meta["weights"]), (a.meta["applicable"], b.meta["applicable"])):
-            assert got.dtype == want.dtype
-            np.testing.assert_array_equal(got, want)
-        assert (a.terminated, a.truncated) == (b.terminated, b.truncated)
+    assert_same_lessons(agent, ref, meta=("weights", "applicable"))
 
 
 CASES = [

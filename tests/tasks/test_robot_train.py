@@ -23,9 +23,15 @@ def _assert_same_agents(agent, ref):
     assert len(d._pos) == len(ref_d._pos)
     for a, b in zip(d._pos, ref_d._pos, strict=True):
         np.testing.assert_array_equal(a, b)
+    assert_same_lessons(agent, ref)
+
+
+def assert_same_lessons(agent, ref, meta=()):
+    """The same lessons stored, array for array and dtype for dtype (with the ``meta`` entries named)."""
     assert len(agent.book.memory) == len(ref.book.memory)
     for a, b in zip(agent.book.memory.lessons, ref.book.memory.lessons, strict=True):
-        for got, want in ((a.inputs, b.inputs), (a.actions, b.actions), (a.rewards, b.rewards)):
+        pairs = [(a.inputs, b.inputs), (a.actions, b.actions), (a.rewards, b.rewards)]
+        for got, want in pairs + [(a.meta[k], b.meta[k]) for k in meta]:
             assert got.dtype == want.dtype
             np.testing.assert_array_equal(got, want)
         assert (a.terminated, a.truncated) == (b.terminated, b.truncated)

@@ -1,0 +1,93 @@
+"""Ch. 7's compiled cup trials are run_trial's, step for step: the same training trials (steps, reward, outcome, nets,
+lessons, model, learner and world left behind, both random streams) and the same greedy test scores and wasted
+pick-ups, bit for bit; and anything but the plain case plays through run_trial."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from connrl.core.rollout import run_trial
+from connrl.experiments.hidden_state import CupParams
+from connrl.tasks import cup_play, hidden_state
+from connrl.tasks.hidden_state import make_agent, make_cup_envs
+from tests.tasks.test_robot_train import assert_same_lessons
+
+
+def _parts(agent) -> dict:
+    nets = {"q": agent.q, "model": agent.model} if hasattr(agent, "model") else {"net": agent.net}
+    out = {}
+    for name, net in nets.items():
+        for field in ("w1", "w2", "d1", "d2", "context", "_h_all", "_y"):
+            if hasattr(net, field):
+                out[f"{name}.{field}"] = getattr(net, field)
+    return out
+
+
+def _assert_same_agents(agent, ref):
+    mine = _parts(agent)
+    for name, value in _parts(ref).items():
+        np.testing.assert_array_equal(mine[name], value, err_msg=name)
+    assert agent.rng.bit_generator.state == ref.rng.bit_generator.state
+    for name in ("_x", "_xq", "last_probabilities"):
+        if hasattr(ref, name):
+            np.testing.assert_array_equal(getattr(agent, name), getattr(ref, name), err_msg=name)
+    assert_same_lessons(agent, ref)
+
+
+def _assert_same_worlds(env, ref_env):
+    w, ref_w = env.unwrapped, ref_env.unwrapped
+    assert (w.position, w.cups, w._collision, w._steps, w._done) == (
+        ref_w.position, ref_w.cups, ref_w._collision, ref_w._steps, ref_w._done)
+    assert w.np_random.bit_generator.state == ref_w.np_random.bit_generator.state
+
+
+@pytest.mark.parametrize(("task", "arch", "changes"), [
+    (1, "recurrent-model", {}), (2, "recurrent-model", {}), (3, "recurrent-model", {"model_lessons_per_trial": 3}),
+    (2, "recurrent-model", {"online": False}), (1, "recurrent-Q", {}), (2, "recurrent-Q", {}), (3, "recurrent-Q", {})])
+def test_the_compiled_trials_are_run_trials(task, arch, changes):
+    p = CupParams(task=task, arch=arch, trials=30, lessons_per_trial=4, **changes)
+    pairs = []
+    for _ in range(2):
+        train_env, test_env = make_cup_envs(task)
+        train_env.reset(seed=11)
+        test_env.reset(seed=12)
+        pairs.append((train_env, test_env, make_agent(p, train_env.observation_space.shape[0], 3,
+                                                      np.random.default_rng(5))))
+    (env, test_env, agent), (ref_env, ref_test_env, ref) = pairs
+    assert cup_play.compiled(env, agent) and cup_play.compiled(test_env, agent)
+    outcomes, picked = set(), False
+    for k in range(25):
+        got = cup_play.learning_play(env, agent, trial=k)
+        want = run_trial(ref_env, ref, trial=k, learning=True)
+        assert (got.steps, got.total_reward, got.terminated, got.truncated) == (
+            want.steps, want.total_reward, want.terminated, want.truncated)
+        _assert_same_worlds(env, ref_env)
+        _assert_same_agents(agent, ref)
+        outcomes.add(got.terminated)
+        picked |= len(ref_env.unwrapped.cups) < 2
+        if k % 4 == 0:
+            test_env.wasted = ref_test_env.wasted = 0
+            assert cup_play.test_score(test_env, agent) == hidden_state.test_score(ref_test_env, ref)
+            assert test_env.wasted == ref_test_env.wasted
+            _assert_same_worlds(test_env, ref_test_env)
+            _assert_same_agents(agent, ref)
+    assert picked and False in outcomes  # trials that collected cups and trials that timed out
+
+
+def test_other_learners_and_worlds_play_through_run_trial():
+    p = CupParams(task=2, arch="window-Q", trials=5)
+    env, test_env = make_cup_envs(2)
+    env.reset(seed=1)
+    window = make_agent(p, env.observation_space.shape[0], 3, np.random.default_rng(0))
+    assert not cup_play.compiled(env, window)
+    assert cup_play.learning_play(env, window, trial=0).steps >= 1  # through run_trial
+    agent = make_agent(CupParams(task=2, arch="recurrent-model"), env.observation_space.shape[0], 3,
+                       np.random.default_rng(0))
+    assert cup_play.compiled(env, agent)
+    for part, name in ((agent, "act"), (agent.q, "update"), (agent.model, "step"), (agent.explore, "temperature"),
+                       (agent.book.recorder, "add")):
+        setattr(part, name, getattr(part, name))  # a method replaced on the instance: the loop would not call it
+        assert not cup_play.compiled(env, agent)
+        delattr(part, name)
+    assert not cup_play.compiled(make_cup_envs(1)[0], agent)  # a world without the random bits its nets read
