@@ -267,6 +267,7 @@ class RecurrentModelQ(LessonAgent):
         self.track_model_error = False  # measure the model on each new lesson (7.5.1; off: it costs a pass)
         self.last_model_error: dict[str, float] | None = None  # on the latest lesson, before training on it
         self._checked: dict[int, tuple] = {}  # id(lesson) -> the lesson and its arrays as the kernels take them
+        self._packed: dict = {"lessons": [], "rows": 0, "arrays": None, "starts": [0]}  # _packed_history's
         self._xq: np.ndarray | None = None
 
     def q_input(self, sensation: np.ndarray) -> np.ndarray:
@@ -305,10 +306,28 @@ class RecurrentModelQ(LessonAgent):
         if not self.history or k == 0 or self.freeze_model:
             return 0.0
         picks = [len(self.history) - 1] + list(self.rng.integers(0, len(self.history), k - 1))
-        loss = 0.0
-        for i in picks:
-            loss += self.model.train_checked(*self._arrays(self.history[i])[:4])
-        return loss / len(picks)
+        return self.model.train_lessons(self._packed_history(), picks) / len(picks)
+
+    def _packed_history(self) -> tuple[np.ndarray, ...]:
+        """The past lessons laid end to end as ``RecurrentOAON.train_lessons`` takes them, extended as lessons are
+        added (built anew if the history was replaced)."""
+        packed, history, n = self._packed, self.history, len(self._packed["lessons"])
+        if n > len(history) or any(a is not b for a, b in zip(packed["lessons"], history[:n], strict=True)):
+            packed = self._packed = {"lessons": [], "rows": 0, "arrays": None, "starts": [0]}
+        for lesson in history[len(packed["lessons"]):]:
+            parts, n = self._arrays(lesson)[:4], len(lesson)
+            if packed["arrays"] is None or packed["rows"] + n > len(packed["arrays"][0]):  # room for twice as many
+                size = 2 * (packed["rows"] + n)
+                grown = tuple(np.empty((size, *a.shape[1:]), a.dtype) for a in parts)
+                for new, old in zip(grown, packed["arrays"] or (), strict=False):
+                    new[:packed["rows"]] = old[:packed["rows"]]
+                packed["arrays"] = grown
+            for buffer, a in zip(packed["arrays"], parts, strict=True):
+                buffer[packed["rows"]:packed["rows"] + n] = a
+            packed["rows"] += n
+            packed["lessons"].append(lesson)
+            packed["starts"].append(packed["rows"])
+        return (*packed["arrays"], np.array(packed["starts"], dtype=np.int64))
 
     def _arrays(self, lesson: Lesson) -> tuple[np.ndarray, ...]:
         """A past lesson as the model's kernels take it, checked and computed once (it is replayed many times):

@@ -57,6 +57,7 @@ from connrl.nets.recurrent_kernels import (  # noqa: F401 (tests and benchmarks 
     _policy_weights,
     _replay_q_lesson,
     _replay_q_lessons,
+    _train_lessons,
 )
 
 
@@ -299,6 +300,19 @@ class RecurrentOAON:
         _momentum_step(self.w2.reshape(-1), self.d2.reshape(-1), self._g2.reshape(-1), self.lr, c.momentum)
         self._fresh = False
         return loss
+
+    def train_lessons(self, packed: tuple, picks: np.ndarray) -> float:
+        """``train_checked`` on lessons ``picks`` of ``packed`` in turn, in one compiled call (issue 45); returns the
+        summed loss. ``packed``: (xs, actions, targets, weights, starts), arrays as ``check_sequence`` returns them
+        laid end to end, lesson i at rows starts[i]:starts[i + 1]."""
+        xs, actions, targets, weights, starts = packed
+        picks = np.asarray(picks, dtype=np.int64)
+        if picks.size and not (0 <= picks.min() and picks.max() < starts.size - 1):
+            raise ValueError(f"picks must be lessons 0..{starts.size - 2}, got {picks.min()}..{picks.max()}")
+        c = self.config
+        self._fresh = False
+        return float(_train_lessons(self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, xs, actions, targets,
+                                    weights, starts, picks, c.feedback, c.decay, self.scale, self.lr, c.momentum))
 
     def replay_q_lesson(self, xs: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool, *,
                         gamma: float, lam: float, temperature: float, p_threshold: float,

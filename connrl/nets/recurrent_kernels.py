@@ -199,6 +199,24 @@ def _bptt_backward(w1, w2, xs, actions, targets, weights, feedback, decay, scale
     return loss
 
 
+@numba.njit(cache=True)
+def _train_lessons(w1, w2, d1, d2, g1, g2, xs, actions, targets, weights, starts, picks, feedback, decay, scale, lr,
+                   momentum):
+    """One BPTT and momentum step (``RecurrentOAON.train_checked``) on each picked lesson in turn, lesson i being rows
+    ``starts[i]:starts[i + 1]`` of the packed arrays; returns the losses summed in order."""
+    w1f, w2f, d1f, d2f = w1.reshape(w1.size), w2.reshape(w2.size), d1.reshape(d1.size), d2.reshape(d2.size)
+    g1f, g2f = g1.reshape(g1.size), g2.reshape(g2.size)
+    loss = 0.0
+    for i in picks:
+        g1f[:] = 0.0
+        g2f[:] = 0.0
+        s, e = starts[i], starts[i + 1]
+        loss += _bptt(w1, w2, xs[s:e], actions[s:e], targets[s:e], weights[s:e], feedback, decay, scale, g1, g2)
+        _momentum_step(w1f, d1f, g1f, lr, momentum)
+        _momentum_step(w2f, d2f, g2f, lr, momentum)
+    return loss
+
+
 @numba.njit(cache=True, inline="always")
 def _momentum_step(w, d, g, lr, momentum):
     """``d <- momentum * d - lr * g``; ``w <- w + d`` on flat views."""

@@ -25,6 +25,7 @@ from connrl.core.replay import ReplayParams, batch_targets
 from connrl.core.rollout import run_trial
 from connrl.envs.cup import CupCollectionEnv
 from connrl.nets import NetConfig, RecurrentNetConfig, RecurrentOAON
+from connrl.tasks.hidden_state import _probe_walks
 
 TEMP = TemperatureSchedule.inverse(5, 30, 100)
 
@@ -326,3 +327,25 @@ def test_recurrent_model_trains_and_replays_from_lessons_checked_once():
     other = Lesson(lesson.inputs[::-1].copy(), lesson.actions, lesson.rewards, terminated=False)
     agent._checked[id(other)] = agent._checked[id(lesson)]  # as if the id had been reused
     np.testing.assert_array_equal(agent._arrays(other)[4], other.inputs)
+
+
+def test_the_models_passes_in_one_call_are_train_sequence_on_each_pick():
+    """``train_model`` trains on its picks in one compiled call over the packed history (issue 45): the same weights,
+    loss and random stream as ``train_sequence`` on each picked lesson in turn, as the history grows and when it is
+    replaced."""
+    agent = model_agent(seed=3)
+    walks = [lesson for lesson, _ in _probe_walks(1, 5, 12, 10)]  # random walks of the cup world
+    twin, twin_rng = copy.deepcopy(agent.model), copy.deepcopy(agent.rng)
+    for k in range(12):
+        agent.history.append(walks[k])
+        if k == 8:
+            agent.history = agent.history[2:]  # replaced: packed anew
+        n = len(agent.history)
+        picks = [n - 1] + list(twin_rng.integers(0, n, agent.config.model_lessons_per_trial - 1))
+        want = sum(twin.train_sequence(agent.history[i].inputs[:-1], agent.history[i].actions,
+                                       model_targets(agent.history[i], agent.config.payoff_scale)) for i in picks)
+        assert agent.train_model() == want / len(picks)
+        for name in ("w1", "w2", "d1", "d2"):
+            np.testing.assert_array_equal(getattr(agent.model, name), getattr(twin, name))
+    assert agent.rng.bit_generator.state == twin_rng.bit_generator.state
+

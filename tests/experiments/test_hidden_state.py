@@ -75,7 +75,7 @@ def test_model_is_fixed_at_the_first_optimal_test(monkeypatch):
     monkeypatch.setattr(RecurrentModelQ, "train_model", lambda self: seen.append(self.freeze_model) or train(self))
     def run(p):
         scores = iter([20, 14, 20, 20])  # greedy test scores after trials 1-4: optimal (14) once, after trial 2
-        monkeypatch.setattr(hs, "test_score", lambda env, agent: next(scores))
+        monkeypatch.setattr(hs.cup_play, "test_score", lambda env, agent: next(scores))
         return hs.run_cup(p, np.random.default_rng(0))
 
     p = hs.FrozenModelParams(task=2, arch="recurrent-model", trials=4, lessons_per_trial=2, model_lessons_per_trial=2,
