@@ -26,7 +26,11 @@ the loop adds on top of it.
   each against ``replay_q_lessons``;
 - Ch. 4's training plays (QCON, AHCON, QCON-M with the perfect model, AHCON-M with the learned one, planning
   from the first play), 20 plays after 10: ``run_trial`` against ``connrl.tasks.survival_train.learning_play``, each
-  batch from a copy of the agent and world (the copy's time in both).
+  batch from a copy of the agent and world (the copy's time in both);
+- the sixth round: 20 training trials over behaviours (Ch. 6's QCON, Ch. 8's recurrent-Q) and 20 cup trials with
+  their greedy tests (Ch. 7's three learners), ``run_trial`` (and ``hidden_state.test_score``) against
+  ``recharge_train.learning_play`` and ``cup_play``; recurrent-model's 70 model passes of a trial,
+  ``train_checked`` on each against ``train_lessons``.
 Each time is the best of --repeat rounds.
 """
 
@@ -57,6 +61,8 @@ from connrl.core.replay import (
 from connrl.core.rollout import run_trial
 from connrl.envs.robot.recharge import ROOMS, sample_in_room
 from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS, SurvivalEnv
+from connrl.experiments.hidden_state import CupParams
+from connrl.experiments.integration import IntegrationParams
 from connrl.experiments.recharge import RechargeParams
 from connrl.experiments.robot import RobotParams
 from connrl.nets import OAON, NetConfig
@@ -64,7 +70,10 @@ from connrl.nets.kernels import _forward_at, _replay_mlp, _replay_q_steps, _rota
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
 from connrl.nets.recurrent_kernels import _forward_sequence
 from connrl.nets.rotated import RotatedNet
-from connrl.tasks import recharge_play, robot_play
+from connrl.tasks import cup_play, hidden_state, recharge_play, recharge_train, robot_play
+from connrl.tasks.hidden_state import make_agent as make_memory_agent
+from connrl.tasks.hidden_state import make_cup_envs
+from connrl.tasks.integration import make_integration_agent, make_integration_env
 from connrl.tasks.recharge import make_high_level_agent, make_recharge_env
 from connrl.tasks.robot import make_agent, make_env
 from connrl.tasks.survival import SurvivalAgentParams, make_survival_agent
@@ -211,7 +220,7 @@ def mlp_rows(repeat: int, rng) -> list[tuple[str, float, float]]:
                 best_time(lambda: [replay_q(nets[0], x, params) for x in picks], 1, repeat),
                 best_time(lambda: replay_q_lessons(nets[1], picks, [0.005] * 1000, params, lambda _: (None, None)), 1,
                           repeat)))
-    return out + training_rows(repeat)
+    return out + training_rows(repeat) + sixth_rows(repeat)
 
 
 def training_rows(repeat: int) -> list[tuple[str, float, float]]:
@@ -237,6 +246,55 @@ def training_rows(repeat: int) -> list[tuple[str, float, float]]:
                                repeat),
                      best_time(lambda plays=plays: plays(learning_play), 1, repeat)))
     return out
+
+
+def sixth_rows(repeat: int) -> list[tuple[str, float, float]]:
+    """The sixth round: training trials over behaviours and cup trials, each batch from a copy of the agent and world;
+    the model's passes of a trial."""
+    out = []
+    for name, p, make_world, make in (
+            ("Ch. 6 QCON", RechargeParams(), make_recharge_env, make_high_level_agent),
+            ("Ch. 8 recurrent-Q", IntegrationParams(memory="recurrent", online=False), make_integration_env,
+             make_integration_agent)):
+        env, agent = make_world(p), make(p, np.random.default_rng(3))
+        for k in range(5):
+            run_trial(env, agent, trial=k, learning=True, seed=k)
+        out.append((f"20 training trials over behaviours, {name}: run_trial / compiled",
+                    *(best_time(lambda play=play, start=(env, agent): _trials(play, start, 5), 1, repeat)
+                      for play in (run_trial, recharge_train.learning_play))))
+    for arch in ("window-Q", "recurrent-Q", "recurrent-model"):
+        train_env, test_env = make_cup_envs(2)
+        train_env.reset(seed=1)
+        test_env.reset(seed=2)
+        agent = make_memory_agent(CupParams(task=2, arch=arch), train_env.observation_space.shape[0], 3,
+                                  np.random.default_rng(3))
+        for k in range(20):
+            run_trial(train_env, agent, trial=k, learning=True)
+        out.append((f"20 cup trials and their tests, {arch} (Ch. 7, Task 2): run_trial / compiled",
+                    *(best_time(lambda play=play, score=score, start=(train_env, test_env, agent):
+                                _cup_trials(play, score, start), 1, repeat)
+                      for play, score in ((run_trial, hidden_state.test_score),
+                                          (cup_play.learning_play, cup_play.test_score)))))
+    model = agent.model
+    picks = [len(agent.history) - 1] + list(np.random.default_rng(0).integers(0, len(agent.history), 69))
+    out.append(("recurrent-model's 70 model passes of a trial (Ch. 7): train_checked each / one call",
+                best_time(lambda: [model.train_checked(*agent._arrays(agent.history[i])[:4]) for i in picks], 1,
+                          repeat),
+                best_time(lambda: model.train_lessons(agent._packed_history(), picks), 1, repeat)))
+    return out
+
+
+def _trials(play, start, first):
+    env, agent = copy.deepcopy(start)
+    for k in range(first, first + 20):
+        play(env, agent, trial=k, seed=k, **({"learning": True} if play is run_trial else {}))
+
+
+def _cup_trials(play, score, start):
+    train_env, test_env, agent = copy.deepcopy(start)
+    for k in range(20, 40):
+        play(train_env, agent, trial=k, **({"learning": True} if play is run_trial else {}))
+        score(test_env, agent)
 
 
 @numba.njit(cache=False)

@@ -137,7 +137,7 @@ _LOOP_METHODS = {"": ("act", "observe", "next_value", "temperature", "encode", "
                  "q": ("values", "value", "update", "update_error"), "policy": ("values", "update_error"),
                  "v": ("value", "update"), "explore": ("temperature", "begin"), "explore.detector": ("factor",),
                  "book.recorder": ("add",), "net": ("values", "outputs", "advance"),
-                 "model": ("step", "outputs", "advance"),
+                 "model": ("step", "outputs", "advance"), "memory": ("push", "encode", "reset"),
                  "choice": ("choose", "weights", "observed", "next_value")}
 
 
@@ -320,8 +320,10 @@ class LessonAgent:
         p_taught = r.taught_probability(self.trial)
         if r.taught_order == "after":  # draws interleaved with replays, as the streams of stored runs expect
             if self.replays_in_one_call():  # its replays draw nothing: the same stream with the draws first
-                picks = [mem.sample(self.rng) for _ in range(n)]
-                self.replay_lessons([lesson for _, lesson in picks], [r.threshold_for_age(age) for age, _ in picks])
+                ages = mem.sample_ages(self.rng, n)
+                thresholds = {age: r.threshold_for_age(age) for age in set(ages)}
+                lessons = mem.lessons
+                self.replay_lessons([lessons[-1 - age] for age in ages], [thresholds[age] for age in ages])
             else:
                 for _ in range(n):
                     age, lesson = mem.sample(self.rng)

@@ -124,6 +124,17 @@ class LessonMemory:
         k = recency_index(len(self.lessons), float(rng.random()))
         return len(self.lessons) - 1 - k, self.lessons[k]
 
+    def sample_ages(self, rng: np.random.Generator, count: int) -> list[int]:
+        """The ages of ``count`` lessons chosen as ``sample`` chooses them, from the same draws taken at once
+        (``rng.random(count)`` is ``count`` calls of ``rng.random()``): a trial replays up to 1000 (issue 45)."""
+        n = len(self.lessons)
+        if n < 1:
+            raise ValueError("cannot choose a lesson from an empty memory")
+        w = min(3.0, 1.0 + 0.02 * n)
+        spread = math.exp(w) - 1.0  # recency_index's arithmetic, in its order
+        return [n - 1 - min(int(math.floor(n * math.log(1.0 + r * spread) / w)), n - 1)
+                for r in rng.random(count).tolist()]
+
 
 class MixedOptions(ValueError):
     """Some lessons of one packed call have per-step weights or allowed choices and some not (a behaviour-level

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from connrl.agents.base import Exploration, methods_replaced
-from connrl.agents.memory import RecurrentModelQ, RecurrentQ
+from connrl.agents.memory import RecurrentModelQ, RecurrentQ, SensationWindow, WindowQ, window_input_size
 from connrl.core.boltzmann_kernel import _boltzmann_choice, _nanmax, compiled_choice_fits
 from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.cup import INSTANCES, N_CELLS, OFF, ON, CupCollectionEnv
@@ -49,6 +49,12 @@ def compiled(env, agent) -> bool:
         net = agent.net
         nets = (type(net) is RecurrentOAON and net.config.n_outputs == 1 and net.n_nets == n_a
                 and net.config.n_inputs == n_s)
+    elif type(agent) is WindowQ:
+        m, q = agent.memory, agent.q
+        nets = (type(m) is SensationWindow and type(q) is OAON and agent.planner is None and q.n_nets == n_a
+                and (m.n_sensation, m.n_actions) == (n_s, n_a) and q.config.n_inputs == window_input_size(
+                    n_s, n_a, m.window) and m.sensations.shape == (m.window, n_s)
+                and m.actions.shape == (m.window, n_a))
     else:
         return False
     return (nets and n_a == 3 and type(agent.explore) is Exploration and agent.explore.detector is None
@@ -64,7 +70,8 @@ def learning_play(env: CupCollectionEnv, agent, *, trial: int) -> TrialStats:
     agent.begin_trial(obs, info, trial=trial, learning=True)
     steps, total, terminated, inputs, actions, rewards, p = _play(env, agent, obs, True)
     agent.took_compiled_trial(inputs[:steps + 1], actions[:steps], rewards[:steps], terminated, p)
-    agent._x = inputs[steps - 1].copy()  # the input of the last choice (neither observe keeps the next one)
+    if type(agent) is not WindowQ:  # the input of the last choice: their observe keeps no next one
+        agent._x = inputs[steps - 1].copy()
     agent.end_trial()
     agent.learn()
     return TrialStats(steps, total, terminated, not terminated, {})
@@ -91,8 +98,10 @@ def _play(env, agent, obs, learning: bool):
     (steps, total reward, terminated, inputs, actions, rewards, the last choice's distribution)."""
     world = env.env if type(env) is hidden_state.WastedPickUps else env
     cap = world.max_steps - world._steps
-    inputs, actions, rewards = np.empty((cap + 1, len(obs))), np.empty(cap, np.int64), np.empty(cap)
-    inputs[0] = obs
+    window = type(agent) is WindowQ
+    width = agent.q.config.n_inputs if window else len(obs)
+    inputs, actions, rewards = np.empty((cap + 1, width)), np.empty(cap, np.int64), np.empty(cap)
+    inputs[0] = agent._x if window else obs
     cups = np.zeros(N_CELLS, dtype=np.bool_)
     cups[list(world.cups)] = True
     cell = np.array([world.position, world._collision, world._steps, 0], dtype=np.int64)
@@ -108,6 +117,16 @@ def _play(env, agent, obs, learning: bool):
                                                       m._y), (learning and agent.config.online, agent.config.gamma, t),
                                                spec, cups, cell, record, agent.rng, world.np_random, q, p, scratch,
                                                agent._xq)
+    elif window:
+        qn, now, last, last_obs = agent.q, np.array(obs, dtype=np.float64), np.array([-1]), np.empty(len(obs))
+        qnet = (qn.w1, qn.w2, qn.d1, qn.d2, qn.scale, qn.lr, qn.config.momentum, qn.config.linear_output)
+        c = agent.config
+        learner = (learning, learning and c.online, c.gamma, 0.0 if c.target_clip is None else c.target_clip,
+                   c.target_clip is not None, t)
+        steps, total, terminated = _window_loop(qnet, learner, agent.memory.sensations, agent.memory.actions, spec,
+                                                cups, cell, record, now, (last, last_obs), agent.rng,
+                                                world.np_random, q, p, scratch)
+        agent._last_obs, agent._last_action = last_obs, None if last[0] < 0 else int(last[0])
     else:
         n = agent.net
         steps, total, terminated = _recurrent_loop((n.w1, n.w2, n.scale, n.config.feedback, n.context, n._h_all,
@@ -230,5 +249,71 @@ def _recurrent_loop(net, t, spec, cups, cell, record, agent_rng, rng, q, p, scra
         reward, terminated, truncated = _move_on(a, feedback, h_all, context, spec, cups, cell, rng, record, steps)
         steps += 1
         total += reward
+        if terminated or truncated:
+            return steps, total, terminated
+
+
+@numba.njit(cache=False)
+def _push(sens, acts, s, a):
+    """``SensationWindow.push(s, a)``: the window shifted one slot older, ``s`` and action ``a`` (one-hot in +-0.5)
+    in front."""
+    for i in range(sens.shape[0] - 1, 0, -1):
+        sens[i, :] = sens[i - 1, :]
+        acts[i, :] = acts[i - 1, :]
+    sens[0, :] = s
+    acts[0, :] = OFF
+    acts[0, a] = ON
+
+
+@numba.njit(cache=False)
+def _encode(s, sens, acts, x):
+    """``SensationWindow.encode(s)`` into ``x``: [s, the window's sensations, its actions]."""
+    k = 0
+    for v in (s, sens.ravel(), acts.ravel()):
+        for j in range(v.size):
+            x[k] = v[j]
+            k += 1
+
+
+@numba.njit(cache=False)
+def _window_loop(qnet, learner, sens, acts, spec, cups, cell, record, now, last, agent_rng, rng, q, p, scratch):
+    """Window-Q over the trial (``WindowQ.act`` and, learning, ``observe``): the values on the encoded window, the
+    choice, the world's step, the window shifted and, with ``online``, Fig. 3.4's update. A test play shifts the
+    window and encodes at each choice, as ``act`` does without ``observe``. ``now``: the current sensation;
+    ``last``: (the action not yet in the window, -1 for none; the sensation of the last choice). Returns as
+    ``_model_loop``."""
+    w1, w2, d1, d2, scale, lr, momentum, linear = qnet
+    learning, online, gamma, clip, has_clip, t = learner
+    inputs, actions, rewards = record
+    pending, last_obs = last
+    h, qn, s_next = np.empty(max(w1.shape[1], 1)), np.empty(q.size), np.empty(now.size)
+    steps, total = 0, 0.0
+    while True:
+        x = inputs[steps]
+        if not learning:
+            if pending[0] >= 0:
+                _push(sens, acts, last_obs, pending[0])
+            _encode(now, sens, acts, x)
+        _values_any(w1, w2, x, h, scale, q, linear)
+        a = _choose(q, t, agent_rng, p, scratch)
+        last_obs[:] = now
+        pending[0] = a
+        reward, terminated, truncated = _cup_step(spec, cups, cell, a, rng, s_next)
+        steps += 1
+        actions[steps - 1], rewards[steps - 1] = a, reward
+        total += reward
+        now[:] = s_next
+        if learning:
+            _push(sens, acts, last_obs, a)
+            pending[0] = -1
+            _encode(now, sens, acts, inputs[steps])
+            if online:
+                nxt = 0.0
+                if not terminated:
+                    _values_any(w1, w2, inputs[steps], h, scale, qn, linear)
+                    nxt = _nanmax(qn, qn.size)
+                target = reward + gamma * nxt
+                target = clip if has_clip and clip < target else target
+                _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum, linear)
         if terminated or truncated:
             return steps, total, terminated

@@ -6,6 +6,7 @@ P(k) = (e^(w (k+1) / n) - e^(w k / n)) / (e^w - 1), written out here without the
 
 import math
 
+import numpy as np
 import pytest
 
 from connrl.core.lessons import Lesson, LessonMemory, recency_index
@@ -61,3 +62,19 @@ def test_lesson_memory_samples_ages_with_the_a2_probabilities(n):
         assert counts[age] / m == pytest.approx(p[n - 1 - age], abs=2.0 / m)
     if n > 1:
         assert counts[0] > counts[-1]  # the latest is the likeliest
+
+
+@pytest.mark.parametrize("n", (1, 7, 100, 250))
+def test_ages_drawn_at_once_are_samples_one_by_one(n):
+    """``sample_ages`` (a trial's draws in one call, issue 45) gives ``sample``'s ages from the same stream, at and
+    above the cap of w."""
+    mem = LessonMemory(capacity=300)
+    for i in range(n):
+        mem.add(Lesson([[float(i)], [float(i)]], [0], [0.0], terminated=True))
+    rng, ref = np.random.default_rng(n), np.random.default_rng(n)
+    assert mem.sample_ages(rng, 0) == []
+    for count in (1, 5, 1000):
+        assert mem.sample_ages(rng, count) == [mem.sample(ref)[0] for _ in range(count)]
+    assert rng.bit_generator.state == ref.bit_generator.state
+    with pytest.raises(ValueError, match="empty memory"):
+        LessonMemory(3).sample_ages(rng, 2)

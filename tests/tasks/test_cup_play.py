@@ -15,7 +15,7 @@ from tests.tasks.test_robot_train import assert_same_lessons
 
 
 def _parts(agent) -> dict:
-    nets = {"q": agent.q, "model": agent.model} if hasattr(agent, "model") else {"net": agent.net}
+    nets = {name: getattr(agent, name) for name in ("q", "model", "net") if hasattr(agent, name)}
     out = {}
     for name, net in nets.items():
         for field in ("w1", "w2", "d1", "d2", "context", "_h_all", "_y"):
@@ -29,7 +29,11 @@ def _assert_same_agents(agent, ref):
     for name, value in _parts(ref).items():
         np.testing.assert_array_equal(mine[name], value, err_msg=name)
     assert agent.rng.bit_generator.state == ref.rng.bit_generator.state
-    for name in ("_x", "_xq", "last_probabilities"):
+    assert getattr(agent, "_last_action", None) == getattr(ref, "_last_action", None)
+    if hasattr(ref, "memory"):
+        np.testing.assert_array_equal(agent.memory.sensations, ref.memory.sensations)
+        np.testing.assert_array_equal(agent.memory.actions, ref.memory.actions)
+    for name in ("_x", "_xq", "last_probabilities", "_last_obs"):
         if hasattr(ref, name):
             np.testing.assert_array_equal(getattr(agent, name), getattr(ref, name), err_msg=name)
     assert_same_lessons(agent, ref)
@@ -44,7 +48,9 @@ def _assert_same_worlds(env, ref_env):
 
 @pytest.mark.parametrize(("task", "arch", "changes"), [
     (1, "recurrent-model", {}), (2, "recurrent-model", {}), (3, "recurrent-model", {"model_lessons_per_trial": 3}),
-    (2, "recurrent-model", {"online": False}), (1, "recurrent-Q", {}), (2, "recurrent-Q", {}), (3, "recurrent-Q", {})])
+    (2, "recurrent-model", {"online": False}), (1, "recurrent-Q", {}), (2, "recurrent-Q", {}), (3, "recurrent-Q", {}),
+    (1, "window-Q", {}), (2, "window-Q", {"lam": 0.0}), (3, "window-Q", {"online": False}),
+    (2, "window-Q", {"table": {"hq": 4}})])
 def test_the_compiled_trials_are_run_trials(task, arch, changes):
     p = CupParams(task=task, arch=arch, trials=30, lessons_per_trial=4, **changes)
     pairs = []
@@ -80,6 +86,8 @@ def test_other_learners_and_worlds_play_through_run_trial():
     env, test_env = make_cup_envs(2)
     env.reset(seed=1)
     window = make_agent(p, env.observation_space.shape[0], 3, np.random.default_rng(0))
+    assert cup_play.compiled(env, window)
+    window.__class__ = type("OwnWindowQ", (type(window),), {})  # a subclass may do anything differently
     assert not cup_play.compiled(env, window)
     assert cup_play.learning_play(env, window, trial=0).steps >= 1  # through run_trial
     agent = make_agent(CupParams(task=2, arch="recurrent-model"), env.observation_space.shape[0], 3,
