@@ -7,8 +7,8 @@ chapter, and where the cores sat idle; optionally profile the most expensive exp
 `--from-records` skips the run and reads what is stored (the pool's idle time is then unknown: the runs may come from
 several commands). `--write-times` writes connrl/data/run_times.json (each variant's mean run time: the order runs start
 in and the ETA of `connrl reproduce`). `--top N` runs the longest run of each of the N most expensive experiments again
-under cProfile, in this process, and splits its time into Ch. 4's compiled test plays, environment steps, action
-selection, learning (replay, updates, models) and the rest (bookkeeping).
+under cProfile, in this process, and splits its time into the compiled trials (the loops that play a whole trial,
+Chs. 4-8), environment steps, action selection, learning (replay, updates, models) and the rest (bookkeeping).
 """
 
 from __future__ import annotations
@@ -33,7 +33,9 @@ from connrl.experiments.timing import RUN_TIMES, computed, per_experiment, pool_
 
 # cProfile's own-time of each function, by where it lives (the first pattern that matches the "file:function")
 CATEGORIES = [
-    ("compiled test plays", r"_greedy_loop"),  # Ch. 4's greedy plays: world steps and choices in one kernel
+    # the compiled plays and trials of Chs. 4-8 (connrl/tasks/*_play.py, *_train.py): world steps, choices and on-line
+    # updates in one kernel
+    ("compiled trials", r"\(_(greedy|play|flat|learning|qcon|recurrent|model|window)_loop\)"),
     ("environment", r"connrl/envs/|gymnasium/|survival_models\.py:\d+\(predict|cup\.py"),
     ("action selection", r"exploration\.py|\((values|_mlp_values|_rotated_values|_forward_all|outputs|act|choose|"
                          r"q_values|applicable|select\w*)\)"),
@@ -158,7 +160,7 @@ def profile_top(records, specs, n, profile) -> list[str]:
     lines = ["", f"The {n} most expensive experiments, each one's longest run again under cProfile (own time of every "
              "function, by kind; cProfile slows Python calls more than compiled kernels, so the Python shares are "
              "upper bounds):", "",
-             "| experiment | run | compiled test plays | environment | action selection | learning | bookkeeping |",
+             "| experiment | run | compiled trials | environment | action selection | learning | bookkeeping |",
              "|---|---|---|---|---|---|---|"]
     for name in top:
         rec = max((r for r in computed(records) if r["experiment"] == name), key=lambda r: r["wall_time_s"])

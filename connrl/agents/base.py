@@ -131,9 +131,10 @@ def position_of(info: dict | None):
 
 
 # What a compiled training loop does in place of the learner's own methods (connrl.tasks.survival_train,
-# robot_train, recharge_train): a method replaced on the instance of any of these parts is not called there, so that
-# trial takes the Python path.
-_LOOP_METHODS = {"": ("act", "observe", "next_value", "temperature", "encode", "begin_trial", "online_target"),
+# robot_train, recharge_train, cup_play): a method replaced on the instance of any of these parts is not called
+# there, so that trial takes the Python path.
+_LOOP_METHODS = {"": ("act", "observe", "next_value", "temperature", "encode", "begin_trial", "online_target",
+                      "q_input"),
                  "q": ("values", "value", "update", "update_error"), "policy": ("values", "update_error"),
                  "v": ("value", "update"), "explore": ("temperature", "begin"), "explore.detector": ("factor",),
                  "book.recorder": ("add",), "net": ("values", "outputs", "advance"),
@@ -257,9 +258,9 @@ class LessonAgent:
     def took_compiled_trial(self, inputs: np.ndarray, actions: np.ndarray, rewards: np.ndarray, terminated: bool,
                             probabilities: np.ndarray) -> None:
         """The learner as ``run_trial`` leaves it before ``end_trial`` after a trial a compiled loop played
-        (``connrl.tasks.survival_train``, ``robot_train``): its n steps' n + 1 inputs, actions and rewards in the
-        recorder, the trial's end (a time limit when not terminated), its last input and its last choice's
-        distribution."""
+        (``connrl.tasks.survival_train``, ``robot_train``, ``recharge_train``, ``cup_play``): its n steps' n + 1
+        inputs, actions and rewards in the recorder, the trial's end (a time limit when not terminated), its last
+        input and its last choice's distribution."""
         rec = self.book.recorder
         rec.inputs, rec.actions, rec.rewards = list(inputs), actions.tolist(), rewards.tolist()
         self.book.ended = (bool(terminated), not terminated)

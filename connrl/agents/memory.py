@@ -315,16 +315,16 @@ class RecurrentModelQ(LessonAgent):
         if n > len(history) or any(a is not b for a, b in zip(packed["lessons"], history[:n], strict=True)):
             packed = self._packed = {"lessons": [], "rows": 0, "arrays": None, "starts": [0]}
         for lesson in history[len(packed["lessons"]):]:
-            parts, n = self._arrays(lesson)[:4], len(lesson)
-            if packed["arrays"] is None or packed["rows"] + n > len(packed["arrays"][0]):  # room for twice as many
-                size = 2 * (packed["rows"] + n)
+            parts, rows = self._arrays(lesson)[:4], len(lesson)
+            if packed["arrays"] is None or packed["rows"] + rows > len(packed["arrays"][0]):  # room for twice as many
+                size = 2 * (packed["rows"] + rows)
                 grown = tuple(np.empty((size, *a.shape[1:]), a.dtype) for a in parts)
                 for new, old in zip(grown, packed["arrays"] or (), strict=False):
                     new[:packed["rows"]] = old[:packed["rows"]]
                 packed["arrays"] = grown
             for buffer, a in zip(packed["arrays"], parts, strict=True):
-                buffer[packed["rows"]:packed["rows"] + n] = a
-            packed["rows"] += n
+                buffer[packed["rows"]:packed["rows"] + rows] = a
+            packed["rows"] += rows
             packed["lessons"].append(lesson)
             packed["starts"].append(packed["rows"])
         return (*packed["arrays"], np.array(packed["starts"], dtype=np.int64))

@@ -128,6 +128,8 @@ class LessonMemory:
         """The ages of ``count`` lessons chosen as ``sample`` chooses them, from the same draws taken at once
         (``rng.random(count)`` is ``count`` calls of ``rng.random()``): a trial replays up to 1000 (issue 45)."""
         n = len(self.lessons)
+        if count == 0:
+            return []
         if n < 1:
             raise ValueError("cannot choose a lesson from an empty memory")
         w = min(3.0, 1.0 + 0.02 * n)

@@ -306,10 +306,16 @@ class RecurrentOAON:
         summed loss. ``packed``: (xs, actions, targets, weights, starts), arrays as ``check_sequence`` returns them
         laid end to end, lesson i at rows starts[i]:starts[i + 1]."""
         xs, actions, targets, weights, starts = packed
+        c = self.config
+        n = int(starts[-1]) if starts.size else -1
+        if (starts.size < 2 or starts[0] != 0 or (np.diff(starts) < 1).any() or xs.shape[1:] != (c.n_inputs,)
+                or targets.shape[1:] != (c.n_outputs,) or min(len(xs), len(actions), len(targets), len(weights)) < n
+                or (n and not 0 <= actions[:n].min() <= actions[:n].max() < self.n_nets)):
+            raise ValueError(f"packed lessons must be ({c.n_inputs} inputs, actions 0..{self.n_nets - 1}, "
+                             f"{c.n_outputs} targets, weights) rows with lesson starts rising from 0")
         picks = np.asarray(picks, dtype=np.int64)
         if picks.size and not (0 <= picks.min() and picks.max() < starts.size - 1):
             raise ValueError(f"picks must be lessons 0..{starts.size - 2}, got {picks.min()}..{picks.max()}")
-        c = self.config
         self._fresh = False
         return float(_train_lessons(self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, xs, actions, targets,
                                     weights, starts, picks, c.feedback, c.decay, self.scale, self.lr, c.momentum))

@@ -1,18 +1,20 @@
-"""Ch. 7's cup-collection trials compiled whole, for the recurrent agents (issue 45).
+"""Ch. 7's cup-collection trials compiled whole (issue 45).
 
 Each of the 500 trials of a cup run is a training trial and two greedy test episodes (7.5.1), each step a dozen
-Python calls: the Q-values, the Boltzmann choice, the model's or the Q-net's context moved on by the chosen action's
-net (7.4), the corridor's step and its sensation (with Task 2's random bits and Task 3's control errors drawn from
-the world's generator) and, in training, recurrent-model's on-line update of its feed-forward Q-net (Fig. 3.4 on
-[sensation, context]). ``learning_play`` and ``test_score`` run them as one Numba loop with the same arithmetic and
-the same draws from the learner's and the world's generators as ``run_trial`` and
-``connrl.tasks.hidden_state.test_score``; the lesson, the model's training and the replays after a trial are the
-Python path's own. tests/tasks/test_cup_play.py holds the two to each other, nets and streams bit for bit.
+Python calls: the Q-values, the Boltzmann choice, recurrent-model's model or recurrent-Q's nets moving their context on
+by the chosen action's net (7.4) or window-Q's window shifted, the corridor's step and its sensation (with Task 2's
+random bits and Task 3's control errors drawn from the world's generator) and, in training, the on-line update of
+recurrent-model's and window-Q's feed-forward Q-nets (Fig. 3.4). ``learning_play`` and ``test_score`` run them as one
+Numba loop with the same arithmetic and the same draws from the learner's and the world's generators as
+``run_trial`` and ``connrl.tasks.hidden_state.test_score``; the lesson, the model's training and the replays after a
+trial are the Python path's own. tests/tasks/test_cup_play.py holds the two to each other, nets and streams bit for
+bit.
 
 Compiled: a plain ``CupCollectionEnv`` (under ``WastedPickUps`` for tests) and a ``RecurrentModelQ`` (its Q-net an
-``OAON``) or ``RecurrentQ`` over ``RecurrentOAON`` nets, exploring without stuck detection at a temperature above 0
-(in training); anything else (window-Q, a method replaced on the instance, a trial watched step by step) plays
-through ``run_trial``. The returned stats' info is empty. Not cached: the Boltzmann choice holds NumPy's ``exp``.
+``OAON``), a ``RecurrentQ`` over ``RecurrentOAON`` nets or a ``WindowQ`` over an ``OAON`` without a planner,
+exploring without stuck detection at a temperature above 0 (in training); anything else (another class or subclass,
+a method replaced on the instance of the learner or its parts) plays through ``run_trial``. The returned stats' info
+is empty. Not cached: the Boltzmann choice holds NumPy's ``exp``.
 """
 
 from __future__ import annotations

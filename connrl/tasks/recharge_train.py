@@ -39,7 +39,6 @@ from connrl.tasks.robot_play import _as_input
 
 def compiled_learning(env, agent, trial: int) -> bool:
     """Whether ``learning_play`` compiles this trial (the module docstring's cases)."""
-    ex = agent.explore
     if type(agent) is BehaviourQCON:
         nets = type(agent.q) is OAON and agent.planner is None and agent.q.n_nets == len(BEHAVIOUR_TASKS)
         n_inputs = agent.q.config.n_inputs
@@ -49,6 +48,7 @@ def compiled_learning(env, agent, trial: int) -> bool:
         n_inputs = net.config.n_inputs
     else:
         return False
+    ex = agent.explore
     return (nets and compiled_world(env) and n_inputs == env.observation_space.shape[0]
             and agent.n_actions == len(BEHAVIOUR_TASKS) and type(agent.choice) is BehaviourChoice
             and type(ex) is Exploration and ex.detector is None and ex.schedule(trial) > 0

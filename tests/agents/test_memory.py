@@ -348,4 +348,9 @@ def test_the_models_passes_in_one_call_are_train_sequence_on_each_pick():
         for name in ("w1", "w2", "d1", "d2"):
             np.testing.assert_array_equal(getattr(agent.model, name), getattr(twin, name))
     assert agent.rng.bit_generator.state == twin_rng.bit_generator.state
+    xs, actions, targets, ones, starts = agent._packed_history()
+    for bad in ((xs[:, :3], actions, targets, ones, starts), (xs, actions + 3, targets, ones, starts),
+                (xs, actions, targets, ones, starts[::-1].copy())):
+        with pytest.raises(ValueError, match="packed lessons"):  # the kernel indexes without bounds checks
+            agent.model.train_lessons(bad, [0])
 

@@ -78,3 +78,4 @@ def test_ages_drawn_at_once_are_samples_one_by_one(n):
     assert rng.bit_generator.state == ref.bit_generator.state
     with pytest.raises(ValueError, match="empty memory"):
         LessonMemory(3).sample_ages(rng, 2)
+    assert LessonMemory(3).sample_ages(rng, 0) == []  # no replay asked of an empty memory: no error, as sample's

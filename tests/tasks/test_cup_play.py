@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from connrl.core.rollout import run_trial
+from connrl.envs.cup import CupCollectionEnv
 from connrl.experiments.hidden_state import CupParams
 from connrl.tasks import cup_play, hidden_state
 from connrl.tasks.hidden_state import make_agent, make_cup_envs
@@ -51,7 +52,7 @@ def _assert_same_worlds(env, ref_env):
     (2, "recurrent-model", {"online": False}), (1, "recurrent-Q", {}), (2, "recurrent-Q", {}), (3, "recurrent-Q", {}),
     (1, "window-Q", {}), (2, "window-Q", {"lam": 0.0}), (3, "window-Q", {"online": False}),
     (2, "window-Q", {"table": {"hq": 4}})])
-def test_the_compiled_trials_are_run_trials(task, arch, changes):
+def test_the_compiled_trials_are_run_trials(task, arch, changes, monkeypatch):
     p = CupParams(task=task, arch=arch, trials=30, lessons_per_trial=4, **changes)
     pairs = []
     for _ in range(2):
@@ -61,11 +62,13 @@ def test_the_compiled_trials_are_run_trials(task, arch, changes):
         pairs.append((train_env, test_env, make_agent(p, train_env.observation_space.shape[0], 3,
                                                       np.random.default_rng(5))))
     (env, test_env, agent), (ref_env, ref_test_env, ref) = pairs
-    assert cup_play.compiled(env, agent) and cup_play.compiled(test_env, agent)
+    reference, reference_score = run_trial, hidden_state.test_score
+    monkeypatch.setattr(cup_play, "run_trial", _refused)  # every trial and test below must be compiled
+    monkeypatch.setattr(hidden_state, "test_score", _refused)
     outcomes, picked = set(), False
     for k in range(25):
         got = cup_play.learning_play(env, agent, trial=k)
-        want = run_trial(ref_env, ref, trial=k, learning=True)
+        want = reference(ref_env, ref, trial=k, learning=True)
         assert (got.steps, got.total_reward, got.terminated, got.truncated) == (
             want.steps, want.total_reward, want.terminated, want.truncated)
         _assert_same_worlds(env, ref_env)
@@ -74,14 +77,32 @@ def test_the_compiled_trials_are_run_trials(task, arch, changes):
         picked |= len(ref_env.unwrapped.cups) < 2
         if k % 4 == 0:
             test_env.wasted = ref_test_env.wasted = 0
-            assert cup_play.test_score(test_env, agent) == hidden_state.test_score(ref_test_env, ref)
+            assert cup_play.test_score(test_env, agent) == reference_score(ref_test_env, ref)
             assert test_env.wasted == ref_test_env.wasted
             _assert_same_worlds(test_env, ref_test_env)
             _assert_same_agents(agent, ref)
     assert picked and False in outcomes  # trials that collected cups and trials that timed out
 
 
-def test_other_learners_and_worlds_play_through_run_trial():
+def _refused(*args, **kwargs):
+    raise AssertionError("this trial was to be compiled, not played through the Python path")
+
+
+def test_a_test_world_with_control_errors_counts_failed_pick_ups_as_wasted():
+    """``WastedPickUps`` counts a pick-up that collects nothing, a failed one too: so does the compiled test."""
+    agent = make_agent(CupParams(task=3, arch="recurrent-Q"), 4, 3, np.random.default_rng(2))
+    agent.net.w2[2, 0, -1] += 3.0  # pick-up preferred everywhere: many pick-ups, some of them failed
+    envs = [hidden_state.WastedPickUps(CupCollectionEnv(control_error=0.5)) for _ in range(2)]
+    for env in envs:
+        env.reset(seed=4)
+    assert cup_play.compiled(envs[0], agent)
+    for _ in range(3):
+        assert cup_play.test_score(envs[0], agent) == hidden_state.test_score(envs[1], agent)
+        assert envs[0].wasted == envs[1].wasted > 0
+        _assert_same_worlds(envs[0], envs[1])
+
+
+def test_other_learners_and_worlds_play_through_run_trial(monkeypatch):
     p = CupParams(task=2, arch="window-Q", trials=5)
     env, test_env = make_cup_envs(2)
     env.reset(seed=1)
@@ -89,12 +110,15 @@ def test_other_learners_and_worlds_play_through_run_trial():
     assert cup_play.compiled(env, window)
     window.__class__ = type("OwnWindowQ", (type(window),), {})  # a subclass may do anything differently
     assert not cup_play.compiled(env, window)
-    assert cup_play.learning_play(env, window, trial=0).steps >= 1  # through run_trial
+    played = []
+    monkeypatch.setattr(cup_play, "run_trial", lambda *a, **kw: played.append(a) or run_trial(*a, **kw))
+    cup_play.learning_play(env, window, trial=0)
+    assert len(played) == 1  # through run_trial
     agent = make_agent(CupParams(task=2, arch="recurrent-model"), env.observation_space.shape[0], 3,
                        np.random.default_rng(0))
     assert cup_play.compiled(env, agent)
-    for part, name in ((agent, "act"), (agent.q, "update"), (agent.model, "step"), (agent.explore, "temperature"),
-                       (agent.book.recorder, "add")):
+    for part, name in ((agent, "act"), (agent, "q_input"), (agent.q, "update"), (agent.model, "step"),
+                       (agent.explore, "temperature"), (agent.book.recorder, "add")):
         setattr(part, name, getattr(part, name))  # a method replaced on the instance: the loop would not call it
         assert not cup_play.compiled(env, agent)
         delattr(part, name)

@@ -43,6 +43,7 @@ def _assert_same_agents(agent, ref):
 
 CASES = [
     ("ch6", {}),  # Exp. 3: persistence, on-line, the applicable max
+    ("ch6", {"target_clip": 40.0}),  # on-line targets cut off (4.2.4's rule; Ch. 6 does not use it)
     ("ch6", {"persistence": False, "target_max": "all"}),  # Exp. 2
     ("ch6", {"online": False, "step_scale": 0.2, "success_reward": 500.0, "grouping": True}),  # Exp. 4
     ("ch8", {}),  # Exp. 1: memoryless without X-Y
@@ -52,6 +53,14 @@ CASES = [
 
 
 def _pair(kind, changes):
+    clip = changes.pop("target_clip", None)
+    pairs = _made(kind, changes)
+    for _, agent in pairs:
+        agent.config = dataclasses.replace(agent.config, target_clip=clip)
+    return pairs
+
+
+def _made(kind, changes):
     if kind == "ch6":
         p = dataclasses.replace(RechargeParams(), max_steps=90, lessons_per_trial=5, **changes)
         return [(make_recharge_env(p), make_high_level_agent(p, np.random.default_rng(7))) for _ in range(2)]
@@ -60,13 +69,14 @@ def _pair(kind, changes):
 
 
 @pytest.mark.parametrize(("kind", "changes"), CASES)
-def test_the_compiled_training_trial_is_run_trials_trial(kind, changes):
-    (env, agent), (ref_env, ref) = _pair(kind, changes)
-    assert compiled_learning(env, agent, 0)
+def test_the_compiled_training_trial_is_run_trials_trial(kind, changes, monkeypatch):
+    (env, agent), (ref_env, ref) = _pair(kind, dict(changes))
+    reference = run_trial
+    monkeypatch.setattr(recharge_train, "run_trial", _refused)  # every trial below must be compiled
     ended, chosen = set(), set()
     for k in range(8):
         got = learning_play(env, agent, trial=k, seed=500 + k)
-        want = run_trial(ref_env, ref, trial=k, learning=True, seed=500 + k)
+        want = reference(ref_env, ref, trial=k, learning=True, seed=500 + k)
         assert (got.steps, got.total_reward, got.terminated, got.truncated, got.info["success"]) == (
             want.steps, want.total_reward, want.terminated, want.truncated, want.info["success"])
         assert_same_worlds(env, ref_env)
@@ -76,6 +86,10 @@ def test_the_compiled_training_trial_is_run_trials_trial(kind, changes):
     assert len(chosen) >= 3  # the trials chose among behaviours
     if kind == "ch6" and changes.get("persistence", True):
         assert any((x.meta["weights"] == 100.0).any() for x in ref.book.memory.lessons)  # persistence acted
+
+
+def _refused(*args, **kwargs):
+    raise AssertionError("this trial was to be compiled, not played by run_trial")
 
 
 def test_other_learners_and_trials_play_through_run_trial(monkeypatch):
