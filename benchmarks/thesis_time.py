@@ -7,8 +7,9 @@ chapter, and where the cores sat idle; optionally profile the most expensive exp
 `--from-records` skips the run and reads what is stored (the pool's idle time is then unknown: the runs may come from
 several commands). `--write-times` writes connrl/data/run_times.json (each variant's mean run time: the order runs start
 in and the ETA of `connrl reproduce`). `--top N` runs the longest run of each of the N most expensive experiments again
-under cProfile, in this process, and splits its time into the compiled trials (the loops that play a whole trial,
-Chs. 4-8), environment steps, action selection, learning (replay, updates, models) and the rest (bookkeeping).
+(once to compile the uncached kernels, then) under cProfile, in this process, and splits its time into the compiled
+trials (the loops that play a whole trial, Chs. 4-8), environment steps, action selection, learning (replay, updates,
+models) and the rest (bookkeeping).
 """
 
 from __future__ import annotations
@@ -56,6 +57,7 @@ def categorise(stats: pstats.Stats) -> dict[str, float]:
 def profile_run(spec, record: dict, profile: str) -> dict[str, float]:
     jobs = make_jobs(spec, profile, spec.full_runs if profile == "full" else None, spec.seed, Path("/nonexistent"))
     job = next(j for j in jobs if j.variant == record["variant"] and j.seed == record["seed"])
+    run_job(job)  # first unprofiled: the uncached kernels compile, as in a pool worker before most of its runs
     prof = cProfile.Profile()
     prof.enable()
     run_job(job)
