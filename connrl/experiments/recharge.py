@@ -99,10 +99,13 @@ def _test(env, agent, tasks, seeds) -> dict[str, tuple[float, int, int, int]]:
     """Per room: (total reinforcement, steps, dockings, collisions) of the greedy policy on the fixed tasks."""
     out = {r: [0.0, 0, 0, 0] for r in ROOMS}
     fast = recharge_play.compiled(env, agent)  # the same plays, compiled (connrl.tasks.recharge_play)
-    flat = not fast and recharge_play.compiled_flat(env, agent)
+    recurrent = not fast and recharge_train.compiled_greedy(env, agent)  # Ch. 8's recurrent-Q
+    flat = not fast and not recurrent and recharge_play.compiled_flat(env, agent)
     for (room, start), s in zip(tasks, seeds, strict=True):
         if fast:
             stats, hits = recharge_play.greedy_play(env, agent, int(s), start)
+        elif recurrent:
+            stats, hits = recharge_train.greedy_play(env, agent, int(s), start)
         elif flat:
             stats, hits = recharge_play.greedy_play_flat(env, agent, int(s), start)
         else:

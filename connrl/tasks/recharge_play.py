@@ -60,6 +60,20 @@ def _first_max(q):
 
 
 @numba.njit(cache=False)
+def _greedy_applicable(q, applicable, acted):
+    """``BehaviourChoice.choose`` at T = 0: the first best applicable behaviour (0 where an applicable value is NaN,
+    as ``np.argmax`` of the all-False mask gives); the applicability it read is left in ``acted``."""
+    b, best, nan = -1, 0.0, False
+    for k in range(q.size):
+        acted[k] = applicable[k]
+        if applicable[k]:
+            nan = nan or np.isnan(q[k])
+            if b < 0 or q[k] > best:
+                b, best = k, q[k]
+    return 0 if nan else b
+
+
+@numba.njit(cache=False)
 def _observe(pose, room, collision, sonar, sonar_radius, light, door, low, xy_scale, size, room_bits, dk, dp, wf, top,
              feat):
     """``RechargeEnv._observe`` in "high" mode: the 16 high-level units into ``top``, Ch. 5's observations into
@@ -131,15 +145,7 @@ def _play_loop(qw1, qw2, qscale, qlinear, w1s, w2s, scales, linears, thresholds,
     while True:
         # BehaviourQCON.act(greedy=True): the first best applicable behaviour (Eq. 6.6 at T = 0)
         _values_any(qw1, qw2, _as_input(obs, x), h, qscale, q, qlinear)
-        b, best, nan = -1, 0.0, False
-        for k in range(4):
-            acted[k] = applicable[k]
-            if applicable[k]:
-                nan = nan or np.isnan(q[k])
-                if b < 0 or q[k] > best:
-                    b, best = k, q[k]
-        if nan:
-            b = 0  # no value equals a NaN maximum: np.argmax of an all-False mask
+        b = _greedy_applicable(q, applicable, acted)
         # BehaviourEnv.step: the behaviour's greedy primitive, the world's step
         if b >= 2:
             _values_any(w1s[b], w2s[b], _as_input(wf, xwf), h, scales[b], qwf, linears[b])

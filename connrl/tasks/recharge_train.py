@@ -6,7 +6,8 @@ and scan, the sensors' encodings and DK's and DP's applicability (6.4.3), then, 
 on-line update (its target's max over all behaviours or the applicable ones); Ch. 8's ``BehaviourRecurrentQ`` moves
 its context on instead. ``learning_play`` runs all of it as one Numba loop with the same arithmetic and the same draws
 from the learner's and the world's generators as ``run_trial(env, agent, learning=True)``; the lesson (with each
-step's W and each state's applicability), the trial's end and the replays are the Python path's own.
+step's W and each state's applicability), the trial's end and the replays are the Python path's own. Ch. 8's greedy
+test plays of recurrent-Q are compiled here too (``greedy_play``; ``recharge_play`` compiles Ch. 6's).
 tests/tasks/test_recharge_train.py holds the two to each other, nets and streams bit for bit.
 
 Compiled where a greedy test play is (``connrl.tasks.recharge_play``: a ``BehaviourEnv`` over a plain world and
@@ -33,7 +34,14 @@ from connrl.nets.kernels import _update_any, _values_any
 from connrl.nets.recurrent import RecurrentOAON
 from connrl.nets.recurrent_kernels import _forward_all
 from connrl.tasks.behaviours import APPLICABLE_ABOVE
-from connrl.tasks.recharge_play import _applicable, _chg_step, _first_max, _observe, compiled_world
+from connrl.tasks.recharge_play import (
+    _applicable,
+    _chg_step,
+    _first_max,
+    _greedy_applicable,
+    _observe,
+    compiled_world,
+)
 from connrl.tasks.robot_play import _as_input
 
 
@@ -65,10 +73,7 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
     obs, info = env.reset(seed=seed, options=options)
     agent.begin_trial(obs, info, trial=trial, learning=True)
     world, choice, cap = env.world, agent.choice, env.world.max_steps
-    tasks = info["task_obs"]
-    state = (np.array(obs, dtype=np.float32), *(np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL")),
-             np.array(world.sim.pose, dtype=np.float64), np.zeros(4, dtype=np.uint8), np.empty((cap + 1, 3)))
-    state[6][0] = state[4]
+    state = _state(obs, info, world)
     n = len(BEHAVIOUR_TASKS)
     inputs, actions, rewards = np.empty((cap + 1, len(obs))), np.empty(cap, np.int64), np.empty(cap)
     weights, applicable = np.empty((cap, n)), np.empty((cap + 1, n), dtype=np.bool_)
@@ -103,6 +108,54 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
     agent.end_trial()
     agent.learn()
     return TrialStats(steps, total, bool(docked), not docked, {"success": bool(docked)})
+
+
+def compiled_greedy(env, agent) -> bool:
+    """Whether ``greedy_play`` plays Ch. 8's recurrent-Q test in ``env`` compiled (``recharge_play.compiled`` takes
+    Ch. 6's learner)."""
+    if type(agent) is not BehaviourRecurrentQ or type(agent.net) is not RecurrentOAON:
+        return False
+    c = agent.net.config
+    return (c.n_outputs == 1 and agent.net.n_nets == len(BEHAVIOUR_TASKS) == agent.n_actions
+            and type(agent.choice) is BehaviourChoice and not methods_replaced(agent) and compiled_world(env)
+            and c.n_inputs == env.observation_space.shape[0])
+
+
+def greedy_play(env, agent, seed: int, start) -> tuple[TrialStats, int]:
+    """``run_trial(env, agent, trial=0, learning=False, seed=seed, options={"start": start})`` for Ch. 8's
+    recurrent-Q where ``compiled_greedy(env, agent)``: the values at the context, the first best applicable behaviour
+    (Eq. 6.6 at T = 0), the context moved on, the world's step. Returns its stats (their info holds "success" only)
+    and the steps with a collision; the learner's record of the trial's choices is left as ``recharge_play``'s plays
+    leave it (a test trial never reads it, the next trial begins it anew)."""
+    obs, info = env.reset(seed=seed, options={"start": start})
+    agent.begin_trial(obs, info, trial=0, learning=False)
+    world, net = env.world, agent.net
+    state = _state(obs, info, world)
+    inputs, acted = np.empty((world.max_steps + 1, len(obs))), np.empty(len(BEHAVIOUR_TASKS), dtype=np.bool_)
+    inputs[0] = agent._x
+    q = np.empty(len(BEHAVIOUR_TASKS))
+    steps, total, docked, hits, prim = _greedy_loop(net.w1, net.w2, net.scale, net.config.feedback, net.context,
+                                                    net._h_all, net._y, _library(env), _world(env), state, inputs,
+                                                    world.sim.rng, q, acted)
+    _, dk, dp, wf, pose, collision, trace = state
+    leave(world, pose, collision, prim, steps, trace)
+    env._task_obs = {"DK": dk, "DP": dp, "WFL": wf, "WFR": wf.copy()}
+    agent._x, agent.last_q = inputs[steps - 1].copy(), q
+    best = acted & (q == q[acted].max())
+    agent.last_probabilities = best / best.sum()
+    agent.end_trial()
+    return TrialStats(steps, total, bool(docked), not docked, {"success": bool(docked)}), hits
+
+
+def _state(obs, info, world) -> tuple:
+    """The loops' world state from a reset: the high-level input, DK's, DP's and wall following's observations (as
+    the world hands them out), the pose, the collision bits and the poses visited."""
+    tasks = info["task_obs"]
+    state = (np.array(obs, dtype=np.float32), *(np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL")),
+             np.array(world.sim.pose, dtype=np.float64), np.zeros(4, dtype=np.uint8),
+             np.empty((world.max_steps + 1, 3)))
+    state[6][0] = state[4]
+    return state
 
 
 def _library(env) -> tuple:
@@ -143,7 +196,7 @@ def _choice_weights(applicable, was, active, goal, persistence, persist, w):
 def _behaviour_step(b, lib, world, state, rng, scan):
     """``BehaviourEnv.step(b)`` after its checks: the behaviour's greedy primitive, the world's step and the new
     state's observations and applicability (``scan[0]``). Returns (primitive, docked, reward, the behaviour's goal
-    reached: DK docked, DP into another room without a collision)."""
+    reached: DK docked, DP into another room without a collision, whether it collided)."""
     w1s, w2s, scales, linears, thresholds = lib
     (segs, kinds, lights, rooms, room_bits, size, control_noise, sensor_noise, step_scale, partial, sonar_radius,
      edge_jump, edge_both, low, xy_scale, dock_tolerance, success_reward, collision_penalty, _) = world
@@ -163,7 +216,7 @@ def _behaviour_step(b, lib, world, state, rng, scan):
         obs[k] = top[k]
     _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)
     goal = docked if b == 0 else (b == 1 and not collided and room != before)
-    return prim, docked, reward, goal
+    return prim, docked, reward, goal, collided
 
 
 @numba.njit(cache=False)
@@ -201,7 +254,7 @@ def _qcon_loop(w1, w2, d1, d2, learner, rule, lib, world, state, record, agent_r
             return -1, total, False, active, -1
         was[:] = applicable
         active = b
-        prim, docked, reward, goal = _behaviour_step(b, lib, world, state, rng, scan)
+        prim, docked, reward, goal, _ = _behaviour_step(b, lib, world, state, rng, scan)
         steps += 1
         trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
         _as_input(state[0], y)
@@ -250,7 +303,7 @@ def _recurrent_loop(w1, w2, scale, feedback, context, h_all, y, rule, lib, world
             context[k] = feedback * h_all[b, k]
         was[:] = applicable
         active = b
-        prim, docked, reward, goal = _behaviour_step(b, lib, world, state, rng, scan)
+        prim, docked, reward, goal, _ = _behaviour_step(b, lib, world, state, rng, scan)
         steps += 1
         trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
         _as_input(state[0], inputs[steps])
@@ -259,3 +312,27 @@ def _recurrent_loop(w1, w2, scale, feedback, context, h_all, y, rule, lib, world
         total += reward
         if docked or steps >= max_steps:
             return steps, total, docked, b, prim
+
+
+@numba.njit(cache=False)
+def _greedy_loop(w1, w2, scale, feedback, context, h_all, y, lib, world, state, inputs, rng, q, acted):
+    """``greedy_play``'s trial: returns (steps, total reward, docked, collided steps, the last primitive); ``q`` and
+    ``acted``: the last choice's values and the applicability it read."""
+    scan = _scan_arrays(lib, state[1], state[2], state[3], 0)
+    applicable, pose, trace = scan[0], state[4], state[6]
+    steps, total, hits, max_steps = 0, 0.0, 0, world[-1]
+    while True:
+        _forward_all(w1, w2, inputs[steps], context, scale, h_all, y)
+        for k in range(q.size):
+            q[k] = y[k, 0]
+        b = _greedy_applicable(q, applicable, acted)
+        for k in range(context.size):
+            context[k] = feedback * h_all[b, k]
+        prim, docked, reward, _, collided = _behaviour_step(b, lib, world, state, rng, scan)
+        steps += 1
+        trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
+        _as_input(state[0], inputs[steps])
+        total += reward
+        hits += collided
+        if docked or steps >= max_steps:
+            return steps, total, docked, hits, prim

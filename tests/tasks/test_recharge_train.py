@@ -10,13 +10,14 @@ import numpy as np
 import pytest
 
 from connrl.core.rollout import run_trial
+from connrl.envs.robot.recharge import ROOMS
 from connrl.experiments.integration import IntegrationParams
-from connrl.experiments.recharge import RechargeParams
+from connrl.experiments.recharge import RechargeParams, _test
 from connrl.tasks import recharge_train
 from connrl.tasks.integration import make_integration_agent, make_integration_env
 from connrl.tasks.recharge import make_high_level_agent, make_recharge_env
 from connrl.tasks.recharge_train import compiled_learning, learning_play
-from tests.tasks.test_recharge_play import assert_same_worlds
+from tests.tasks.test_recharge_play import _starts, assert_same_worlds
 from tests.tasks.test_robot_train import assert_same_lessons
 
 
@@ -112,3 +113,35 @@ def test_other_learners_and_trials_play_through_run_trial(monkeypatch):
     monkeypatch.setattr(recharge_train, "weighted_choice_fits", lambda n: False)
     assert not compiled_learning(env, agent, 1)
 
+
+
+@pytest.mark.parametrize("changes", [{}, {"xy": True, "share_output": True, "persistence": False}])
+def test_the_compiled_recurrent_test_play_is_run_trials_play(changes, monkeypatch):
+    """Ch. 8's greedy tests of recurrent-Q: the same steps, reward, outcome and collisions, the same world and learner
+    left behind; and the protocol's tests give the same totals either way."""
+    (env, agent), (ref_env, _) = _pair("ch8", {"memory": "recurrent", "online": False, **changes})
+    for k in range(3):
+        run_trial(env, agent, trial=k, learning=True, seed=40 + k)
+    assert recharge_train.compiled_greedy(env, agent)
+    assert not recharge_train.compiled_greedy(env, make_high_level_agent(RechargeParams(), np.random.default_rng(0)))
+    rng, chosen, ended = np.random.default_rng(0), set(), set()
+    for start in _starts(env, rng, 8):
+        seed, hits = int(rng.integers(2**31)), []
+        got, got_hits = recharge_train.greedy_play(env, agent, seed, start)
+        mine = (agent._x.copy(), agent.last_q.copy(), agent.last_probabilities.copy(), agent.net.context.copy(),
+                agent.net._h_all.copy(), agent.net._y.copy())
+        ref = run_trial(ref_env, agent, trial=0, learning=False, seed=seed, options={"start": start},
+                        on_step=lambda info, hits=hits: (hits.append(info["collision"]), chosen.add(info["behaviour"])))
+        assert (got.steps, got.total_reward, got.terminated, got.truncated, got.info["success"], got_hits) == (
+            ref.steps, ref.total_reward, ref.terminated, ref.truncated, ref.info["success"], sum(hits))
+        theirs = (agent._x, agent.last_q, agent.last_probabilities, agent.net.context, agent.net._h_all, agent.net._y)
+        for value, ref_value in zip(mine, theirs, strict=True):
+            np.testing.assert_array_equal(value, ref_value)
+        assert_same_worlds(env, ref_env)
+        ended.add(got.terminated)
+    assert len(chosen) >= 2 and True in ended  # choices among behaviours, and dockings
+    tasks = [(ROOMS[k % 3], s) for k, s in enumerate(_starts(env, rng, 6))]
+    seeds = rng.integers(2**31, size=len(tasks))
+    fast = _test(env, agent, tasks, seeds)
+    monkeypatch.setattr(recharge_train, "compiled_greedy", lambda env, agent: False)
+    assert _test(env, agent, tasks, seeds) == fast
