@@ -3,12 +3,14 @@ line naming the file and entry, reading YAML never builds Python objects, the co
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import pytest
 
 from connrl import cli
-from connrl.settings import SETTINGS_DIR, read_settings, settings_yaml, task_settings
+from connrl.api import AgentOptions
+from connrl.settings import SETTINGS_DIR, check_entry, read_settings, settings_yaml, task_settings
 from connrl.tune import Dimension, parse_dimension
 
 
@@ -129,3 +131,18 @@ def test_drawn_settings_stay_in_their_range_and_float_options_draw_floats():
     lam = parse_dimension("lam=0:1")
     assert len({lam.sample(rng) for _ in range(50)}) > 2  # not only 0 and 1
     assert isinstance(parse_dimension("hidden=4:8").sample(rng), int)
+
+
+def _count_fields() -> list[str]:
+    """Every option that holds a count (an int field of ``AgentOptions``), and the settings file's own n_timesteps."""
+    return [f.name for f in dataclasses.fields(AgentOptions) if f.type in ("int", int, "int | None")] + ["n_timesteps"]
+
+
+@pytest.mark.parametrize("name", _count_fields())
+@pytest.mark.parametrize("value", [True, False, 8.0, 8.5])
+def test_a_boolean_or_a_float_where_a_count_belongs_is_refused_by_name(name, value):
+    """YAML's ``true`` is an int subclass in Python and ``8.0`` equals 8: neither is taken as a count (issue 46)."""
+    with pytest.raises(ValueError, match=rf"{name} must be a whole number") as info:
+        check_entry("own.yml", "CartPole-v1", {name: value})
+    assert str(info.value).startswith("own.yml: entry 'CartPole-v1': ")
+    assert len(_count_fields()) >= 8  # the fields are found: this test cannot pass on an empty list
