@@ -28,10 +28,11 @@ from connrl.core.boltzmann_kernel import _boltzmann_choice, _nanmax, compiled_ch
 from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.cup import INSTANCES, N_CELLS, OFF, ON, CupCollectionEnv
 from connrl.nets import OAON
-from connrl.nets.kernels import _update_any, _values_any
+from connrl.nets.kernels import _values_any
 from connrl.nets.recurrent import RecurrentOAON
 from connrl.nets.recurrent_kernels import _forward_all
 from connrl.tasks import hidden_state
+from connrl.tasks.robot_train import NOT_RESTRICTED, _online_q_step
 
 LEFT, RIGHT, PICK_UP = 0, 1, 2
 
@@ -225,13 +226,10 @@ def _model_loop(qnet, model, learner, spec, cups, cell, record, agent_rng, rng, 
         reward, terminated, truncated = _move_on(a, feedback, h_all, context, spec, cups, cell, rng, record, steps)
         steps += 1
         total += reward
-        if online:
-            nxt = 0.0
-            if not terminated:
-                yq[:n_s], yq[n_s:] = inputs[steps], context
-                _values_any(qw1, qw2, yq, h, qscale, qn, qlinear)
-                nxt = _nanmax(qn, qn.size)
-            _update_any(qw1, qw2, qd1, qd2, a, xq, h, reward + gamma * nxt, qscale, qlr, qmomentum, qlinear)
+        if online:  # on [y, the context moved on]; no clip (compiled() takes target_clip None only)
+            yq[:n_s], yq[n_s:] = inputs[steps], context
+            _online_q_step(qw1, qw2, qd1, qd2, a, xq, yq, terminated, reward, gamma, 0.0, False, h, qn, qscale, qlr,
+                           qmomentum, qlinear, NOT_RESTRICTED, False)
         if terminated or truncated:
             return steps, total, terminated
 
@@ -310,12 +308,7 @@ def _window_loop(qnet, learner, sens, acts, spec, cups, cell, record, now, last,
             pending[0] = -1
             _encode(now, sens, acts, inputs[steps])
             if online:
-                nxt = 0.0
-                if not terminated:
-                    _values_any(w1, w2, inputs[steps], h, scale, qn, linear)
-                    nxt = _nanmax(qn, qn.size)
-                target = reward + gamma * nxt
-                target = clip if has_clip and clip < target else target
-                _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum, linear)
+                _online_q_step(w1, w2, d1, d2, a, x, inputs[steps], terminated, reward, gamma, clip, has_clip, h, qn,
+                               scale, lr, momentum, linear, NOT_RESTRICTED, False)
         if terminated or truncated:
             return steps, total, terminated

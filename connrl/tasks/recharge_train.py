@@ -24,13 +24,13 @@ import numpy as np
 
 from connrl.agents.base import Exploration, methods_replaced
 from connrl.agents.behaviour_level import BehaviourChoice, BehaviourQCON, BehaviourRecurrentQ
-from connrl.core.boltzmann_kernel import _nanmax, _weighted_choice, weighted_choice_fits
+from connrl.core.boltzmann_kernel import _weighted_choice, weighted_choice_fits
 from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.robot.constants import N_RAYS
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS
 from connrl.envs.robot.step import _room, leave, room_table
 from connrl.nets import OAON
-from connrl.nets.kernels import _update_any, _values_any
+from connrl.nets.kernels import _values_any
 from connrl.nets.recurrent import RecurrentOAON
 from connrl.nets.recurrent_kernels import _forward_all
 from connrl.tasks.behaviours import APPLICABLE_ABOVE
@@ -43,6 +43,7 @@ from connrl.tasks.recharge_play import (
     compiled_world,
 )
 from connrl.tasks.robot_play import _as_input
+from connrl.tasks.robot_train import _online_q_step
 
 
 def compiled_learning(env, agent, trial: int) -> bool:
@@ -261,19 +262,9 @@ def _qcon_loop(w1, w2, d1, d2, learner, rule, lib, world, state, record, agent_r
         applicables[steps] = applicable
         actions[steps - 1], rewards[steps - 1] = b, reward
         total += reward
-        if online:
-            nxt = 0.0
-            if not docked:
-                _values_any(w1, w2, y, h, scale, qn, linear)
-                nxt = _nanmax(qn, qn.size)
-                if applicable_max and applicable.any():  # BehaviourChoice.next_value: over the applicable ones
-                    nxt, seen = 0.0, False
-                    for k in range(qn.size):
-                        if applicable[k] and (not seen or qn[k] > nxt or qn[k] != qn[k]) and nxt == nxt:
-                            nxt, seen = qn[k], True
-            target = reward + gamma * nxt
-            target = clip if has_clip and clip < target else target
-            _update_any(w1, w2, d1, d2, b, x, h, target, scale, lr, momentum, linear)
+        if online:  # BehaviourChoice.next_value: the max over the applicable behaviours, when any is
+            _online_q_step(w1, w2, d1, d2, b, x, y, docked, reward, gamma, clip, has_clip, h, qn, scale, lr, momentum,
+                           linear, applicable, applicable_max and applicable.any())
         if docked or steps >= max_steps:
             return steps, total, docked, b, prim
 

@@ -79,6 +79,30 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
     return TrialStats(steps, total, bool(success), not success, info)
 
 
+NOT_RESTRICTED = np.zeros(0, dtype=np.bool_)  # _online_q_step's ``allowed`` where the max ranges over every net
+
+
+@numba.njit(cache=False)
+def _online_q_step(w1, w2, d1, d2, a, x, y, terminal, reward, gamma, clip, has_clip, h, qn, scale, lr, momentum,
+                   linear, allowed, restrict):
+    """Fig. 3.4 steps 4-5 after a step from ``x`` by action ``a`` to ``y``, as ``QCON.observe`` makes them: the target
+    ``reward + gamma * max Q(y)`` (0 for the max at a terminal state; NaN propagates as in ``np.max``), over the nets
+    ``allowed`` when ``restrict`` (``BehaviourChoice.next_value``), cut off at ``clip`` when ``has_clip``
+    (``online_target``), then net a's update toward it. ``qn``: scratch for Q(y)."""
+    nxt = 0.0
+    if not terminal:
+        _values_any(w1, w2, y, h, scale, qn, linear)
+        nxt = _nanmax(qn, qn.size)
+        if restrict:  # q_next[allowed].max()
+            nxt, seen = 0.0, False
+            for k in range(qn.size):
+                if allowed[k] and (not seen or qn[k] > nxt or qn[k] != qn[k]) and nxt == nxt:
+                    nxt, seen = qn[k], True
+    target = reward + gamma * nxt
+    target = clip if has_clip and clip < target else target
+    _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum, linear)
+
+
 @numba.njit(cache=False)
 def _stuck_factor(x, y, history, count, window, radius, boost):
     """``StuckDetector.factor((x, y))``: record the position (the last ``window`` kept, oldest first, ``count[0]`` of
@@ -130,12 +154,7 @@ def _learning_loop(w1, w2, d1, d2, learner, stuck, history, count, agent_rng, wo
         actions[steps - 1], rewards[steps - 1] = a, reward
         total += reward
         if online:
-            nxt = 0.0
-            if not success:
-                _values_any(w1, w2, y, h, scale, q, linear)
-                nxt = _nanmax(q, q.size)
-            target = reward + gamma * nxt
-            target = clip if has_clip and clip < target else target
-            _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum, linear)
+            _online_q_step(w1, w2, d1, d2, a, x, y, success, reward, gamma, clip, has_clip, h, q, scale, lr, momentum,
+                           linear, NOT_RESTRICTED, False)
         if success or steps >= env_max_steps:
             return steps, total, success, a, collided, rel
