@@ -199,7 +199,6 @@ def greedy_play(env: BehaviourEnv, agent: BehaviourQCON, seed: int, start) -> tu
     obs, info = env.reset(seed=seed, options={"start": start})
     agent.begin_trial(obs, info, trial=0, learning=False)
     world, sim = env.world, env.world.sim
-    lib = [env.library[t] for t in BEHAVIOUR_TASKS]
     tasks = info["task_obs"]
     obs = np.array(obs, dtype=np.float32)
     dk, dp, wf = (np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL"))
@@ -214,9 +213,7 @@ def greedy_play(env: BehaviourEnv, agent: BehaviourQCON, seed: int, start) -> tu
     x, q, acted = np.empty(obs.size), np.empty(agent.q.n_nets), np.empty(4, dtype=np.bool_)
     steps, total, docked, hits, _, prim = _play_loop(
         agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output,
-        tuple(b.q.w1 for b in lib), tuple(b.q.w2 for b in lib), np.array([b.q.scale for b in lib]),
-        np.array([b.q.config.linear_output for b in lib]), np.array([APPLICABLE_ABOVE[t] for t in BEHAVIOUR_TASKS]),
-        obs, dk, dp, wf, applicable, pose, collision, trace, sim.rng, sim._segs, sim._kinds,
+        *library_arrays(env), obs, dk, dp, wf, applicable, pose, collision, trace, sim.rng, sim._segs, sim._kinds,
         np.array(sim._light, dtype=np.float64), rooms, room_bits,
         np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
         sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, world.binary_low, world.xy_scale,
@@ -224,6 +221,13 @@ def greedy_play(env: BehaviourEnv, agent: BehaviourQCON, seed: int, start) -> tu
     _leave(env, agent, steps, pose, collision, prim, trace, dk, dp, wf, x, q, acted)
     info = {"success": bool(docked)}
     return TrialStats(steps, total, bool(docked), not docked, info), hits
+
+
+def library_arrays(env) -> tuple:
+    """The behaviours as ``recharge_play``'s kernels read them (DK, DP, WFL, WFR)."""
+    lib = [env.library[t] for t in BEHAVIOUR_TASKS]
+    return (tuple(b.q.w1 for b in lib), tuple(b.q.w2 for b in lib), np.array([b.q.scale for b in lib]),
+            np.array([b.q.config.linear_output for b in lib]), np.array([APPLICABLE_ABOVE[t] for t in BEHAVIOUR_TASKS]))
 
 
 def _leave(env, agent, steps, pose, collision, prim, trace, dk, dp, wf, x, q, acted) -> None:

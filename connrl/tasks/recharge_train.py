@@ -33,7 +33,6 @@ from connrl.nets import OAON
 from connrl.nets.kernels import _values_any
 from connrl.nets.recurrent import RecurrentOAON
 from connrl.nets.recurrent_kernels import _forward_all
-from connrl.tasks.behaviours import APPLICABLE_ABOVE
 from connrl.tasks.recharge_play import (
     _applicable,
     _chg_step,
@@ -41,6 +40,7 @@ from connrl.tasks.recharge_play import (
     _greedy_applicable,
     _observe,
     compiled_world,
+    library_arrays,
 )
 from connrl.tasks.robot_play import _as_input
 from connrl.tasks.robot_train import _online_q_step
@@ -87,14 +87,14 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
         net, c = agent.q, agent.config
         learner = (c.online, c.gamma, 0.0 if c.target_clip is None else c.target_clip, c.target_clip is not None,
                    net.scale, net.lr, net.config.momentum, net.config.linear_output)
-        steps, total, docked, b, prim = _qcon_loop(net.w1, net.w2, net.d1, net.d2, learner, rule, _library(env),
+        steps, total, docked, b, prim = _qcon_loop(net.w1, net.w2, net.d1, net.d2, learner, rule, library_arrays(env),
                                                    _world(env), state, record, agent.rng, world.sim.rng, q, p,
                                                    np.empty(n), scratch)
     else:
         net = agent.net
         steps, total, docked, b, prim = _recurrent_loop(net.w1, net.w2, net.scale, net.config.feedback, net.context,
-                                                        net._h_all, net._y, rule, _library(env), _world(env), state,
-                                                        record, agent.rng, world.sim.rng, q, p, scratch)
+                                                        net._h_all, net._y, rule, library_arrays(env), _world(env),
+                                                        state, record, agent.rng, world.sim.rng, q, p, scratch)
     if steps < 0:
         raise ValueError("Probabilities contain NaN")  # as Generator.choice refuses Eq. 6.6's NaN distribution
     _, dk, dp, wf, pose, collision, trace = state
@@ -136,7 +136,7 @@ def greedy_play(env, agent, seed: int, start) -> tuple[TrialStats, int]:
     inputs[0] = agent._x
     q = np.empty(len(BEHAVIOUR_TASKS))
     steps, total, docked, hits, prim = _greedy_loop(net.w1, net.w2, net.scale, net.config.feedback, net.context,
-                                                    net._h_all, net._y, _library(env), _world(env), state, inputs,
+                                                    net._h_all, net._y, library_arrays(env), _world(env), state, inputs,
                                                     world.sim.rng, q, acted)
     _, dk, dp, wf, pose, collision, trace = state
     leave(world, pose, collision, prim, steps, trace)
@@ -157,13 +157,6 @@ def _state(obs, info, world) -> tuple:
              np.empty((world.max_steps + 1, 3)))
     state[6][0] = state[4]
     return state
-
-
-def _library(env) -> tuple:
-    """The behaviours as ``recharge_play``'s kernels read them (DK, DP, WFL, WFR)."""
-    lib = [env.library[t] for t in BEHAVIOUR_TASKS]
-    return (tuple(b.q.w1 for b in lib), tuple(b.q.w2 for b in lib), np.array([b.q.scale for b in lib]),
-            np.array([b.q.config.linear_output for b in lib]), np.array([APPLICABLE_ABOVE[t] for t in BEHAVIOUR_TASKS]))
 
 
 def _world(env) -> tuple:
