@@ -240,6 +240,21 @@ def cmd_show(args) -> int:
     return 0
 
 
+def cmd_params(args) -> int:
+    from connrl.report.params import class_tables, experiment_table
+
+    print(experiment_table(_get(args.name)) if args.name else class_tables(_experiments()), end="")
+    return 0
+
+
+def _add_params_command(sub) -> None:
+    s = sub.add_parser("params", help="print an experiment's parameters", description="Print, as Markdown, an "
+                       "experiment's parameters (value, allowed values, where the thesis states it, what sets it) "
+                       "or, without NAME, every parameter class's (docs/PARAMETERS.md).")
+    s.add_argument("name", nargs="?", help="experiment name (default: every parameter class)")
+    s.set_defaults(func=cmd_params)
+
+
 def cmd_teach(args) -> int:
     from connrl.tasks.teach import TEACH_TARGETS, teach
 
@@ -320,6 +335,7 @@ def build_parser() -> argparse.ArgumentParser:
                                 "Robots Using Neural Networks, and use its techniques on Gymnasium tasks.")
     sub = p.add_subparsers(dest="command", required=True)
     _add_experiment_commands(sub)
+    _add_params_command(sub)
     _add_tool_commands(sub)
     add_own_task_commands(sub)
     add_tune_command(sub)

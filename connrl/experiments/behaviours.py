@@ -26,7 +26,7 @@ from connrl.envs.robot import Layout, RobotTaskEnv
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS
 from connrl.envs.robot.tasks import sample_anywhere
 from connrl.experiments.robot import RobotParams, RobotRun
-from connrl.experiments.spec import check_types
+from connrl.experiments.spec import check_types, param
 from connrl.experiments.store import environment_info
 from connrl.storage import atomic_write_text
 from connrl.tasks.behaviours import Behaviour, library_paths, load_library, save_behaviour
@@ -37,13 +37,13 @@ from connrl.tasks.robot import TAUGHT_COUNTS
 class TrainingPlan:
     """One behaviour's training: task, trials, taught lessons, and (DP) the share of far-from-door starts."""
 
-    task: str
-    trials: int = 1500
-    lessons: int = 10
-    far_share: float = 0.0
+    task: str = param(choices=BEHAVIOUR_TASKS)
+    trials: int = param(1500, ">=1")
+    lessons: int = param(10, ">=0")
+    far_share: float = param(0.0, "0..1")
 
     def __post_init__(self):
-        check_types(self, {"trials": ">=1", "lessons": ">=0", "far_share": "0..1"}, task=BEHAVIOUR_TASKS)
+        check_types(self)
 
 
 # A quarter of DK's and DP's trials start anywhere, so that their Q-values, and so their applicability (6.4.3), stay

@@ -29,23 +29,22 @@ import numpy as np
 from connrl.core.hierarchy import abstract_graph, ball, multi_level, overhead, single_level
 from connrl.core.model_learning import RULES, learn_model
 from connrl.envs.grid import GridWorld
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override, param
 
 LEARNERS = ("flat", "single", "multi", "additional_inside", "additional_outside")
-RANGES = {"dim": ">=1", "j_min": ">=1", "j_max": ">=1", "block_max": ">=1", "max_states": ">=1"}
 
 
 @dataclass(frozen=True)
 class ComplexityParams:
-    dim: int = 2  # grid dimension d (1 or 2)
-    rule: str = "greedy"  # exploration: "greedy" mapping or "random" walk
-    j_min: int = 4  # n = 3^j_min .. 3^j_max states (81 .. 59049)
-    j_max: int = 10
-    block_max: int = 9  # single level: odd region sides 3..block_max (below the grid's side) tried
-    max_states: int = 10**6  # sizes above this are skipped (the tiny and quick profiles' cap)
+    dim: int = param(2, ">=1", "grid dimension d (1 or 2)", choices=(1, 2))
+    rule: str = param("greedy", note="exploration: 'greedy' mapping or 'random' walk", choices=RULES)
+    j_min: int = param(4, ">=1", "n = 3^j_min .. 3^j_max states (81 .. 59049)")
+    j_max: int = param(10, ">=1")
+    block_max: int = param(9, ">=1", "single level: odd region sides 3..block_max (below the grid's side) tried")
+    max_states: int = param(10**6, ">=1", "sizes above this are skipped (the tiny and quick profiles' cap)")
 
     def __post_init__(self):
-        check_types(self, RANGES, rule=RULES, dim=(1, 2))
+        check_types(self)
         if self.j_max < self.j_min or self.j_max > 12:
             raise ValueError(f"parameters j_min..j_max must satisfy j_min <= j_max <= 12 (n = 3^j states), got "
                              f"{self.j_min}..{self.j_max}")

@@ -65,6 +65,7 @@ from connrl.experiments.spec import (
     Variant,
     check_sequence,
     check_types,
+    param,
 )
 from connrl.tasks import cup_play
 from connrl.tasks.hidden_state import (
@@ -77,9 +78,6 @@ from connrl.tasks.hidden_state import (
 )
 from connrl.tasks.pole import make_envs as make_pole_envs
 
-HIDDEN_RANGES = {"lam": "0..1", "gamma": "0..1", "init_range": ">0", "momentum": "0..<1", "feedback": ">=0",
-                 "decay": "0..1", "capacity": ">=1", "anneal_trials": ">=1", "trials": ">=1",
-                 "lessons_per_trial": ">=0", "p_threshold": "0..<1", "p_threshold_oldest": ">0"}
 # the Table B.1 entries ``table`` may override: sizes (window N, hidden and context units) with their bounds
 TABLE_SIZES = {"window": (1, MAX_WINDOW), **dict.fromkeys(("hq", "cq", "hm", "cm"), (0, MAX_UNITS))}
 TABLE_KEYS = (*TABLE_SIZES, "lam", "lr_q", "lr_m", "inv_t")
@@ -125,39 +123,42 @@ def check_hidden_state(p: CupParams | PoleHiddenParams) -> None:
 class HiddenStateParams:
     """What the cup tasks and the pole from (x, theta) share; Table B.1 gives each architecture's own values."""
 
-    arch: str = "recurrent-Q"  # one of ARCHITECTURES (set by the variant)
-    lam: float | None = None  # TD(lambda) recency factor; None = Table B.1 (the lambda = 0 variants set 0)
+    arch: str = param("recurrent-Q", note="one of ARCHITECTURES (set by the variant)", choices=ARCHITECTURES)
+    lam: float | None = param(None, "0..1", "TD(lambda) recency factor; None = Table B.1 (the lambda = 0 variants set "
+                              "0)")
     table: dict = field(default_factory=dict)  # overrides of Table B.1 entries (e.g. {"hq": 12}); {} = thesis's
-    gamma: float = 0.9  # App. B
-    init_range: float = 0.5  # App. B
-    momentum: float = 0.9  # App. B: 0.9 for multilayer nets (0 is used for perceptrons)
-    feedback: float = 1.5  # constant context feedback weight (7.4)
-    decay: float = 0.9  # BPTT error decay on the context path (7.4)
-    share_output: bool = False  # share hidden->output connections among recurrent action nets (7.4, optional)
-    capacity: int = 70  # replay only the latest 70 trials (7.5)
-    online: bool = True  # feed-forward Q-nets also learn on-line (Fig. 3.4) (R)
-    anneal_trials: int | None = None  # trials of the 1/T schedule; None = the whole run (R)
-    linear_perceptron: bool = True  # H_q = 0 Q-nets have a linear output unit (7.4: the "linear OAON") (R)
+    gamma: float = param(0.9, "0..1", "App. B")
+    init_range: float = param(0.5, ">0", "App. B")
+    momentum: float = param(0.9, "0..<1", "App. B: 0.9 for multilayer nets (0 is used for perceptrons)")
+    feedback: float = param(1.5, ">=0", "constant context feedback weight (7.4)")
+    decay: float = param(0.9, "0..1", "BPTT error decay on the context path (7.4)")
+    share_output: bool = param(False, note="share hidden->output connections among recurrent action nets (7.4, "
+                               "optional)")
+    capacity: int = param(70, ">=1", "replay only the latest 70 trials (7.5)")
+    online: bool = param(True, note="feed-forward Q-nets also learn on-line (Fig. 3.4) (R)")
+    anneal_trials: int | None = param(None, ">=1", "trials of the 1/T schedule; None = the whole run (R)")
+    linear_perceptron: bool = param(True, note="H_q = 0 Q-nets have a linear output unit (7.4: the 'linear OAON') (R)")
 
 
 @dataclass(frozen=True)
 class CupParams(HiddenStateParams):
     """Tasks 1-3 of 7.5.1-7.5.3."""
 
-    task: int = 1  # 1, 2 or 3 (7.5.1-7.5.3)
-    trials: int = 500  # 7.5.1: curves over 500 trials
-    lessons_per_trial: int = 70  # Q replays per trial from the latest 70, App. A.2 recency (R; 20 was too few)
-    model_lessons_per_trial: int = 70  # model BPTT passes per trial over all past trials (R)
-    model_range: float = 1.0  # model outputs span +-model_range (R)
-    p_threshold: float = 0.01  # P_l for the latest lesson (App. B)
-    p_threshold_oldest: float = 1e-5  # P_l for the oldest lesson (App. B)
-    window_q_inv_t: tuple | None = (5.0, 30.0)  # window-Q's 1/T: a -> b; deviation from Table B.1 (docstring)
-    probe: bool = True  # run the robustness probe of 7.5.1 after training
-    probe_steps: tuple = (1, 2, 3)  # forced steps in the robustness probe (R: "a few steps")
+    task: int = param(1, note="1, 2 or 3 (7.5.1-7.5.3)", choices=(1, 2, 3))
+    trials: int = param(500, ">=1", "7.5.1: curves over 500 trials")
+    lessons_per_trial: int = param(70, ">=0", "Q replays per trial from the latest 70, App. A.2 recency (R; 20 was "
+                                   "too few)")
+    model_lessons_per_trial: int = param(70, ">=0", "model BPTT passes per trial over all past trials (R)")
+    model_range: float = param(1.0, ">0", "model outputs span +-model_range (R)")
+    p_threshold: float = param(0.01, "0..<1", "P_l for the latest lesson (App. B)")
+    p_threshold_oldest: float = param(1e-5, ">0", "P_l for the oldest lesson (App. B)")
+    window_q_inv_t: tuple | None = param((5.0, 30.0), note="window-Q's 1/T: a -> b; deviation from Table B.1 "
+                                         "(docstring)")
+    probe: bool = param(True, note="run the robustness probe of 7.5.1 after training")
+    probe_steps: tuple = param((1, 2, 3), note="forced steps in the robustness probe (R: 'a few steps')")
 
     def __post_init__(self):
-        check_types(self, {**HIDDEN_RANGES, "model_range": ">0", "model_lessons_per_trial": ">=0"},
-                    arch=ARCHITECTURES, task=(1, 2, 3))
+        check_types(self)
         check_hidden_state(self)
 
 
@@ -165,34 +166,23 @@ class CupParams(HiddenStateParams):
 class PoleHiddenParams(HiddenStateParams):
     """Task 4 of 7.5.4: the pole from the cart position and pole angle only."""
 
-    task: int = 4
-    trials: int = 1000  # 7.5.4: "not always found within 1000 trials"
-    lessons_per_trial: int = 70  # as the full-state pole experiment and the cup tasks (R)
-    model_lessons_per_trial: int = 70  # as the cup tasks (R)
-    model_range: float = 1.5  # normalized x, theta reach ~1.05 at failure (R)
-    p_threshold: float = 1e-4  # App. B
-    p_threshold_oldest: float = 1e-7  # App. B
-    train_max_steps: int = 2000  # training trials are cut here (truncated, bootstrapped) (R)
-    start_x: float = 1.2  # training start ranges (R, as pole-full)
-    start_theta: float = 0.06
-    test_steps: int = 5001  # "balanced for over 5000 steps" (7.5.4)
+    task: int = param(4, choices=(4,))
+    trials: int = param(1000, ">=1", "7.5.4: 'not always found within 1000 trials'")
+    lessons_per_trial: int = param(70, ">=0", "as the full-state pole experiment and the cup tasks (R)")
+    model_lessons_per_trial: int = param(70, ">=0", "as the cup tasks (R)")
+    model_range: float = param(1.5, ">0", "normalized x, theta reach ~1.05 at failure (R)")
+    p_threshold: float = param(1e-4, "0..<1", "App. B")
+    p_threshold_oldest: float = param(1e-7, ">0", "App. B")
+    train_max_steps: int = param(2000, ">=1", "training trials are cut here (truncated, bootstrapped) (R)")
+    start_x: float = param(1.2, ">=0", "training start ranges (R, as pole-full)")
+    start_theta: float = param(0.06, ">=0")
+    test_steps: int = param(5001, ">=1", "'balanced for over 5000 steps' (7.5.4)")
+    window_q_inv_t: tuple | None = param(None, note="window-Q's 1/T: None, Table B.1's")
+    probe_steps: tuple | None = param(None, note="the robustness probe's forced steps: None, no probe (the cup tasks')")
 
     def __post_init__(self):
-        check_types(self, {**HIDDEN_RANGES, "model_range": ">0", "model_lessons_per_trial": ">=0",
-                           "train_max_steps": ">=1", "start_x": ">=0", "start_theta": ">=0", "test_steps": ">=1"},
-                    arch=ARCHITECTURES, task=(4,))
+        check_types(self)
         check_hidden_state(self)
-
-    # Not parameters here (so outside the run records and the run-folder hashes), as CupParams has them.
-    @property
-    def window_q_inv_t(self) -> tuple | None:
-        """window-Q's 1/T: None, Table B.1's."""
-        return None
-
-    @property
-    def probe_steps(self) -> tuple | None:
-        """The robustness probe's forced steps: None, no probe (it is the cup tasks')."""
-        return None
 
 
 # 7.5.1: recurrent-model's action model on fixed random walks every 50 trials (connrl.tasks.hidden_state.model_probe;
@@ -206,12 +196,13 @@ class FrozenModelParams(CupParams):
     greedy test has been optimal ``freeze_after_optimal`` times (the thesis fixed it "at some point of learning",
     after the agent "found the optimal policy many times")."""
 
-    freeze_at: int | None = None  # trials after which the model is fixed (None: not by trials)
-    freeze_after_optimal: int | None = None  # optimal greedy tests after which it is fixed (None: not by tests)
+    freeze_at: int | None = param(None, ">=0", "trials after which the model is fixed (None: not by trials)")
+    freeze_after_optimal: int | None = param(None, ">=1", "optimal greedy tests after which it is fixed (None: not by "
+                                             "tests)")
 
     def __post_init__(self):
         super().__post_init__()
-        check_types(self, {"freeze_at": ">=0", "freeze_after_optimal": ">=1"})
+        check_types(self)
 
     def check_combination(self):
         if (self.freeze_at, self.freeze_after_optimal) != (None, None) and self.arch != "recurrent-model":

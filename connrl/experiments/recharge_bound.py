@@ -36,7 +36,7 @@ import numpy as np
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, sample_in_room
 from connrl.envs.robot.teachers import teach_chg
 from connrl.experiments.recharge import LAYOUT, SHIPPED_LIBRARY
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, param
 from connrl.tasks.recharge import make_recharge_env
 
 WALLS = ("WFL", "WFR")
@@ -47,23 +47,24 @@ LEADS_ON = {"B": "B", "C": "A"}  # the door out of a room towards the charger (i
 class BoundParams:
     """The fixed rule's settings and the recharging task's (as ``RechargeParams``'s)."""
 
-    position: bool = True  # DP only near the door that leads on (needs X-Y); False: DP wherever applicable
-    history: bool = False  # without position: in room C come from B, no DP while door B is in sight (Ch. 8)
-    near_door: float = 60.0  # inches from the door's centre within which DP is taken (ours)
-    best_walls: bool = False  # per task, the best of the 8 wall-follower choices (an oracle) instead of wall_A/B/C
-    wall_A: str = "WFL"  # wall follower per room (ours: development seeds 100-106)
-    wall_B: str = "WFL"
-    wall_C: str = "WFR"
-    max_steps: int = 200  # (6.6)
-    tests_per_room: int = 10  # as RechargeParams: the same test tasks for the same seed
-    step_scale: float = 1.0
-    success_reward: float = 100.0
-    xy_scale: float = 8.0  # as RechargeParams's, so the world is the learners' (the rule reads the true position)
+    position: bool = param(True, note="DP only near the door that leads on (needs X-Y); False: DP wherever applicable")
+    history: bool = param(False, note="without position: in room C come from B, no DP while door B is in sight (Ch. 8)")
+    near_door: float = param(60.0, ">0", "inches from the door's centre within which DP is taken (ours)")
+    best_walls: bool = param(False, note="per task, the best of the 8 wall-follower choices (an oracle) instead of "
+                             "wall_A/B/C")
+    wall_A: str = param("WFL", note="wall follower per room (ours: development seeds 100-106)", choices=WALLS)
+    wall_B: str = param("WFL", choices=WALLS)
+    wall_C: str = param("WFR", choices=WALLS)
+    max_steps: int = param(200, ">=1", "(6.6)")
+    tests_per_room: int = param(10, ">=1", "as RechargeParams: the same test tasks for the same seed")
+    step_scale: float = param(1.0, ">0")
+    success_reward: float = param(100.0, ">0")
+    xy_scale: float = param(8.0, ">0", "as RechargeParams's, so the world is the learners' (the rule reads the true "
+                            "position)")
     library: str = SHIPPED_LIBRARY
 
     def __post_init__(self):
-        check_types(self, {"near_door": ">0", "max_steps": ">=1", "tests_per_room": ">=1", "step_scale": ">0",
-                           "success_reward": ">0", "xy_scale": ">0"}, wall_A=WALLS, wall_B=WALLS, wall_C=WALLS)
+        check_types(self)
         if self.history and self.position:
             raise ValueError("parameter history applies without position only: use position=false with history=true")
         if self.library != SHIPPED_LIBRARY:

@@ -15,44 +15,39 @@ from dataclasses import dataclass
 import numpy as np
 
 from connrl.experiments.recharge import PROFILES, QUANTITIES, run_rooms
-from connrl.experiments.spec import ExperimentSpec, RunResult, Variant, check_types, override
+from connrl.experiments.spec import ExperimentSpec, RunResult, Variant, check_types, override, param
 from connrl.tasks.recharge import CHG_TAUGHT, make_flat_agent, make_flat_env
-
-RANGES = {"lessons": ">=0", "hidden": ">=1", "lr": ">0", "momentum": "0..<1", "init_range": ">0", "gamma": "0..1",
-          "lam": "0..1", "t_start": ">0", "t_end": ">0", "capacity": ">=1", "lessons_per_trial": ">=0",
-          "p_threshold": "0..<1", "stuck_window": ">=1", "stuck_radius": ">=0", "stuck_boost": ">0", "trials": ">=1",
-          "max_steps": ">=1", "test_every": ">=1", "tests_per_room": ">=1", "paths": ">=0"}
 
 
 @dataclass(frozen=True)
 class FlatParams:
     """One Experiment 1 run: 6.6.1's values, else Ch. 5's (5.3)."""
 
-    lessons: int = CHG_TAUGHT  # taught lessons (6.6.1: 10)
-    hidden: int = 30  # (6.6.1)
-    lr: float = 0.05  # (6.6: fixed to 0.05)
-    momentum: float = 0.9  # (Ch. 5)
-    init_range: float = 0.5  # (Ch. 5)
-    gamma: float = 0.99  # (6.6.1)
-    lam: float = 0.8  # (6.6.1)
-    t_start: float = 0.05  # (6.6)
-    t_end: float = 0.02
-    capacity: int = 100  # (App. A.2, Ch. 5)
-    lessons_per_trial: int = 60  # (6.6)
-    p_threshold: float = 0.02  # P_l (Ch. 5)
-    online: bool = True  # (Ch. 5)
-    stuck_window: int = 8  # stuck detection (Ch. 5's)
-    stuck_radius: float = 12.0
-    stuck_boost: float = 5.0
-    collision_penalty: float = 0.0  # (6.6.1: none; -5 and -10 also tried)
-    trials: int = 300  # (Fig. 6.5)
-    max_steps: int = 200  # (6.6)
-    test_every: int = 10
-    tests_per_room: int = 10  # as Exps 2-3
-    paths: int = 0  # greedy solution paths recorded per start room after the last trial
+    lessons: int = param(CHG_TAUGHT, ">=0", "taught lessons (6.6.1: 10)")
+    hidden: int = param(30, ">=1", "(6.6.1)")
+    lr: float = param(0.05, ">0", "(6.6: fixed to 0.05)")
+    momentum: float = param(0.9, "0..<1", "(Ch. 5)")
+    init_range: float = param(0.5, ">0", "(Ch. 5)")
+    gamma: float = param(0.99, "0..1", "(6.6.1)")
+    lam: float = param(0.8, "0..1", "(6.6.1)")
+    t_start: float = param(0.05, ">0", "(6.6)")
+    t_end: float = param(0.02, ">0")
+    capacity: int = param(100, ">=1", "(App. A.2, Ch. 5)")
+    lessons_per_trial: int = param(60, ">=0", "(6.6)")
+    p_threshold: float = param(0.02, "0..<1", "P_l (Ch. 5)")
+    online: bool = param(True, note="(Ch. 5)")
+    stuck_window: int = param(8, ">=1", "stuck detection (Ch. 5's)")
+    stuck_radius: float = param(12.0, ">=0")
+    stuck_boost: float = param(5.0, ">0")
+    collision_penalty: float = param(0.0, note="(6.6.1: none; -5 and -10 also tried)")
+    trials: int = param(300, ">=1", "(Fig. 6.5)")
+    max_steps: int = param(200, ">=1", "(6.6)")
+    test_every: int = param(10, ">=1")
+    tests_per_room: int = param(10, ">=1", "as Exps 2-3")
+    paths: int = param(0, ">=0", "greedy solution paths recorded per start room after the last trial")
 
     def __post_init__(self):
-        check_types(self, RANGES)
+        check_types(self)
         if not self.collision_penalty <= 0:
             raise ValueError(f"parameter collision_penalty must be <= 0, got {self.collision_penalty}")
         if self.lessons > CHG_TAUGHT:

@@ -19,7 +19,7 @@ import numpy as np
 
 from connrl.agents.cloning import agreement, copy_epoch, lesson_pairs
 from connrl.experiments.robot import RobotParams, RobotRun
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override, param
 from connrl.tasks.robot import evaluate, teacher_score
 
 CHECKPOINTS = (0, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
@@ -29,12 +29,13 @@ CHECKPOINTS = (0, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
 class CopyParams(RobotParams):
     """A Ch. 5 run's world, nets and test tasks (``RobotParams``), with the copying done instead of learning."""
 
-    policy: str = "copy"  # "copy": the nets copy the taught lessons; "teacher": the scripted teacher drives
-    copy_epochs: int = 200  # passes over the taught states at most (stops early at full agreement)
+    policy: str = param("copy", note="'copy': the nets copy the taught lessons; 'teacher': the scripted teacher drives",
+                        choices=("copy", "teacher"))
+    copy_epochs: int = param(200, ">=0", "passes over the taught states at most (stops early at full agreement)")
 
     def __post_init__(self):
         super().__post_init__()
-        check_types(self, {"copy_epochs": ">=0"}, policy=("copy", "teacher"))
+        check_types(self)
 
     def check_combination(self):
         super().check_combination()

@@ -11,26 +11,15 @@ whole results page uses; a difference is a Welch t-test, and otherwise the runs 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from connrl.experiments.robot import PROFILES, Q_FINAL, Q_MEAN, RobotParams
-from connrl.experiments.spec import ExperimentSpec, Variant, override
-
-
-@dataclass(frozen=True)
-class RobotNoiseParams(RobotParams):
-    """RobotParams with the world's noise as a parameter (``connrl.tasks.robot.make_env`` reads it)."""
-
-    noise: bool = True  # sensing and control noise of 5.2.1, in training and in the tests
-
+from connrl.experiments.spec import ExperimentSpec, Variant
 
 TASK_LESSONS = (("DP", 10), ("DK", 10), ("WFL", 5))  # Exp. 1's most-taught variants (5.4.1)
 THESIS = "the robot's performance in the noisy world was almost the same as that in a noise-free world"  # 5.5
 
 EXPERIMENTS = [ExperimentSpec(
     name="robot-noise", title="DP, DK and WFL learned with and without sensing and control noise", section="5.5",
-    run="connrl.experiments.robot:run_robot",  # the runner builds RobotNoiseParams (the spec's params class)
-    params=override(RobotNoiseParams(), {}, "experiment robot-noise"),
+    run="connrl.experiments.robot:run_robot", params=RobotParams(),
     profiles={k: {key: v for key, v in over.items() if key != "paths"} for k, over in PROFILES.items()},
     variants=tuple(Variant(f"{task}, {'noisy' if noise else 'noise-free'}", {"task": task, "lessons": n,
                                                                             "noise": noise})

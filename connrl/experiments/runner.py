@@ -43,7 +43,7 @@ from connrl.experiments.executors import (  # noqa: F401 (the runner's API, as b
     check_executor,
 )
 from connrl.experiments.guards import ExecutorError, check_ray_cluster, check_reachable, run_lock  # noqa: F401
-from connrl.experiments.spec import ExperimentSpec, RunResult, as_dict, load_callable, qualified_name
+from connrl.experiments.spec import ExperimentSpec, RunResult, as_dict, load_callable, qualified_name, run_key
 from connrl.experiments.store import (
     DamagedFile,
     environment_info,
@@ -91,7 +91,7 @@ def remove_stale_temporaries(folder: Path) -> list[Path]:
 
 def make_jobs(spec: ExperimentSpec, profile: str, runs: int | None, seed: int, out: Path) -> list[Job]:
     base, n = spec.resolve(profile, runs)
-    root = out / spec.name / "runs" / f"{profile}-{params_hash(as_dict(base))}"
+    root = out / spec.name / "runs" / f"{profile}-{run_key(base)}"
     jobs = []
     for v in spec.variants:
         params = as_dict(spec.variant_params(base, v))
@@ -101,6 +101,23 @@ def make_jobs(spec: ExperimentSpec, profile: str, runs: int | None, seed: int, o
             path = root / variant_slug(v.label) / f"seed-{s}"
             jobs.append(Job(spec.name, spec.run, v.label, params, s, str(path), qualified_name(spec.params)))
     return jobs
+
+
+def adopt_earlier_folder(jobs: list[Job]) -> Path | None:
+    """Rename to the jobs' run folder an earlier one of the same profile (named by an earlier key: before
+    ``run_key``, a hash of every value) whose records all belong to these jobs, so stored runs are reused, not
+    redone; returns the folder adopted (None: none fits, or the folder is there already)."""
+    root = Path(jobs[0].path).parents[1]
+    if root.exists() or not root.parent.is_dir():
+        return None
+    profile = root.name.split("-")[0]
+    for old in sorted(d for d in root.parent.glob(f"{profile}-*") if d.is_dir() and not d.is_symlink()):
+        found = [load_record(old / Path(j.path).relative_to(root), j) for j in jobs
+                 if (old / Path(j.path).relative_to(root)).with_suffix(".json").exists()]
+        if found and all(rec is not None for rec, _ in found):
+            old.rename(root)
+            return old
+    return None
 
 
 def execute_job(job: Job) -> dict:
@@ -368,8 +385,9 @@ def execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind
 
 
 def prepare_outputs(folder: Path, jobs: list[Job]) -> None:
-    """Make every folder the runs will write in, before any run: a path in the way fails now (``OSError``
-    naming it), not after the compute."""
+    """Make every folder the runs will write in, before any run (an earlier key's folder of these runs is adopted):
+    a path in the way fails now (``OSError`` naming it), not after the compute."""
+    adopt_earlier_folder(jobs)
     for where in sorted({Path(j.path).parent for j in jobs}):
         try:
             where.mkdir(parents=True, exist_ok=True)
@@ -394,6 +412,7 @@ def stored_runs(spec: ExperimentSpec, out: Path, on_damaged=None) -> tuple[dict 
         jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], Path(out))
     except ValueError as exc:
         raise DamagedFile(p, f"it does not fit experiment {spec.name}: {exc}") from None
+    adopt_earlier_folder(jobs)
     records = []
     for j in jobs:
         rec, damage = load_record(j.path, j)

@@ -16,12 +16,24 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
-import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from connrl.nets.mlp import MAX_UNITS as NET_MAX_UNITS
+from connrl.core.params import (  # noqa: F401  (the parameter classes' tools, re-exported)
+    CAPS,
+    MAX_COUNT,
+    MAX_UNITS,
+    MAX_WINDOW,
+    as_dict,
+    cap,
+    check_sequence,
+    check_types,
+    declared,
+    field_kinds,
+    param,
+    run_key,
+)
 
 PROFILES = ("tiny", "quick", "full")
 
@@ -81,97 +93,6 @@ def _whole(kinds: list[str], value):
     return value
 
 
-def field_kinds(field: dataclasses.Field) -> list[str]:
-    """The type names of a parameter field's annotation (``"float | None"`` -> ``["float", "None"]``); the
-    parameter modules use postponed annotations, so these are strings."""
-    return [k.strip() for k in str(field.type).split("|")]
-
-
-_KINDS = {"bool": (bool,), "int": (int,), "float": (int, float), "str": (str,), "tuple": (tuple,), "dict": (dict,)}
-
-
-_RANGES = {">0": (lambda v: v > 0, "> 0"), ">=0": (lambda v: v >= 0, ">= 0"), ">=1": (lambda v: v >= 1, ">= 1"),
-           "0..1": (lambda v: 0 <= v <= 1, "in [0, 1]"), "0..<1": (lambda v: 0 <= v < 1, "in [0, 1)"),
-           "0..180": (lambda v: 0 <= v <= 180, "in [0, 180]")}
-
-# Upper bounds of the size-like parameters (issue 24): every int parameter is at most MAX_COUNT, and a parameter named
-# in CAPS (an int, or a float that sizes something) at most its cap; check_types refuses a larger value before any run.
-# Generous: every profile and variant of every experiment stays within a tenth of its cap
-# (tests/experiments/test_bounds.py), while no single value can ask for gigabytes or for years of compute.
-MAX_COUNT = 10**7  # any count: steps spent pre-training, states of a grid, ...
-MAX_UNITS = NET_MAX_UNITS  # hidden or context units of one net (the thesis's largest: 30): one cap everywhere
-MAX_WINDOW = 100  # window sizes: the last N steps kept as input or for stuck detection (the thesis's: 5 and 8)
-CAPS = {
-    **dict.fromkeys(("hidden", "context"), MAX_UNITS),
-    "hidden_fraction": 10.0,  # hidden units per input (Ch. 5: 0.3)
-    "stuck_window": MAX_WINDOW,
-    # trials, plays, epochs, and the trial counts that pace them (the thesis's most: 1000 trials)
-    **dict.fromkeys(("trials", "max_trials", "anneal_trials", "train_plays", "copy_epochs", "test_every",
-                     "planning_block", "freeze_at", "freeze_after_optimal"), 10**6),
-    # steps of one trial or test, or one lesson's length (the most: 5001 steps of a pole test)
-    **dict.fromkeys(("max_steps", "train_max_steps", "test_steps", "steps"), 10**6),
-    # lessons taught, kept for replay, replayed per trial (the most: 100)
-    **dict.fromkeys(("lessons", "capacity", "lessons_per_trial", "model_lessons_per_trial"), 10**5),
-    # test tasks and environments, paths and samples recorded (the most: 8000 environments of 4.3.4)
-    **dict.fromkeys(("test_tasks", "test_envs", "eval_envs", "tests_per_room", "final_tests_per_room", "paths",
-                     "probe_samples"), 10**5),
-    "block_max": 10**6,  # grids' regions of odd side up to block_max (n = 3^j states, j <= 12: ComplexityParams)
-}
-
-
-def cap(name: str, kinds: list[str]) -> float | None:
-    """The largest value parameter ``name`` may take (None: not a size)."""
-    return CAPS.get(name, MAX_COUNT if "int" in kinds else None)
-
-
-def _allowed(name: str, kinds: list[str], rng: str | None) -> str:
-    """``"in [1, 1000000]"``, or ``"at most 10000000"`` without a lower bound."""
-    top = cap(name, kinds)
-    if rng == ">0":
-        return f"in (0, {top}]" if "float" in kinds else f"in [1, {top}]"
-    return f"in [{rng[2:]}, {top}]" if rng in (">=0", ">=1") else f"at most {top}"
-
-
-def check_types(params, ranges: Mapping[str, str] | None = None, **choices: tuple) -> None:
-    """Refuse a field whose value does not match its annotation (``float``, ``int | None``, ...; a bool is not
-    a number), lies outside its range in ``ranges`` (``">0"``, ``">=0"``, ``">=1"``, ``"0..1"``, ``"0..<1"``,
-    ``"0..180"``; None passes where the annotation allows it), exceeds its cap (``cap``: every int, and the floats
-    named in ``CAPS``) or, for the fields named in ``choices``, is not one of the allowed values. Parameter classes
-    call it from ``__post_init__``, so a bad value fails when the spec (or a sweep) is built, before any run."""
-    ranges = ranges or {}
-    for f in dataclasses.fields(params):
-        v = getattr(params, f.name)
-        kinds = field_kinds(f)
-        ok = (v is None and "None" in kinds) or any(
-            isinstance(v, _KINDS.get(k, object)) and not (isinstance(v, bool) and k in ("int", "float"))
-            for k in kinds if k != "None")
-        if not ok and "int" in kinds and "float" not in kinds:
-            raise ValueError(f"parameter {f.name} must be a whole number {_allowed(f.name, kinds, ranges.get(f.name))}"
-                             f"{' or None' if 'None' in kinds else ''}, got {v!r}")
-        if not ok:
-            raise ValueError(f"parameter {f.name} must be {f.type}, got {v!r}")
-        if isinstance(v, float) and not math.isfinite(v):
-            raise ValueError(f"parameter {f.name} must be a finite number, got {v!r}")
-        if f.name in ranges and v is not None and not _RANGES[ranges[f.name]][0](v):
-            raise ValueError(f"parameter {f.name} must be {_RANGES[ranges[f.name]][1]}, got {v!r}")
-        top = cap(f.name, kinds)
-        if top is not None and isinstance(v, (int, float)) and not isinstance(v, bool) and v > top:
-            raise ValueError(f"parameter {f.name} must be {_allowed(f.name, kinds, ranges.get(f.name))}, got {v!r}")
-        if f.name in choices and v not in choices[f.name]:
-            raise ValueError(f"parameter {f.name} must be one of {', '.join(map(repr, choices[f.name]))}, got {v!r}")
-
-
-def check_sequence(name: str, values, kind: type, low: float, high: float, longest: int) -> None:
-    """Refuse a tuple parameter (e.g. ``probe_steps``) with more than ``longest`` entries or an entry that
-    is not a ``kind`` (a bool is not a number) in [low, high]."""
-    if len(values) > longest:
-        raise ValueError(f"parameter {name} must have at most {longest} entries, got {len(values)}")
-    for x in values:
-        if isinstance(x, bool) or not isinstance(x, kind) or not low <= x <= high:
-            what = "whole numbers" if kind is int else "numbers"
-            raise ValueError(f"parameter {name} must hold {what} in [{low}, {high}], got {x!r}")
-
-
 def check_combination(params, where: str = "parameters"):
     """A complete parameter set's checks across fields (``params.check_combination()``, where a class has one:
     e.g. no more taught lessons than a task has), which a partial set such as a spec's base cannot pass."""
@@ -182,11 +103,6 @@ def check_combination(params, where: str = "parameters"):
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
     return params
-
-
-def as_dict(params) -> dict[str, Any]:
-    """The plain-data form of a parameter set, as stored in run records and hashed into run folders."""
-    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
 
 
 @dataclass(frozen=True)

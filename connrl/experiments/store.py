@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from connrl.core.params import defaults
+from connrl.experiments.spec import load_callable
 from connrl.storage import (
     MAX_JSON_BYTES,
     MAX_NESTING,
@@ -113,12 +115,18 @@ def check_record(rec: object, job=None) -> str | None:
         return "'copy_of' does not name the experiment and variant of the run it copies"
     if job is not None:
         params = json.loads(json.dumps(job.params, default=json_default))  # as stored: tuples become lists
-        for key, want in (("experiment", job.experiment), ("variant", job.variant), ("seed", job.seed),
-                          ("params", params)):
-            if rec[key] != want:
+        # a parameter declared after the record was written is the record's at its default (run_key's contract)
+        stored = {**_as_stored(defaults(load_callable(job.params_type))), **rec["params"]}
+        for key, want, have in (("experiment", job.experiment, rec["experiment"]), ("variant", job.variant,
+                                 rec["variant"]), ("seed", job.seed, rec["seed"]), ("params", params, stored)):
+            if have != want:
                 return f"its {key} is not this run's" if key == "params" else \
-                    f"its {key} is {rec[key]!r}, this run's is {want!r}"
+                    f"its {key} is {have!r}, this run's is {want!r}"
     return None
+
+
+def _as_stored(values: dict) -> dict:
+    return json.loads(json.dumps(values, default=json_default))
 
 
 def _csv_problem(path: Path) -> str | None:

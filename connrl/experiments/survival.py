@@ -29,7 +29,7 @@ import numpy as np
 
 from connrl.envs.survival.world import REWARD_FOOD
 from connrl.experiments.protocol import train_and_test
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, param
 from connrl.tasks.survival import (
     FRAMEWORKS,
     MODELS,
@@ -54,56 +54,23 @@ FRESH_SEED = 2000  # first seed of the fresh-seed runs: Ch. 4 development used 0
 class SurvivalParams:
     """One Ch. 4 run (4.3.1); the agents' own constants are ``connrl.tasks.survival.SurvivalAgentParams``."""
 
-    framework: str = "QCON"  # one of connrl.tasks.survival.FRAMEWORKS
-    model: str = "learned"  # action model of the -M agents (4.2.5)
-    representation: str = "global"  # 4.2.3
-    lr_scale: float = 1.0  # Study 2: 2.0 (4.3.3)
-    train_plays: int = 300  # 4.3.1
-    test_envs: int = 50  # 4.3.1
-    test_every: int = 20  # 4.3.1
-    eval_envs: int = 0  # 4.3.4: 8000 after training (survival-eval only)
-    curve: str = "food"  # "food" (Figs. 4.3/4.4) or "planning" (Fig. 4.5: hypothetical actions per step)
-    planning_block: int = 10  # plays averaged per point of the planning curve
+    framework: str = param("QCON", note="one of connrl.tasks.survival.FRAMEWORKS", choices=FRAMEWORKS)
+    model: str = param("learned", note="action model of the -M agents (4.2.5)", choices=MODELS)
+    representation: str = param("global", note="4.2.3", choices=("global", "local"))
+    lr_scale: float = param(1.0, ">0", "Study 2: 2.0 (4.3.3)")
+    train_plays: int = param(300, ">=1", "4.3.1")
+    test_envs: int = param(50, ">=1", "4.3.1")
+    test_every: int = param(20, ">=0", "4.3.1")
+    eval_envs: int = param(0, ">=0", "4.3.4: 8000 after training (survival-eval only)")
+    curve: str = param("food", note="'food' (Figs. 4.3/4.4) or 'planning' (Fig. 4.5: hypothetical actions per step)",
+                       choices=("food", "planning"))
+    planning_block: int = param(10, ">=1", "plays averaged per point of the planning curve")
+    p_threshold: float | None = param(None, "0..<1", "P_t: actions less likely are not replayed (3.5.1); None: "
+                                      "4.2.7's per framework")
+    food_reward: float = param(REWARD_FOOD, ">=0", "the reinforcement for food in training (4.2.1); tests count food")
 
     def __post_init__(self):
-        check_types(self, {"lr_scale": ">0", "train_plays": ">=1", "test_envs": ">=1", "test_every": ">=0",
-                           "eval_envs": ">=0", "planning_block": ">=1"},
-                    framework=FRAMEWORKS, model=MODELS, representation=("global", "local"), curve=("food", "planning"))
-
-    # Not parameters here (so outside the run records and the run-folder hashes): SurvivalTuningParams and
-    # SurvivalFoodParams make them parameters.
-    @property
-    def p_threshold(self) -> float | None:
-        """Replay's P_t: None, 4.2.7's value per framework."""
-        return None
-
-    @property
-    def food_reward(self) -> float:
-        """The reinforcement for food in training: the world's (4.2.1)."""
-        return REWARD_FOOD
-
-
-@dataclass(frozen=True)
-class SurvivalTuningParams(SurvivalParams):
-    """SurvivalParams with replay's P_t as a parameter (4.2.7's tuning claims; the other experiments keep their run
-    folders)."""
-
-    p_threshold: float | None = None  # P_t: actions less likely are not replayed (3.5.1); None: 4.2.7's per framework
-
-    def __post_init__(self):
-        super().__post_init__()
-        check_types(self, {"p_threshold": "0..<1"})
-
-
-@dataclass(frozen=True)
-class SurvivalFoodParams(SurvivalParams):
-    """SurvivalParams with the food reward as a parameter (4.2.1's tuning claim), in training; tests count food."""
-
-    food_reward: float = REWARD_FOOD  # 4.2.1
-
-    def __post_init__(self):
-        super().__post_init__()
-        check_types(self, {"food_reward": ">=0"})
+        check_types(self)
 
     def check_combination(self):
         if self.food_reward != REWARD_FOOD and self.framework.endswith(("-M", "-T")):
@@ -278,13 +245,13 @@ EXPERIMENTS = [
         x_label="plays", y_label="food per play"),
     ExperimentSpec(  # 4.2.7: "For AHCON-R, P_t = 0.2 ... roughly the best"; QCON-R similar at 0.1-0.001, poor at 0
         name="survival-tuning", title="Survival, Study 1: AHCON-R and QCON-R with replay thresholds P_t around "
-        "4.2.7's", section="4.2.7", run="connrl.experiments.survival:run_survival", params=SurvivalTuningParams(),
+        "4.2.7's", section="4.2.7", run="connrl.experiments.survival:run_survival", params=SurvivalParams(),
         profiles=_PROFILES, variants=tuple(Variant(f"{fw} P_t={pt:g}", {"framework": fw, "p_threshold": pt})
                                            for fw, pt in _TUNING),
         quantities=_CURVE_QUANTITIES[:2], x_label="plays", y_label="food per test play"),
     ExperimentSpec(  # 4.2.1: "a few different values were tried for Agent AHCON, and 0.4 gave roughly the best"
         name="survival-food", title="Survival, Study 1: AHCON with food rewards around 4.2.1's 0.4", section="4.2.1",
-        run="connrl.experiments.survival:run_survival", params=SurvivalFoodParams(framework="AHCON"),
+        run="connrl.experiments.survival:run_survival", params=SurvivalParams(framework="AHCON"),
         profiles=_PROFILES, variants=tuple(Variant(f"food reward {r:g}", {"food_reward": r})
                                            for r in (0.1, 0.2, 0.4, 0.8)),
         quantities=_CURVE_QUANTITIES[:2], x_label="plays", y_label="food per test play"),

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from connrl.core.returns import lambda_returns
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, param
 
 LAMS = (0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9,
         0.91, 0.92, 0.93, 0.94, 0.95, 0.96, 0.97, 0.98, 0.99)
@@ -29,12 +29,14 @@ MARKS = (0.7, 0.9, 0.99)  # D reported as quantities: the thesis's lambda for Ch
 
 @dataclass(frozen=True)
 class DepthParams:
-    lams: tuple = LAMS  # the lambda values measured (each in (0, 1))
-    steps: int = 5000  # lesson length: lambda^steps must be negligible for the largest lambda (0.99^5000 ~ 1e-22)
-    gamma: float = 1.0  # 1: D is lambda's own depth, as 5.1.1 defines it (the code's weights are (gamma lambda)^k)
+    lams: tuple = param(LAMS, note="the lambda values measured (each in (0, 1))")
+    steps: int = param(5000, ">=1", "lesson length: lambda^steps must be negligible for the largest lambda (0.99^5000 "
+                       "~ 1e-22)")
+    gamma: float = param(1.0, "0..1", "1: D is lambda's own depth, as 5.1.1 defines it (the code's weights are (gamma "
+                         "lambda)^k)")
 
     def __post_init__(self):
-        check_types(self, {"steps": ">=1", "gamma": "0..1"})
+        check_types(self)
         if len(self.lams) > MAX_LAMS:
             raise ValueError(f"parameter lams must have at most {MAX_LAMS} entries, got {len(self.lams)}")
         if not self.lams or not all(isinstance(x, float) and 0 < x < 1 for x in self.lams):

@@ -93,7 +93,7 @@ class RobotWorldParams(RobotWorldDetails, Protocol):
     @property
     def dp_far(self) -> float: ...
     @property
-    def noise(self) -> bool: ...  # RobotParams: always on (a class constant); RobotNoiseParams (5.5): a parameter
+    def noise(self) -> bool: ...  # the sensing and control noise of 5.2.1 (off in 5.5's noise-free world)
 
 
 class RobotAgentParams(RobotWorldDetails, Protocol):

@@ -4,7 +4,8 @@ noise (its verdict rule is connrl.report.verdicts, tested in tests/report)."""
 import json
 from pathlib import Path
 
-from connrl.experiments.robot_noise import EXPERIMENTS, RobotNoiseParams
+from connrl.experiments.robot import RobotParams
+from connrl.experiments.robot_noise import EXPERIMENTS
 from connrl.tasks.robot import make_env
 
 GOLDEN = json.loads((Path(__file__).parents[1] / "data" / "tiny_e172482.json").read_text())
@@ -21,9 +22,9 @@ def test_the_noisy_variants_are_exp_1s_runs_and_the_noise_free_ones_differ():
 
 
 def test_noise_off_means_exact_moves_and_readings():
-    env = make_env(RobotNoiseParams(task="DK", noise=False))
+    env = make_env(RobotParams(task="DK", noise=False))
     assert not env.sim.sensor_noise and not env.sim.control_noise
-    assert make_env(RobotNoiseParams(task="DK")).sim.control_noise  # on by default, as in Ch. 5
+    assert make_env(RobotParams(task="DK")).sim.control_noise  # on by default, as in Ch. 5
 
 
 def test_the_variants_cover_each_task_both_ways():

@@ -62,11 +62,11 @@ def test_the_tuning_threshold_reaches_replay():
     import numpy as np
 
     from connrl.envs.survival import SurvivalEnv
-    from connrl.experiments.survival import SurvivalTuningParams, _agent_params
+    from connrl.experiments.survival import SurvivalParams, _agent_params
     from connrl.tasks.survival import make_survival_agent
     for fw, pt, expected in (("AHCON-R", 0.4, 0.4), ("QCON-R", 0.0, 0.0), ("AHCON-R", None, 0.2),
                              ("QCON-R", None, 0.01)):  # None: 4.2.7's value for the framework
-        agent = make_survival_agent(_agent_params(SurvivalTuningParams(framework=fw, p_threshold=pt)),
+        agent = make_survival_agent(_agent_params(SurvivalParams(framework=fw, p_threshold=pt)),
                                     SurvivalEnv("global"), np.random.default_rng(0))
         assert agent.config.replay.p_threshold == expected
 
@@ -101,16 +101,16 @@ def test_the_food_reward_experiments_04_is_study_1s_ahcon_and_the_wrapper_maps_o
 def test_the_new_parameters_at_their_defaults_run_exactly_as_study_1():
     import numpy as np
 
-    from connrl.experiments.survival import SurvivalFoodParams, SurvivalParams, SurvivalTuningParams, run_survival
+    from connrl.experiments.survival import SurvivalParams, run_survival
     small = {"train_plays": 6, "test_envs": 3, "test_every": 2}
 
     def rows(p):
         return run_survival(p, np.random.default_rng(0)).rows
-    assert rows(SurvivalTuningParams(framework="AHCON-R", p_threshold=0.2, **small)) == \
+    assert rows(SurvivalParams(framework="AHCON-R", p_threshold=0.2, **small)) == \
         rows(SurvivalParams(framework="AHCON-R", **small))
-    assert rows(SurvivalFoodParams(framework="AHCON", food_reward=0.4, **small)) == \
+    assert rows(SurvivalParams(framework="AHCON", food_reward=0.4, **small)) == \
         rows(SurvivalParams(framework="AHCON", **small))
-    assert rows(SurvivalTuningParams(framework="QCON-R", p_threshold=0.0, **small)) != \
+    assert rows(SurvivalParams(framework="QCON-R", p_threshold=0.0, **small)) != \
         rows(SurvivalParams(framework="QCON-R", **small))  # the threshold reaches the runs
 
 
@@ -118,6 +118,6 @@ def test_a_food_reward_for_a_model_or_taught_agent_is_refused():
     import pytest
 
     from connrl.experiments.spec import check_combination
-    from connrl.experiments.survival import SurvivalFoodParams
+    from connrl.experiments.survival import SurvivalParams
     with pytest.raises(ValueError, match="food_reward applies to agents without a model or taught lessons"):
-        check_combination(SurvivalFoodParams(framework="AHCON-T", food_reward=0.8))
+        check_combination(SurvivalParams(framework="AHCON-T", food_reward=0.8))

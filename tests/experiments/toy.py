@@ -1,5 +1,6 @@
 """A toy experiment for the runner, spec and plot tests: importable by worker processes by name."""
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,3 +38,19 @@ def spec(run="tests.experiments.toy:toy_run"):
         profiles={"tiny": {"runs": 2}, "quick": {"runs": 3}, "full": {"runs": 4, "n": 7}},
         variants=(Variant("a", {}, {"total": 2.0}), Variant("b/c", {"n": 6})),
         quantities=(Quantity("total", "sum of draws", "higher"),))
+
+
+@dataclass(frozen=True)
+class ToyParamsGrown(ToyParams):
+    """ToyParams with a parameter declared later: at its default it is ToyParams's behaviour (``m`` is unused)."""
+
+    m: int = 3
+
+
+@dataclass(frozen=True)
+class ToyParamsNewDefault(ToyParams):
+    n: int = 6
+
+
+def grown_spec(params=ToyParamsGrown()):
+    return dataclasses.replace(spec(), params=params)

@@ -8,7 +8,6 @@ import ast
 import inspect
 import types
 import typing
-from dataclasses import fields
 from pathlib import Path
 
 import pytest
@@ -21,8 +20,6 @@ from connrl.experiments.recharge_bound import BoundParams
 from connrl.experiments.recharge_flat import FlatParams
 from connrl.experiments.robot import RobotParams
 from connrl.experiments.robot_bounds import CopyParams
-from connrl.experiments.robot_noise import RobotNoiseParams
-from connrl.experiments.survival import SurvivalFoodParams, SurvivalParams, SurvivalTuningParams
 from connrl.tasks import hidden_state, integration, pole, recharge, robot
 
 TASKS = Path(pole.__file__).resolve().parent
@@ -34,9 +31,9 @@ PASSED = {
     pole.make_agent: (PoleParams,),
     hidden_state.table_entry: (CupParams, PoleHiddenParams, FrozenModelParams),
     hidden_state.make_agent: (CupParams, PoleHiddenParams, FrozenModelParams),
-    robot.make_env: (RobotParams, RobotNoiseParams, CopyParams),
-    robot.make_agent: (RobotParams, RobotNoiseParams, CopyParams),
-    robot.world_of: (RobotParams, RobotNoiseParams, CopyParams),
+    robot.make_env: (RobotParams, CopyParams),
+    robot.make_agent: (RobotParams, CopyParams),
+    robot.world_of: (RobotParams, CopyParams),
     recharge.make_recharge_env: (RechargeParams, OwnLibraryParams, BoundParams),
     recharge.make_high_level_agent: (RechargeParams, IntegrationParams),
     recharge.cooling: (RechargeParams, IntegrationParams),
@@ -92,25 +89,10 @@ def test_the_parameter_classes_passed_have_every_member_of_its_type(fn):
 
 
 def test_no_getattr_fallbacks_on_parameters():
-    """A parameter a subclass adds is a read-only property of its base (outside the run records and run-folder
-    hashes), not ``getattr(p, name, default)``."""
+    """A parameter is a field of its class (a new one moves no stored run: ``connrl.core.params.run_key``), not
+    ``getattr(p, name, default)``."""
     for path in [*TASKS.glob("*.py"), *(TASKS.parent / "experiments").glob("*.py")]:
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "getattr" \
                     and isinstance(node.args[0], ast.Name) and node.args[0].id == "p" and len(node.args) == 3:
                 raise AssertionError(f"{path.name}:{node.lineno}: getattr(p, ..., default)")
-
-
-def test_base_constants_are_not_parameters():
-    """The bases' read-only stand-ins are what the fallbacks were, and are no fields (the records and hashes of
-    the base classes' runs stay as they were); the subclasses' fields override them."""
-    assert RobotParams().noise is True and RobotNoiseParams(noise=False).noise is False
-    assert SurvivalParams().p_threshold is None and SurvivalTuningParams(p_threshold=0.1).p_threshold == 0.1
-    assert SurvivalParams().food_reward == SurvivalFoodParams().food_reward
-    assert SurvivalFoodParams(food_reward=2.0).food_reward == 2.0
-    assert PoleHiddenParams().window_q_inv_t is None and PoleHiddenParams().probe_steps is None
-    for cls, name in ((RobotParams, "noise"), (SurvivalParams, "p_threshold"), (SurvivalParams, "food_reward"),
-                      (PoleHiddenParams, "window_q_inv_t"), (CopyParams, "noise")):
-        assert name not in {f.name for f in fields(cls)}
-    assert [f.name for f in fields(RobotNoiseParams)][-1] == "noise"
-    assert [f.name for f in fields(SurvivalTuningParams)][-1] == "p_threshold"
