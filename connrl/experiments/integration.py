@@ -20,51 +20,19 @@ hidden-state probe: every step taken in room C within
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
 from connrl.envs.robot import Layout
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, sample_in_room
-from connrl.experiments.recharge import PROFILES, QUANTITIES, RechargeParams, run_rooms
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override, param
-from connrl.tasks.integration import make_integration_agent, make_integration_env
+from connrl.experiments.recharge import PROFILES, QUANTITIES, run_rooms
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, override
+from connrl.tasks.integration import MEMORY, IntegrationParams, make_integration_agent, make_integration_env  # noqa: F401
 from connrl.tasks.recharge import BehaviourEnv
 
-MEMORY = ("none", "recurrent")
 PROBE_RADIUS = 30.0  # in: "at subgoal 4 / 5" (R)
 LAYOUTS = ("default", "changed")
-
-
-@dataclass(frozen=True)
-class IntegrationParams(RechargeParams):
-    """One Ch. 8 run: Ch. 6 Experiment 3's parameters (``RechargeParams``) without X-Y, and the memory used."""
-
-    xy: bool = param(False, note="the 2 X-Y inputs (Ch. 6) or none (Ch. 8, 8.1)")
-    memory: str = param("none", note="'none': Exp. 1's memoryless Q-nets (8.2); 'recurrent': Exp. 2's recurrent-Q "
-                        "(8.3)", choices=MEMORY)
-    context: int = param(8, ">=0", "context units of the recurrent Q-nets (8.3); memory='none' has none")
-    share_output: bool = param(False, note="the recurrent nets share their hidden->output connections (7.4: 'tends to "
-                               "help')")
-    final_tests_per_room: int = param(20, ">=1", "Exp. 3: fresh tasks per start room in each layout after the last "
-                                      "trial (R)")
-    probe_samples: int = param(300, ">=0", "at most this many near-door steps kept per run for the hidden-state probe "
-                               "(R)")
-
-    def __post_init__(self):
-        super().__post_init__()
-        check_types(self)
-        if self.memory == "recurrent" and self.context > self.hidden:
-            raise ValueError(f"parameter context must be at most hidden ({self.hidden}): context units copy hidden "
-                             f"units (7.4), got {self.context}")
-        if self.pretrain_steps or (self.grouping and self.memory == "recurrent"):
-            raise ValueError("parameters pretrain_steps (Ch. 6 Exp. 5) and grouping with memory='recurrent' are not "
-                             "built for Ch. 8: use pretrain_steps=0, and grouping only with memory='none'")
-        if self.memory == "recurrent" and self.online:
-            raise ValueError("parameter online must be False with memory='recurrent': the recurrent nets learn only by "
-                             "batch replay (7.5, 8.3)")
-        if self.memory == "none" and self.share_output:
-            raise ValueError("parameter share_output applies to memory='recurrent' only")
 
 
 def _near_door(layout: Layout, pose) -> str | None:

@@ -8,47 +8,14 @@ training trials until then (None if not within ``max_trials``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
 from connrl.core.rollout import run_trial
 from connrl.experiments.protocol import train_and_test
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, param
-from connrl.tasks.pole import make_agent, make_envs, satisfactory
-
-
-@dataclass(frozen=True)
-class PoleParams:
-    """Table B.1, Task 4 (the memoryless full-state agent reuses the window-Q column with N = 1), plus the
-    choices where the thesis is silent (R; docs/RECONSTRUCTION.md, "Pole balancing" and "Learners and
-    protocols"); see docs/RESULTS.md for how they were chosen."""
-
-    agent: str = param("qcon", note="'qcon' or 'ahcon'", choices=("qcon", "ahcon"))
-    observe: str = param("full", note="full state (x, x_dot, theta, theta_dot)", choices=("full", "x_theta"))
-    hidden: int = param(6, ">=0", "H_q (Table B.1)")
-    lr: float = param(0.25, ">0", "eta_q (Table B.1)")
-    init_range: float = param(0.5, ">0", "App. B")
-    momentum: float = param(0.9, "0..<1", "App. B")
-    gamma: float = param(0.9, "0..1", "App. B")
-    lam: float = param(0.7, "0..1", "Table B.1")
-    inv_t_start: float = param(20.0, ">0", "1/T: 20 -> 50 (Table B.1)")
-    inv_t_end: float = param(50.0, ">0")
-    anneal_trials: int = param(1000, ">=1", "trials over which 1/T moves (R)")
-    capacity: int = param(70, ">=1", "replay only the latest 70 trials (7.5)")
-    lessons_per_trial: int = param(70, ">=0", "lessons replayed after each trial, drawn by App. A.2 from the latest "
-                                   "70 (R)")
-    p_threshold: float = param(1e-4, "0..<1", "P_l for the latest lesson (App. B)")
-    p_threshold_oldest: float | None = param(1e-7, ">0", "P_l for the oldest lesson (App. B)")
-    online: bool = param(True, note="also learn on-line from each step (Fig. 3.4)")
-    train_max_steps: int = param(2000, ">=1", "training trials are cut here (truncated, bootstrapped) (R)")
-    start_x: float = param(1.2, ">=0", "training start ranges (R)")
-    start_theta: float = param(0.06, ">=0")
-    test_steps: int = param(5001, ">=1", "'balanced for over 5000 steps' (7.5.4)")
-    max_trials: int = param(1000, ">=1", "7.5.4: 'not always found within 1000 trials'")
-
-    def __post_init__(self):
-        check_types(self)
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
+from connrl.tasks.pole import PoleParams, make_agent, make_envs, satisfactory
 
 
 def train_until_satisfactory(train_env, test_env, agent, max_trials: int, test_steps: int, progress) -> RunResult:

@@ -25,74 +25,21 @@ from connrl.envs.robot.recharge import ROOMS, sample_in_room
 from connrl.envs.robot.teachers import teach_chg
 from connrl.experiments.behaviours import THESIS_BEHAVIOUR_STEPS, budget_split, pretrain_behaviours, train_within_budget
 from connrl.experiments.protocol import train_and_test
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override, param
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, override, param
 from connrl.tasks import recharge_play, recharge_train
-from connrl.tasks.behaviours import Behaviour, library_digest
-from connrl.tasks.recharge import TARGET_MAX, BehaviourEnv, make_high_level_agent, make_recharge_env
+from connrl.tasks.behaviours import Behaviour
+from connrl.tasks.recharge import (  # noqa: F401  (the parameters, re-exported)
+    SHIPPED_LIBRARY,
+    TARGET_MAX,
+    BehaviourEnv,
+    RechargeParams,
+    make_high_level_agent,
+    make_recharge_env,
+)
 from connrl.tasks.recharge_together import TrainingBehaviourEnv
 
-SHIPPED_LIBRARY = library_digest()
 LAYOUT = Layout.load("default")  # where the test tasks are drawn
 
-
-
-@dataclass(frozen=True)
-class RechargeParams:
-    """One Ch. 6 run: the thesis's values where 6.6 gives them, else Ch. 5's (R)."""
-
-    persistence: bool = param(True, note="Exp. 3's persistence rule (6.5.1); False = Exp. 2")
-    hidden: int = param(8, ">=1", "hidden units of each Q-net (6.6)")
-    lr: float = param(0.05, ">0", "(6.6)")
-    momentum: float = param(0.9, "0..<1", "(R, Ch. 5)")
-    init_range: float = param(0.3, ">0", "(R) Ch. 5's 0.5 lets untrained nets differ by tens of Q units: a behaviour "
-                              "falls below the others at once and is never tried again; 0.3 learns room B faster than "
-                              "0.1 (docs/RECONSTRUCTION.md, 'High-level learner')")
-    output_init: float = param(0.0, ">=0", "(R) hidden->output weights start at 0: every behaviour's Q starts at 0 "
-                               "everywhere, so none starts below the others and goes untried (docs/RECONSTRUCTION.md, "
-                               "'High-level learner')")
-    gamma: float = param(0.99, "0..1", "(6.6.2)")
-    lam: float = param(0.8, "0..1", "(6.6.2)")
-    t_start: float = param(0.05, ">0", "T 0.05 -> 0.02 over the run, on Q / 100 (6.6; the scale as in Ch. 5)")
-    t_end: float = param(0.02, ">0")
-    cool_trials: int = param(60, ">=1", "(R) T cools from t_start to t_end over the first cool_trials trials, then "
-                             "holds; the thesis gives the range, not the pace (docs/RECONSTRUCTION.md, 'High-level "
-                             "learner')")
-    lessons_per_trial: int = param(60, ">=0", "'approximately 60 lessons' (6.6)")
-    replay_from_start: bool = param(True, note="(R) 60 replays from the first trial on, drawn from the lessons stored "
-                                    "so far; False: no more replays than lessons stored (5.3.5's reading), which "
-                                    "leaves the first trials nearly unlearnt")
-    capacity: int = param(100, ">=1", "latest lessons kept (App. A.2)")
-    p_oldest: float = param(0.02, "0..<1", "P_l from 0 for the latest lesson to this for the oldest (6.6)")
-    online: bool = param(True, note="Q-learning on each step as well as replay (R, as Ch. 5)")
-    trials: int = param(150, ">=1", "(Fig. 6.6 / 6.7: 'after 150 learning trials')")
-    max_steps: int = param(200, ">=1", "(6.6)")
-    test_every: int = param(10, ">=1")
-    tests_per_room: int = param(10, ">=1", "fixed greedy test tasks per start room (R)")
-    library: str = param(SHIPPED_LIBRARY, note="digest of the behaviour library (connrl train-behaviours): new "
-                         "library, new runs")
-    # the Q target's max over the behaviours "applicable" in the next state (R): only those can be chosen there (W > 0,
-    # Eq. 6.6). "all" reads nets never trained where their behaviour is inapplicable (docs/RECONSTRUCTION.md)
-    target_max: str = param("applicable", choices=TARGET_MAX)
-    step_scale: float = param(1.0, ">0", "primitive actions shrunk to this fraction (Exp. 4, 6.6.4: 1/5)")
-    xy_scale: float = param(8.0, ">0", "(R) the X-Y units in +-xy_scale/2: at +-0.5 the 8 hidden units barely tell "
-                            "places in a room apart (docs/RECONSTRUCTION.md, 'High-level learner')")
-    success_reward: float = param(100.0, ">0", "reinforcement for docking (6.4; Exp. 4: 500); Q-nets and T scale with "
-                                  "it")
-    grouping: bool = param(False, note="state grouping in replay (Exp. 4, 6.6.4) ...")
-    mu_low: float = param(0.5, ">=0", "... with mu ~ U(mu_low, mu_high) per group (6.6.4)")
-    mu_high: float = param(2.5, ">=0")
-    paths: int = param(0, ">=0", "greedy solution paths recorded per start room after the last trial (Fig. 6.7)")
-    pretrain_steps: int = param(0, ">=0", "Exp. 5 (6.6.5): behaviours pre-trained this many primitive steps, then "
-                                "trained along with the high level; 0 = the shipped library, never trained further")
-
-    def __post_init__(self):
-        check_types(self)
-        if self.step_scale > 1 or self.mu_low > self.mu_high:
-            raise ValueError(f"parameter step_scale must be in (0, 1] and mu_low <= mu_high, got step_scale "
-                             f"{self.step_scale}, mu ({self.mu_low}, {self.mu_high})")
-        if self.library != SHIPPED_LIBRARY:
-            raise ValueError(f"parameter library must be the shipped behaviour library's digest {SHIPPED_LIBRARY} "
-                             f"(connrl train-behaviours changes it), got {self.library!r}")
 
 
 def _test(env, agent, tasks, seeds) -> dict[str, tuple[float, int, int, int]]:
@@ -216,8 +163,7 @@ class OwnLibraryParams(RechargeParams):
     library_steps: int = param(sum(THESIS_BEHAVIOUR_STEPS.values()), ">=1", "8.5: 2,000 + 2,000 + 1,500 + 1,500")
 
     def __post_init__(self):
-        super().__post_init__()
-        check_types(self)
+        super().__post_init__()  # check_types(self) included
         if self.pretrain_steps:
             raise ValueError("parameter pretrain_steps (Exp. 5) does not apply: these behaviours are trained first, "
                              "then frozen")

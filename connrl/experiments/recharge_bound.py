@@ -29,47 +29,16 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS, sample_in_room
 from connrl.envs.robot.teachers import teach_chg
-from connrl.experiments.recharge import LAYOUT, SHIPPED_LIBRARY
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, param
-from connrl.tasks.recharge import make_recharge_env
+from connrl.experiments.recharge import LAYOUT
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant
+from connrl.tasks.recharge import WALLS, BoundParams, make_recharge_env  # noqa: F401  (re-exported)
 
-WALLS = ("WFL", "WFR")
 LEADS_ON = {"B": "B", "C": "A"}  # the door out of a room towards the charger (in room A)
-
-
-@dataclass(frozen=True)
-class BoundParams:
-    """The fixed rule's settings and the recharging task's (as ``RechargeParams``'s)."""
-
-    position: bool = param(True, note="DP only near the door that leads on (needs X-Y); False: DP wherever applicable")
-    history: bool = param(False, note="without position: in room C come from B, no DP while door B is in sight (Ch. 8)")
-    near_door: float = param(60.0, ">0", "inches from the door's centre within which DP is taken (ours)")
-    best_walls: bool = param(False, note="per task, the best of the 8 wall-follower choices (an oracle) instead of "
-                             "wall_A/B/C")
-    wall_A: str = param("WFL", note="wall follower per room (ours: development seeds 100-106)", choices=WALLS)
-    wall_B: str = param("WFL", choices=WALLS)
-    wall_C: str = param("WFR", choices=WALLS)
-    max_steps: int = param(200, ">=1", "(6.6)")
-    tests_per_room: int = param(10, ">=1", "as RechargeParams: the same test tasks for the same seed")
-    step_scale: float = param(1.0, ">0")
-    success_reward: float = param(100.0, ">0")
-    xy_scale: float = param(8.0, ">0", "as RechargeParams's, so the world is the learners' (the rule reads the true "
-                            "position)")
-    library: str = SHIPPED_LIBRARY
-
-    def __post_init__(self):
-        check_types(self)
-        if self.history and self.position:
-            raise ValueError("parameter history applies without position only: use position=false with history=true")
-        if self.library != SHIPPED_LIBRARY:
-            raise ValueError(f"parameter library must be the shipped behaviour library's digest {SHIPPED_LIBRARY}, "
-                             f"got {self.library!r}")
 
 
 def fixed_test_tasks(tests_per_room: int, rng: np.random.Generator) -> tuple[list, np.ndarray]:

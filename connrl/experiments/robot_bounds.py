@@ -19,7 +19,7 @@ import numpy as np
 
 from connrl.agents.cloning import agreement, copy_epoch, lesson_pairs
 from connrl.experiments.robot import RobotParams, RobotRun
-from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, check_types, override, param
+from connrl.experiments.spec import ExperimentSpec, Quantity, RunResult, Variant, override, param
 from connrl.tasks.robot import evaluate, teacher_score
 
 CHECKPOINTS = (0, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
@@ -34,8 +34,7 @@ class CopyParams(RobotParams):
     copy_epochs: int = param(200, ">=0", "passes over the taught states at most (stops early at full agreement)")
 
     def __post_init__(self):
-        super().__post_init__()
-        check_types(self)
+        super().__post_init__()  # check_types(self) included
 
     def check_combination(self):
         super().check_combination()

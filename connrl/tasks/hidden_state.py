@@ -2,8 +2,8 @@
 memory architectures of Fig. 7.1 built from Table B.1 (``make_agent``), the cup test (``test_score``) and the
 robustness probe of 7.5.1.
 
-Builders take the experiment's parameters (``connrl.experiments.hidden_state.CupParams`` /
-``PoleHiddenParams``) by attribute; ``TableParams`` and ``MemoryAgentParams`` state what they read.
+The builders take ``CupParams`` or ``PoleHiddenParams``, declared here beside them: each parameter once, with its
+range and where the thesis states it (``connrl.core.params.param``).
 
 Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Cup collection", gives each with its reason.
 """
@@ -11,7 +11,8 @@ Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "Cup collection",
 from __future__ import annotations
 
 import functools
-from typing import Protocol
+import math
+from dataclasses import dataclass, field
 
 import gymnasium as gym
 import numpy as np
@@ -28,6 +29,7 @@ from connrl.agents.memory import (
 from connrl.agents.qcon import QCONConfig
 from connrl.core.exploration import TemperatureSchedule
 from connrl.core.lessons import Lesson
+from connrl.core.params import MAX_UNITS, MAX_WINDOW, check_sequence, check_types, param
 from connrl.core.rollout import run_trial
 from connrl.envs.cup import INSTANCES, LEFT, OPTIMAL_STEPS, PICK_UP, RIGHT, CupCollectionEnv
 from connrl.nets import NetConfig
@@ -61,59 +63,110 @@ CUP_TASKS = {1: {"random_bits": 0, "control_error": 0.0},  # 7.5.1
              3: {"random_bits": 0, "control_error": 0.15}}  # 7.5.3: 15% control errors, off in tests
 
 
-class TableParams(Protocol):
-    """What ``table_entry`` reads (read-only, as the frozen parameter dataclasses are)."""
+# the Table B.1 entries ``table`` may override: sizes (window N, hidden and context units) with their bounds
+TABLE_SIZES = {"window": (1, MAX_WINDOW), **dict.fromkeys(("hq", "cq", "hm", "cm"), (0, MAX_UNITS))}
 
-    @property
-    def task(self) -> int: ...
-    @property
-    def arch(self) -> str: ...
-    @property
-    def window_q_inv_t(self) -> tuple | None: ...  # window-Q's 1/T: a -> b instead of Table B.1's; None: the table's
-    @property
-    def table(self) -> dict: ...  # overrides of Table B.1 entries
-    @property
-    def lam(self) -> float | None: ...  # None: Table B.1's
+TABLE_KEYS = (*TABLE_SIZES, "lam", "lr_q", "lr_m", "inv_t")
+
+PROBE_MAX = 1000  # forced steps of one robustness probe (the probe's world ends a trial at 200 steps)
+
+def _number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+def check_table(table: dict) -> None:
+    """Refuse a ``table`` override that Table B.1 has no entry for, or whose value is out of range: window N and
+    the units are whole numbers within TABLE_SIZES, lam in [0, 1], the learning rates > 0, inv_t two 1/T > 0."""
+    for key, v in table.items():
+        if key in TABLE_SIZES:
+            low, high = TABLE_SIZES[key]
+            ok, want = isinstance(v, int) and not isinstance(v, bool) and low <= v <= high, f"in [{low}, {high}]"
+        elif key == "lam":
+            ok, want = _number(v) and 0 <= v <= 1, "in [0, 1]"
+        elif key in ("lr_q", "lr_m"):
+            ok, want = _number(v) and v > 0, "> 0"
+        elif key == "inv_t":
+            ok = isinstance(v, (tuple, list)) and len(v) == 2 and all(_number(x) and x > 0 for x in v)
+            want = "two numbers > 0 (1/T: a -> b)"
+        else:
+            raise ValueError(f"parameter table: unknown entry {key!r}; allowed: {', '.join(TABLE_KEYS)}")
+        if not ok:
+            raise ValueError(f"parameter table entry {key!r} must be {want}, got {v!r}")
+
+def check_hidden_state(p: CupParams | PoleHiddenParams) -> None:
+    """The checks the cup and pole parameter classes share beyond ``check_types``: ``table``'s entries and the
+    tuples' lengths and values."""
+    check_table(p.table)
+    if p.probe_steps is not None:
+        check_sequence("probe_steps", p.probe_steps, int, 0, PROBE_MAX, 100)
+    if p.window_q_inv_t is not None and not (
+            len(p.window_q_inv_t) == 2 and all(_number(x) and x > 0 for x in p.window_q_inv_t)):
+        raise ValueError(f"parameter window_q_inv_t must be two numbers > 0 (1/T: a -> b), got {p.window_q_inv_t!r}")
+
+@dataclass(frozen=True)
+class HiddenStateParams:
+    """What the cup tasks and the pole from (x, theta) share; Table B.1 gives each architecture's own values."""
+
+    arch: str = param("recurrent-Q", note="one of ARCHITECTURES (set by the variant)", choices=ARCHITECTURES)
+    lam: float | None = param(None, "0..1", "TD(lambda) recency factor; None = Table B.1 (the lambda = 0 variants set "
+                              "0)")
+    table: dict = field(default_factory=dict)  # overrides of Table B.1 entries (e.g. {"hq": 12}); {} = thesis's
+    gamma: float = param(0.9, "0..1", "App. B")
+    init_range: float = param(0.5, ">0", "App. B")
+    momentum: float = param(0.9, "0..<1", "App. B: 0.9 for multilayer nets (0 is used for perceptrons)")
+    feedback: float = param(1.5, ">=0", "constant context feedback weight (7.4)")
+    decay: float = param(0.9, "0..1", "BPTT error decay on the context path (7.4)")
+    share_output: bool = param(False, note="share hidden->output connections among recurrent action nets (7.4, "
+                               "optional)")
+    capacity: int = param(70, ">=1", "replay only the latest 70 trials (7.5)")
+    online: bool = param(True, note="feed-forward Q-nets also learn on-line (Fig. 3.4) (R)")
+    anneal_trials: int | None = param(None, ">=1", "trials of the 1/T schedule; None = the whole run (R)")
+    linear_perceptron: bool = param(True, note="H_q = 0 Q-nets have a linear output unit (7.4: the 'linear OAON') (R)")
+
+@dataclass(frozen=True)
+class CupParams(HiddenStateParams):
+    """Tasks 1-3 of 7.5.1-7.5.3."""
+
+    task: int = param(1, note="1, 2 or 3 (7.5.1-7.5.3)", choices=(1, 2, 3))
+    trials: int = param(500, ">=1", "7.5.1: curves over 500 trials")
+    lessons_per_trial: int = param(70, ">=0", "Q replays per trial from the latest 70, App. A.2 recency (R; 20 was "
+                                   "too few)")
+    model_lessons_per_trial: int = param(70, ">=0", "model BPTT passes per trial over all past trials (R)")
+    model_range: float = param(1.0, ">0", "model outputs span +-model_range (R)")
+    p_threshold: float = param(0.01, "0..<1", "P_l for the latest lesson (App. B)")
+    p_threshold_oldest: float = param(1e-5, ">0", "P_l for the oldest lesson (App. B)")
+    window_q_inv_t: tuple | None = param((5.0, 30.0), note="window-Q's 1/T: a -> b; deviation from Table B.1 "
+                                         "(docstring)")
+    probe: bool = param(True, note="run the robustness probe of 7.5.1 after training")
+    probe_steps: tuple = param((1, 2, 3), note="forced steps in the robustness probe (R: 'a few steps')")
+
+    def __post_init__(self):
+        check_types(self)
+        check_hidden_state(self)
+
+@dataclass(frozen=True)
+class PoleHiddenParams(HiddenStateParams):
+    """Task 4 of 7.5.4: the pole from the cart position and pole angle only."""
+
+    task: int = param(4, choices=(4,))
+    trials: int = param(1000, ">=1", "7.5.4: 'not always found within 1000 trials'")
+    lessons_per_trial: int = param(70, ">=0", "as the full-state pole experiment and the cup tasks (R)")
+    model_lessons_per_trial: int = param(70, ">=0", "as the cup tasks (R)")
+    model_range: float = param(1.5, ">0", "normalized x, theta reach ~1.05 at failure (R)")
+    p_threshold: float = param(1e-4, "0..<1", "App. B")
+    p_threshold_oldest: float = param(1e-7, ">0", "App. B")
+    train_max_steps: int = param(2000, ">=1", "training trials are cut here (truncated, bootstrapped) (R)")
+    start_x: float = param(1.2, ">=0", "training start ranges (R, as pole-full)")
+    start_theta: float = param(0.06, ">=0")
+    test_steps: int = param(5001, ">=1", "'balanced for over 5000 steps' (7.5.4)")
+    window_q_inv_t: tuple | None = param(None, note="window-Q's 1/T: None, Table B.1's")
+    probe_steps: tuple | None = param(None, note="the robustness probe's forced steps: None, no probe (the cup tasks')")
+
+    def __post_init__(self):
+        check_types(self)
+        check_hidden_state(self)
 
 
-class MemoryAgentParams(TableParams, Protocol):
-    """What ``make_agent`` reads."""
-
-    @property
-    def trials(self) -> int: ...
-    @property
-    def anneal_trials(self) -> int | None: ...  # None: ``trials``
-    @property
-    def lessons_per_trial(self) -> int: ...
-    @property
-    def capacity(self) -> int: ...
-    @property
-    def p_threshold(self) -> float: ...
-    @property
-    def p_threshold_oldest(self) -> float: ...
-    @property
-    def init_range(self) -> float: ...
-    @property
-    def momentum(self) -> float: ...
-    @property
-    def linear_perceptron(self) -> bool: ...
-    @property
-    def gamma(self) -> float: ...
-    @property
-    def online(self) -> bool: ...
-    @property
-    def feedback(self) -> float: ...
-    @property
-    def decay(self) -> float: ...
-    @property
-    def share_output(self) -> bool: ...
-    @property
-    def model_range(self) -> float: ...
-    @property
-    def model_lessons_per_trial(self) -> int: ...
-
-
-def table_entry(p: TableParams) -> dict:
+def table_entry(p: CupParams | PoleHiddenParams) -> dict:
     task, arch = p.task, p.arch
     if task not in TABLE_B1:
         raise ValueError(f"task must be 1, 2, 3 (cups) or 4 (pole), got {task!r}")
@@ -128,7 +181,7 @@ def table_entry(p: TableParams) -> dict:
     return t
 
 
-def make_agent(p: MemoryAgentParams, n_sensation: int, n_actions: int, rng: np.random.Generator):
+def make_agent(p: CupParams | PoleHiddenParams, n_sensation: int, n_actions: int, rng: np.random.Generator):
     """The architecture ``p.arch`` with Table B.1's parameters for ``p.task`` (plus overrides)."""
     t = table_entry(p)
     arch = p.arch

@@ -1,79 +1,65 @@
 """Pole balancing wiring (App. C, 7.5.4): the cart-pole worlds and the memoryless QCON / AHCON agents of pole-full.
 
-Builders take the experiment's parameters by attribute; the protocols below state what each reads (satisfied by
-``connrl.experiments.pole.PoleParams``, and ``PoleWorldParams`` also by
-``connrl.experiments.hidden_state.PoleHiddenParams``).
+The builders take ``PoleParams``, declared here beside them (``make_envs`` also the hidden-state pole's
+``connrl.tasks.hidden_state.PoleHiddenParams``).
 """
 
 from __future__ import annotations
 
-from typing import Protocol
+from dataclasses import dataclass
 
 import numpy as np
 
 from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
 from connrl.core.exploration import TemperatureSchedule
+from connrl.core.params import check_types, param
 from connrl.core.rollout import run_trial
 from connrl.envs.pole import TEST_START_ANGLES_DEG, PoleBalancingEnv
 from connrl.nets import NetConfig
+from connrl.tasks.hidden_state import PoleHiddenParams
 
 
-class PoleWorldParams(Protocol):
-    """What ``make_envs`` reads (read-only, as the frozen parameter dataclasses are)."""
+@dataclass(frozen=True)
+class PoleParams:
+    """Table B.1, Task 4 (the memoryless full-state agent reuses the window-Q column with N = 1), plus the
+    choices where the thesis is silent (R; docs/RECONSTRUCTION.md, "Pole balancing" and "Learners and
+    protocols"); see docs/RESULTS.md for how they were chosen."""
 
-    @property
-    def train_max_steps(self) -> int: ...
-    @property
-    def start_x(self) -> float: ...
-    @property
-    def start_theta(self) -> float: ...
-    @property
-    def test_steps(self) -> int: ...
+    agent: str = param("qcon", note="'qcon' or 'ahcon'", choices=("qcon", "ahcon"))
+    observe: str = param("full", note="full state (x, x_dot, theta, theta_dot)", choices=("full", "x_theta"))
+    hidden: int = param(6, ">=0", "H_q (Table B.1)")
+    lr: float = param(0.25, ">0", "eta_q (Table B.1)")
+    init_range: float = param(0.5, ">0", "App. B")
+    momentum: float = param(0.9, "0..<1", "App. B")
+    gamma: float = param(0.9, "0..1", "App. B")
+    lam: float = param(0.7, "0..1", "Table B.1")
+    inv_t_start: float = param(20.0, ">0", "1/T: 20 -> 50 (Table B.1)")
+    inv_t_end: float = param(50.0, ">0")
+    anneal_trials: int = param(1000, ">=1", "trials over which 1/T moves (R)")
+    capacity: int = param(70, ">=1", "replay only the latest 70 trials (7.5)")
+    lessons_per_trial: int = param(70, ">=0", "lessons replayed after each trial, drawn by App. A.2 from the latest "
+                                   "70 (R)")
+    p_threshold: float = param(1e-4, "0..<1", "P_l for the latest lesson (App. B)")
+    p_threshold_oldest: float | None = param(1e-7, ">0", "P_l for the oldest lesson (App. B)")
+    online: bool = param(True, note="also learn on-line from each step (Fig. 3.4)")
+    train_max_steps: int = param(2000, ">=1", "training trials are cut here (truncated, bootstrapped) (R)")
+    start_x: float = param(1.2, ">=0", "training start ranges (R)")
+    start_theta: float = param(0.06, ">=0")
+    test_steps: int = param(5001, ">=1", "'balanced for over 5000 steps' (7.5.4)")
+    max_trials: int = param(1000, ">=1", "7.5.4: 'not always found within 1000 trials'")
 
-
-class PoleAgentParams(Protocol):
-    """What ``make_agent`` reads."""
-
-    @property
-    def agent(self) -> str: ...
-    @property
-    def hidden(self) -> int: ...
-    @property
-    def init_range(self) -> float: ...
-    @property
-    def lr(self) -> float: ...
-    @property
-    def momentum(self) -> float: ...
-    @property
-    def inv_t_start(self) -> float: ...
-    @property
-    def inv_t_end(self) -> float: ...
-    @property
-    def anneal_trials(self) -> int: ...
-    @property
-    def capacity(self) -> int: ...
-    @property
-    def lessons_per_trial(self) -> int: ...
-    @property
-    def p_threshold(self) -> float: ...
-    @property
-    def p_threshold_oldest(self) -> float | None: ...
-    @property
-    def gamma(self) -> float: ...
-    @property
-    def lam(self) -> float: ...
-    @property
-    def online(self) -> bool: ...
+    def __post_init__(self):
+        check_types(self)
 
 
-def make_envs(p: PoleWorldParams, observe: str) -> tuple[PoleBalancingEnv, PoleBalancingEnv]:
+def make_envs(p: PoleParams | PoleHiddenParams, observe: str) -> tuple[PoleBalancingEnv, PoleBalancingEnv]:
     """The training world (cut at ``train_max_steps``, random starts) and the test world (7.5.4)."""
     train_env = PoleBalancingEnv(observe=observe, max_steps=p.train_max_steps, start_x=p.start_x,
                                  start_theta=p.start_theta)
     return train_env, PoleBalancingEnv(observe=observe, max_steps=p.test_steps)
 
 
-def make_agent(p: PoleAgentParams, n_inputs: int, rng: np.random.Generator):
+def make_agent(p: PoleParams, n_inputs: int, rng: np.random.Generator):
     """QCON-R or AHCON-R with Table B.1's Task 4 parameters (N = 1)."""
     net = NetConfig(n_inputs, p.hidden, value_range=1.0, init_range=p.init_range, lr=p.lr,
                     momentum=p.momentum if p.hidden > 0 else 0.0)

@@ -14,13 +14,14 @@ Experiment 1 (6.6.1) learns Q(state, action) on the flat input with QCON-T (``ma
 lessons of the scripted recharging teacher (``connrl.envs.robot.teachers.teach_chg``; ``connrl make-lessons robot``
 writes them to ``connrl/data/lessons/robot-chg.json``).
 
-Builders take the experiment's parameters by attribute; the protocols beside them state what each reads.
+The builders take ``RechargeParams``, ``FlatParams`` or ``BoundParams``, declared here beside them: each parameter
+once, with its range and where the thesis states it (``connrl.core.params.param``).
 """
 
 from __future__ import annotations
 
 import functools
-from typing import Protocol
+from dataclasses import dataclass
 
 import gymnasium as gym
 import numpy as np
@@ -32,14 +33,143 @@ from connrl.agents.teaching import TeachingConfig, TeachingQCON
 from connrl.core.exploration import StuckConfig, TemperatureSchedule
 from connrl.core.lesson_files import load_lessons, save_lessons
 from connrl.core.lessons import Lesson
+from connrl.core.params import check_types, param
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, FLAT_SIZE, HIGH_SIZE, RechargeEnv
 from connrl.envs.robot.teachers import teach_chg
 from connrl.nets import NetConfig
-from connrl.tasks.behaviours import Behaviour, load_library
+from connrl.tasks.behaviours import Behaviour, library_digest, load_library
 from connrl.tasks.robot import LESSON_DIR
 
 CHG_LESSONS = LESSON_DIR / "robot-chg.json"
 CHG_TAUGHT = 10  # taught lessons of Experiment 1 (6.6.1)
+
+
+SHIPPED_LIBRARY = library_digest()
+
+WALLS = ("WFL", "WFR")
+
+@dataclass(frozen=True)
+class BoundParams:
+    """The fixed rule's settings and the recharging task's (as ``RechargeParams``'s)."""
+
+    position: bool = param(True, note="DP only near the door that leads on (needs X-Y); False: DP wherever applicable")
+    history: bool = param(False, note="without position: in room C come from B, no DP while door B is in sight (Ch. 8)")
+    near_door: float = param(60.0, ">0", "inches from the door's centre within which DP is taken (ours)")
+    best_walls: bool = param(False, note="per task, the best of the 8 wall-follower choices (an oracle) instead of "
+                             "wall_A/B/C")
+    wall_A: str = param("WFL", note="wall follower per room (ours: development seeds 100-106)", choices=WALLS)
+    wall_B: str = param("WFL", choices=WALLS)
+    wall_C: str = param("WFR", choices=WALLS)
+    max_steps: int = param(200, ">=1", "(6.6)")
+    tests_per_room: int = param(10, ">=1", "as RechargeParams: the same test tasks for the same seed")
+    step_scale: float = param(1.0, ">0")
+    success_reward: float = param(100.0, ">0")
+    xy_scale: float = param(8.0, ">0", "as RechargeParams's, so the world is the learners' (the rule reads the true "
+                            "position)")
+    library: str = SHIPPED_LIBRARY
+
+    def __post_init__(self):
+        check_types(self)
+        if self.history and self.position:
+            raise ValueError("parameter history applies without position only: use position=false with history=true")
+        if self.library != SHIPPED_LIBRARY:
+            raise ValueError(f"parameter library must be the shipped behaviour library's digest {SHIPPED_LIBRARY}, "
+                             f"got {self.library!r}")
+
+
+@dataclass(frozen=True)
+class FlatParams:
+    """One Experiment 1 run: 6.6.1's values, else Ch. 5's (5.3)."""
+
+    lessons: int = param(CHG_TAUGHT, ">=0", "taught lessons (6.6.1: 10)")
+    hidden: int = param(30, ">=1", "(6.6.1)")
+    lr: float = param(0.05, ">0", "(6.6: fixed to 0.05)")
+    momentum: float = param(0.9, "0..<1", "(Ch. 5)")
+    init_range: float = param(0.5, ">0", "(Ch. 5)")
+    gamma: float = param(0.99, "0..1", "(6.6.1)")
+    lam: float = param(0.8, "0..1", "(6.6.1)")
+    t_start: float = param(0.05, ">0", "(6.6)")
+    t_end: float = param(0.02, ">0")
+    capacity: int = param(100, ">=1", "(App. A.2, Ch. 5)")
+    lessons_per_trial: int = param(60, ">=0", "(6.6)")
+    p_threshold: float = param(0.02, "0..<1", "P_l (Ch. 5)")
+    online: bool = param(True, note="(Ch. 5)")
+    stuck_window: int = param(8, ">=1", "stuck detection (Ch. 5's)")
+    stuck_radius: float = param(12.0, ">=0")
+    stuck_boost: float = param(5.0, ">0")
+    collision_penalty: float = param(0.0, note="(6.6.1: none; -5 and -10 also tried)")
+    trials: int = param(300, ">=1", "(Fig. 6.5)")
+    max_steps: int = param(200, ">=1", "(6.6)")
+    test_every: int = param(10, ">=1")
+    tests_per_room: int = param(10, ">=1", "as Exps 2-3")
+    paths: int = param(0, ">=0", "greedy solution paths recorded per start room after the last trial")
+
+    def __post_init__(self):
+        check_types(self)
+        if not self.collision_penalty <= 0:
+            raise ValueError(f"parameter collision_penalty must be <= 0, got {self.collision_penalty}")
+        if self.lessons > CHG_TAUGHT:
+            raise ValueError(f"parameter lessons must be at most {CHG_TAUGHT} (the shipped recharging lessons), got "
+                             f"{self.lessons}")
+
+
+@dataclass(frozen=True)
+class RechargeParams:
+    """One Ch. 6 run: the thesis's values where 6.6 gives them, else Ch. 5's (R)."""
+
+    persistence: bool = param(True, note="Exp. 3's persistence rule (6.5.1); False = Exp. 2")
+    hidden: int = param(8, ">=1", "hidden units of each Q-net (6.6)")
+    lr: float = param(0.05, ">0", "(6.6)")
+    momentum: float = param(0.9, "0..<1", "(R, Ch. 5)")
+    init_range: float = param(0.3, ">0", "(R) Ch. 5's 0.5 lets untrained nets differ by tens of Q units: a behaviour "
+                              "falls below the others at once and is never tried again; 0.3 learns room B faster than "
+                              "0.1 (docs/RECONSTRUCTION.md, 'High-level learner')")
+    output_init: float = param(0.0, ">=0", "(R) hidden->output weights start at 0: every behaviour's Q starts at 0 "
+                               "everywhere, so none starts below the others and goes untried (docs/RECONSTRUCTION.md, "
+                               "'High-level learner')")
+    gamma: float = param(0.99, "0..1", "(6.6.2)")
+    lam: float = param(0.8, "0..1", "(6.6.2)")
+    t_start: float = param(0.05, ">0", "T 0.05 -> 0.02 over the run, on Q / 100 (6.6; the scale as in Ch. 5)")
+    t_end: float = param(0.02, ">0")
+    cool_trials: int = param(60, ">=1", "(R) T cools from t_start to t_end over the first cool_trials trials, then "
+                             "holds; the thesis gives the range, not the pace (docs/RECONSTRUCTION.md, 'High-level "
+                             "learner')")
+    lessons_per_trial: int = param(60, ">=0", "'approximately 60 lessons' (6.6)")
+    replay_from_start: bool = param(True, note="(R) 60 replays from the first trial on, drawn from the lessons stored "
+                                    "so far; False: no more replays than lessons stored (5.3.5's reading), which "
+                                    "leaves the first trials nearly unlearnt")
+    capacity: int = param(100, ">=1", "latest lessons kept (App. A.2)")
+    p_oldest: float = param(0.02, "0..<1", "P_l from 0 for the latest lesson to this for the oldest (6.6)")
+    online: bool = param(True, note="Q-learning on each step as well as replay (R, as Ch. 5)")
+    trials: int = param(150, ">=1", "(Fig. 6.6 / 6.7: 'after 150 learning trials')")
+    max_steps: int = param(200, ">=1", "(6.6)")
+    test_every: int = param(10, ">=1")
+    tests_per_room: int = param(10, ">=1", "fixed greedy test tasks per start room (R)")
+    library: str = param(SHIPPED_LIBRARY, note="digest of the behaviour library (connrl train-behaviours): new "
+                         "library, new runs")
+    # the Q target's max over the behaviours "applicable" in the next state (R): only those can be chosen there (W > 0,
+    # Eq. 6.6). "all" reads nets never trained where their behaviour is inapplicable (docs/RECONSTRUCTION.md)
+    target_max: str = param("applicable", choices=TARGET_MAX)
+    step_scale: float = param(1.0, ">0", "primitive actions shrunk to this fraction (Exp. 4, 6.6.4: 1/5)")
+    xy_scale: float = param(8.0, ">0", "(R) the X-Y units in +-xy_scale/2: at +-0.5 the 8 hidden units barely tell "
+                            "places in a room apart (docs/RECONSTRUCTION.md, 'High-level learner')")
+    success_reward: float = param(100.0, ">0", "reinforcement for docking (6.4; Exp. 4: 500); Q-nets and T scale with "
+                                  "it")
+    grouping: bool = param(False, note="state grouping in replay (Exp. 4, 6.6.4) ...")
+    mu_low: float = param(0.5, ">=0", "... with mu ~ U(mu_low, mu_high) per group (6.6.4)")
+    mu_high: float = param(2.5, ">=0")
+    paths: int = param(0, ">=0", "greedy solution paths recorded per start room after the last trial (Fig. 6.7)")
+    pretrain_steps: int = param(0, ">=0", "Exp. 5 (6.6.5): behaviours pre-trained this many primitive steps, then "
+                                "trained along with the high level; 0 = the shipped library, never trained further")
+
+    def __post_init__(self):
+        check_types(self)
+        if self.step_scale > 1 or self.mu_low > self.mu_high:
+            raise ValueError(f"parameter step_scale must be in (0, 1] and mu_low <= mu_high, got step_scale "
+                             f"{self.step_scale}, mu ({self.mu_low}, {self.mu_high})")
+        if self.library != SHIPPED_LIBRARY:
+            raise ValueError(f"parameter library must be the shipped behaviour library's digest {SHIPPED_LIBRARY} "
+                             f"(connrl train-behaviours changes it), got {self.library!r}")
 
 
 class BehaviourEnv(gym.Env):
@@ -106,112 +236,19 @@ def _shipped_library() -> dict[str, Behaviour]:
     return load_library()  # read once per process; behaviours are only read, never trained, here
 
 
-class BehaviourTaskParams(Protocol):
-    """What ``make_recharge_env`` reads (read-only, as the frozen parameter dataclasses are)."""
-
-    @property
-    def max_steps(self) -> int: ...
-    @property
-    def step_scale(self) -> float: ...
-    @property
-    def success_reward(self) -> float: ...
-    @property
-    def xy_scale(self) -> float: ...
-
-
-class LearnerParams(Protocol):
-    """The Q-nets, exploration and replay that every Ch. 6 and Ch. 8 learner's builder reads."""
-
-    @property
-    def hidden(self) -> int: ...
-    @property
-    def init_range(self) -> float: ...
-    @property
-    def lr(self) -> float: ...
-    @property
-    def momentum(self) -> float: ...
-    @property
-    def capacity(self) -> int: ...
-    @property
-    def lessons_per_trial(self) -> int: ...
-    @property
-    def t_start(self) -> float: ...
-    @property
-    def t_end(self) -> float: ...
-    @property
-    def trials(self) -> int: ...
-    @property
-    def gamma(self) -> float: ...
-    @property
-    def lam(self) -> float: ...
-
-
-class HighLevelAgentParams(LearnerParams, Protocol):
-    """What ``make_high_level_agent`` reads (``connrl.experiments.recharge.RechargeParams``)."""
-
-    @property
-    def success_reward(self) -> float: ...
-    @property
-    def p_oldest(self) -> float: ...
-    @property
-    def grouping(self) -> bool: ...
-    @property
-    def mu_low(self) -> float: ...
-    @property
-    def mu_high(self) -> float: ...
-    @property
-    def online(self) -> bool: ...
-    @property
-    def persistence(self) -> bool: ...
-    @property
-    def target_max(self) -> str: ...
-    @property
-    def replay_from_start(self) -> bool: ...
-    @property
-    def output_init(self) -> float: ...
-    @property
-    def cool_trials(self) -> int: ...
-
-
-class FlatWorldParams(Protocol):
-    """What ``make_flat_env`` reads (``connrl.experiments.recharge_flat.FlatParams``)."""
-
-    @property
-    def max_steps(self) -> int: ...
-    @property
-    def collision_penalty(self) -> float: ...
-
-
-class FlatAgentParams(LearnerParams, Protocol):
-    """What ``make_flat_agent`` reads (``connrl.experiments.recharge_flat.FlatParams``)."""
-
-    @property
-    def p_threshold(self) -> float: ...
-    @property
-    def online(self) -> bool: ...
-    @property
-    def stuck_window(self) -> int: ...
-    @property
-    def stuck_radius(self) -> float: ...
-    @property
-    def stuck_boost(self) -> float: ...
-    @property
-    def lessons(self) -> int: ...
-
-
-def make_recharge_env(p: BehaviourTaskParams) -> BehaviourEnv:
-    """The behaviour-level task of a Ch. 6 parameter set (``connrl.experiments.recharge.RechargeParams``)."""
+def make_recharge_env(p: RechargeParams | BoundParams) -> BehaviourEnv:
+    """The behaviour-level task of a Ch. 6 parameter set (``RechargeParams``)."""
     return BehaviourEnv(_shipped_library(), max_steps=p.max_steps, step_scale=p.step_scale,
                         success_reward=p.success_reward, xy_scale=p.xy_scale)
 
 
-def cooling(p: HighLevelAgentParams) -> TemperatureSchedule:
+def cooling(p: RechargeParams) -> TemperatureSchedule:
     """The high level's T: from t_start to t_end over the first ``cool_trials`` trials, then held (6.6; the pace is
     ours, docs/RECONSTRUCTION.md); Ch. 8's recurrent learner takes the same."""
     return TemperatureSchedule.direct(p.t_start, p.t_end, min(p.cool_trials, p.trials))
 
 
-def make_high_level_agent(p: HighLevelAgentParams, rng: np.random.Generator,
+def make_high_level_agent(p: RechargeParams, rng: np.random.Generator,
                           n_inputs: int = HIGH_SIZE) -> BehaviourQCON:
     """Q(state, behaviour) of 6.5-6.6 from a Ch. 6 parameter set (``n_inputs``: 14 without X-Y, Ch. 8)."""
     # Q in +-success_reward and T on Q / success_reward, so Exp. 4's reward of 500 keeps Exp. 3's choices (6.6.4)
@@ -269,12 +306,12 @@ def chg_lessons(n: int) -> list[Lesson]:
     return lessons[:n]
 
 
-def make_flat_env(p: FlatWorldParams) -> RechargeEnv:
-    """Experiment 1's world: the flat input, primitive actions (``connrl.experiments.recharge_flat.FlatParams``)."""
+def make_flat_env(p: FlatParams) -> RechargeEnv:
+    """Experiment 1's world: the flat input, primitive actions (``FlatParams``)."""
     return RechargeEnv(obs="flat", max_steps=p.max_steps, collision_penalty=p.collision_penalty)
 
 
-def make_flat_agent(p: FlatAgentParams, rng: np.random.Generator) -> TeachingQCON:
+def make_flat_agent(p: FlatParams, rng: np.random.Generator) -> TeachingQCON:
     """Experiment 1's monolithic QCON-T: "the same learning technique used to train the elementary behaviors"
     (6.6.1), i.e. Ch. 5's, with Ch. 6's gamma, lambda and net size."""
     net = NetConfig(FLAT_SIZE, p.hidden, value_range=100.0, init_range=p.init_range, lr=p.lr, momentum=p.momentum)

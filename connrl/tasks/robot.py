@@ -1,8 +1,8 @@
 """Ch. 5 wiring: the robot task worlds of a parameter set, the scripted teachers' taught lessons (3.7, 5.4), and
 QCON-T (5.3) with its taught lessons; ``evaluate`` is the greedy test of 5.4.
 
-Builders take the experiment's parameters (``connrl.experiments.robot.RobotParams``) by attribute;
-``RobotWorldParams`` and ``RobotAgentParams`` state what they read.
+The builders take ``RobotParams``, declared here beside them: each parameter once, with its range and where the
+thesis states it (``connrl.core.params.param``).
 
 Values marked (R) are reconstructions; docs/RECONSTRUCTION.md, "HEROINE robot world", gives each with its reason.
 """
@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass, fields
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Protocol
 
 import numpy as np
 
@@ -23,16 +23,20 @@ from connrl.agents.teaching import TeachingConfig, TeachingQCON
 from connrl.core.exploration import StuckConfig, TemperatureSchedule
 from connrl.core.lesson_files import load_lessons, save_lessons
 from connrl.core.lessons import Lesson
+from connrl.core.params import check_types, param
+from connrl.core.replay import REPAIRS
 from connrl.core.rollout import run_trial
-from connrl.envs.robot import OBS_SIZE, Layout, RobotTaskEnv, teach
+from connrl.envs.robot import OBS_SIZE, ROBOT_RADIUS, SONAR_MAX, Layout, RobotTaskEnv, teach
 from connrl.envs.robot.constants import (
     COLLISION,
     DOOR_EDGE_JUMP,
+    DP_FAR,
     DP_LATERAL,
     EDGE_MARK,
     PASS_DEPTH,
     SONAR_ORIGIN,
 )
+from connrl.envs.robot.sim import COLLISIONS, EDGE_MARKS, SONAR_ORIGINS
 from connrl.nets import NetConfig
 from connrl.tasks import robot_play
 
@@ -54,102 +58,102 @@ GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 LESSON_FAR = 72.0
 
 
+MAX_TAUGHT = 200  # taught lessons an agent may ask for: the shipped ones, then fresh demonstrations
+
+@dataclass(frozen=True)
+class RobotParams:
+    """One Ch. 5 run: the thesis's values where it states them (5.3, 5.4), else marked R (reconstructed; see
+    docs/RECONSTRUCTION.md, "HEROINE robot world" and "Learners and protocols")."""
+
+    task: str = param("DP", note="'DP' | 'DK' | 'WFL' (5.4) | 'WFR' (Ch. 6's behaviour library)",
+                      choices=("DP", "DK", "WFL", "WFR"))
+    lessons: int = param(10, ">=0", "taught lessons given to the agent (5.4.1: 0/3/10 DP, DK; 0/2/5 WFL)")
+    hidden_fraction: float = param(0.3, ">=0", "hidden units ~ 30 % of inputs (5.3.3); 0 = single-layer (5.4.4)")
+    lr: float = param(0.05, ">0", "back-propagation learning rate (5.3.3; 5.4.4: 0.04 DP/DK, 0.03 WFL)")
+    momentum: float = param(0.9, "0..<1", "(5.3.3; 5.4.4: 0)")
+    init_range: float = param(0.5, ">0", "initial weights in +-0.5 (5.3.3)")
+    value_range: float = param(100.0, ">0", "Q in +-100 (5.3.1)")
+    binary_low: float = param(-0.5, note="binary inputs +-0.5 (5.3.2); 0 -> 0/1 (5.4.4)")
+    gamma: float = param(0.9, "0..1", "(5.3.1)")
+    lam: float = param(0.7, "0..1", "(5.4.1)")
+    t_start: float = param(0.05, ">0", "T: 0.05 -> 0.02 over the run (5.3.4), on Q / value_range")
+    t_end: float = param(0.02, ">0")
+    online: bool = param(True, note="Q-learning on each step as well as replay (Fig. 3.4, R)")
+    capacity: int = param(100, ">=1", "latest lessons kept for replay (App. A.2, R for Ch. 5)")
+    lessons_per_trial: int = param(60, ">=0", "experienced lessons replayed after each trial (5.3.5)")
+    p_threshold: float = param(0.02, "0..<1", "P_l: non-policy threshold (5.3.5)")
+    repair: str = param("none", note="'none' | 'lower' | 'raise' (5.4.3)", choices=REPAIRS)
+    taught_order: str = param("after", note="taught lessons replayed 'after' the experienced ones or 'shuffled' among "
+                              "them (R)", choices=TAUGHT_ORDERS)
+    stuck_window: int = param(8, ">=1", "stuck detection (5.3.4, R): last 8 positions ...")
+    stuck_radius: float = param(12.0, ">=0", "... within 12 in (one move) of their mean ...")
+    stuck_boost: float = param(5.0, ">0", "... multiply T by 5")
+    trials: int = param(300, ">=1", "trials per run (5.4)")
+    max_steps: int = param(30, ">=1", "steps per trial and per test (5.4)")
+    test_every: int = param(10, ">=1", "test after every 10 trials (5.4)")
+    test_tasks: int = param(50, ">=1", "fixed test tasks per run (5.4)")
+    paths: int = param(0, ">=0", "greedy solution paths recorded at the end of the run (Figs. 5.5-5.7)")
+    linear_output: bool = param(False, note="single-layer nets only: linear output unit (7.4's linear OAON; "
+                                "diagnostic)")
+    door_width: float = param(SHIPPED_WORLD["door_width"], note="doorway width, in: the layout's 49 (R, issue 44; "
+                              "SPEC 36)")
+    dp_heading: float = param(180.0, "0..180", "DP starts face within +-this many deg of the door (180 = any heading, "
+                              "5.4)")
+    dock_tolerance: float = param(30.0, "0..180", "DK: a head-on charger contact within this many deg docks (R; "
+                                  "robot-dk-geometry)")
+    dp_far: float = param(DP_FAR, note="DP starts lie 24..dp_far in from the door's wall (R)")
+    edge_jump: float = param(SHIPPED_WORLD["edge_jump"], ">0", "readings this far apart mark a door edge (R, Fig. "
+                             "5.3b; SPEC 24)")
+    lesson_starts: str = param("random", note="DP teacher's starts: 'random' headings or 'spread' (hand-picked, R)",
+                               choices=("random", "spread"))
+    # issue 44's world family (R; docs/RECONSTRUCTION.md, "The robot world as a family")
+    sonar_origin: str = param(SHIPPED_WORLD["sonar_origin"], note="sonar distances from the 'body' surface or the "
+                              "'centre'", choices=SONAR_ORIGINS)
+    collision: str = param(SHIPPED_WORLD["collision"], note="a touching move is 'cancel'led or made 'partial'ly to "
+                           "the contact", choices=COLLISIONS)
+    edge_mark: str = param(SHIPPED_WORLD["edge_mark"], note="a door-edge jump marks the 'nearer' reading or 'both'",
+                           choices=EDGE_MARKS)
+    dp_lateral: float = param(SHIPPED_WORLD["dp_lateral"], note="DP starts within +-this x half the door width of its "
+                              "centre")
+    pass_depth: float = param(SHIPPED_WORLD["pass_depth"], note="DP succeeds this far past the door line (0: in the "
+                              "other room)")
+    noise: bool = param(True, note="sensing and control noise of 5.2.1, in training and in the tests")
+
+    def __post_init__(self):
+        check_types(self)
+        if not 0.25 <= self.dp_lateral <= 3.0:
+            raise ValueError(f"parameter dp_lateral must be in [0.25, 3] (DP starts within +-dp_lateral x half the "
+                             f"door width of its centre), got {self.dp_lateral}")
+        if not 0.0 <= self.pass_depth <= 48.0:
+            raise ValueError(f"parameter pass_depth must be in [0, 48] (in past the door line), got {self.pass_depth}")
+        if not self.door_width > 2 * ROBOT_RADIUS:
+            raise ValueError(f"parameter door_width must exceed the robot's diameter ({2 * ROBOT_RADIUS:g} in), "
+                             f"got {self.door_width}")
+
+        if not 24.0 <= self.dp_far <= 96.0:
+            raise ValueError(f"parameter dp_far must be in [24, 96] (in; DP starts lie 24..dp_far from the door's "
+                             f"wall, near the door), got {self.dp_far}")
+        if self.edge_jump > SONAR_MAX:
+            raise ValueError(f"parameter edge_jump must be at most {SONAR_MAX} (the sonar's range; above it no door "
+                             f"edge is ever seen), got {self.edge_jump}")
+        if self.lessons > MAX_TAUGHT:
+            raise ValueError(f"parameter lessons must be at most {MAX_TAUGHT} (beyond the shipped "
+                             f"{TAUGHT_COUNTS[self.task]} the teacher demonstrates afresh), got {self.lessons}")
+
+    def check_combination(self):
+        defaults = {f.name: f.default for f in fields(RobotParams)}
+        dp_only = [k for k in ("dp_heading", "dp_far", "lesson_starts", "edge_jump", "edge_mark", "dp_lateral",
+                               "pass_depth") if getattr(self, k) != defaults[k]]
+        if self.task != "DP" and dp_only:
+            raise ValueError(f"parameter(s) {', '.join(dp_only)} apply to task DP only (its start region, teacher "
+                             f"and door-edge inputs), got task {self.task}")
+
+
 def lesson_path(task: str) -> Path:
     return LESSON_DIR / f"robot-{task.lower()}.json"
 
 
-class RobotWorldDetails(Protocol):
-    """The world details of SHIPPED_WORLD a parameter set carries (``world_of``; issue 44's family)."""
-
-    @property
-    def door_width(self) -> float: ...
-    @property
-    def dock_tolerance(self) -> float: ...
-    @property
-    def edge_jump(self) -> float: ...
-    @property
-    def edge_mark(self) -> str: ...
-    @property
-    def sonar_origin(self) -> str: ...
-    @property
-    def collision(self) -> str: ...
-    @property
-    def dp_lateral(self) -> float: ...
-    @property
-    def pass_depth(self) -> float: ...
-
-
-class RobotWorldParams(RobotWorldDetails, Protocol):
-    """What ``make_env`` reads (read-only, as the frozen parameter dataclasses are)."""
-
-    @property
-    def task(self) -> str: ...
-    @property
-    def binary_low(self) -> float: ...
-    @property
-    def max_steps(self) -> int: ...
-    @property
-    def dp_heading(self) -> float: ...
-    @property
-    def dp_far(self) -> float: ...
-    @property
-    def noise(self) -> bool: ...  # the sensing and control noise of 5.2.1 (off in 5.5's noise-free world)
-
-
-class RobotAgentParams(RobotWorldDetails, Protocol):
-    """What ``make_agent`` reads."""
-
-    @property
-    def task(self) -> str: ...
-    @property
-    def hidden_fraction(self) -> float: ...
-    @property
-    def value_range(self) -> float: ...
-    @property
-    def init_range(self) -> float: ...
-    @property
-    def lr(self) -> float: ...
-    @property
-    def momentum(self) -> float: ...
-    @property
-    def linear_output(self) -> bool: ...
-    @property
-    def capacity(self) -> int: ...
-    @property
-    def lessons_per_trial(self) -> int: ...
-    @property
-    def p_threshold(self) -> float: ...
-    @property
-    def taught_order(self) -> str: ...
-    @property
-    def t_start(self) -> float: ...
-    @property
-    def t_end(self) -> float: ...
-    @property
-    def trials(self) -> int: ...
-    @property
-    def gamma(self) -> float: ...
-    @property
-    def lam(self) -> float: ...
-    @property
-    def online(self) -> bool: ...
-    @property
-    def stuck_window(self) -> int: ...
-    @property
-    def stuck_radius(self) -> float: ...
-    @property
-    def stuck_boost(self) -> float: ...
-    @property
-    def repair(self) -> str: ...
-    @property
-    def lessons(self) -> int: ...
-    @property
-    def binary_low(self) -> float: ...
-    @property
-    def lesson_starts(self) -> str: ...
-
-
-def make_env(p: RobotWorldParams) -> RobotTaskEnv:
+def make_env(p: RobotParams) -> RobotTaskEnv:
     """The task environment of a parameter set (the layout's doors resized when ``door_width`` asks)."""
     layout = Layout.load("default")
     if p.door_width != SHIPPED_WORLD["door_width"]:
@@ -160,7 +164,7 @@ def make_env(p: RobotWorldParams) -> RobotTaskEnv:
                         edge_mark=p.edge_mark, dp_offset=p.dp_lateral * p.door_width / 2.0, pass_depth=p.pass_depth)
 
 
-def world_of(p: RobotAgentParams) -> dict:
+def world_of(p: RobotParams) -> dict:
     """The world details of a parameter set, keyed as SHIPPED_WORLD (``spread``: DP lessons from spread starts)."""
     return {"door_width": p.door_width, "dock_tolerance": p.dock_tolerance, "edge_jump": p.edge_jump,
             "spread": p.lesson_starts == "spread", "sonar_origin": p.sonar_origin, "collision": p.collision,
@@ -276,8 +280,8 @@ def taught_lessons(task: str, n: int, binary_low: float = -0.5, **world) -> list
     return out
 
 
-def make_agent(p: RobotAgentParams, rng: np.random.Generator) -> TeachingQCON:
-    """QCON-T of 5.3 from the run's parameters (``connrl.experiments.robot.RobotParams``); ``linear_output``:
+def make_agent(p: RobotParams, rng: np.random.Generator) -> TeachingQCON:
+    """QCON-T of 5.3 from the run's parameters; ``linear_output``:
     single-layer nets with a linear output unit."""
     n_in = OBS_SIZE[p.task]
     hidden = int(round(p.hidden_fraction * n_in))
