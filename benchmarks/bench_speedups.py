@@ -66,9 +66,8 @@ from connrl.experiments.integration import IntegrationParams
 from connrl.experiments.recharge import RechargeParams
 from connrl.experiments.robot import RobotParams
 from connrl.nets import OAON, NetConfig
-from connrl.nets.kernels import _forward_at, _replay_mlp, _replay_q_steps, _rotated_values
+from connrl.nets.kernels import _forward_at, _forward_sequence, _replay_mlp, _replay_q_steps, _rotated_values
 from connrl.nets.recurrent import RecurrentNetConfig, RecurrentOAON
-from connrl.nets.recurrent_kernels import _forward_sequence
 from connrl.nets.rotated import RotatedNet
 from connrl.tasks import cup_play, hidden_state, recharge_play, recharge_train, robot_play
 from connrl.tasks.hidden_state import make_agent as make_memory_agent

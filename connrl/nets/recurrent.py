@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from connrl.core.lessons import pack_lessons
-from connrl.nets.recurrent_kernels import (  # noqa: F401 (tests and benchmarks reach the kernels here too)
+from connrl.nets.kernels import (  # noqa: F401 (tests and benchmarks reach the kernels here too)
     _bptt,
     _forward_all,
     _forward_sequence,
@@ -55,8 +55,8 @@ from connrl.nets.recurrent_kernels import (  # noqa: F401 (tests and benchmarks 
     _momentum_step,
     _output,
     _policy_weights,
-    _replay_q_lesson,
-    _replay_q_lessons,
+    _replay_recurrent_lesson,
+    _replay_recurrent_lessons,
     _train_lessons,
 )
 
@@ -339,10 +339,11 @@ class RecurrentOAON:
             raise ValueError(f"rewards must have shape {actions.shape}, got {rewards.shape}")
         w, ok = _check_choices(weights, allowed, len(actions), self.n_nets)
         self._fresh = False
-        return int(_replay_q_lesson(self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, xs, actions, rewards,
-                                    bool(terminated), float(gamma), float(lam), float(temperature),
-                                    float(p_threshold), 0.0 if clip is None else float(clip), clip is not None,
-                                    c.feedback, c.decay, self.scale, self.lr, c.momentum, w, ok))
+        return int(_replay_recurrent_lesson(self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, xs, actions,
+                                            rewards, bool(terminated), float(gamma), float(lam), float(temperature),
+                                            float(p_threshold), 0.0 if clip is None else float(clip),
+                                            clip is not None, c.feedback, c.decay, self.scale, self.lr, c.momentum,
+                                            w, ok))
 
     def replay_q_lessons(self, lessons: list, thresholds: list[float], options, *, gamma: float, lam: float,
                          temperature: float, clip: float | None = None) -> int:
@@ -367,11 +368,11 @@ class RecurrentOAON:
             return 0
         p = pack_lessons(lessons, options, self.n_nets, check)
         self._fresh = False
-        return int(_replay_q_lessons(self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, p.inputs, p.actions,
-                                     p.rewards, p.terminated, p.in_start, p.step_start, p.order,
-                                     np.asarray(thresholds, dtype=np.float64), float(gamma), float(lam),
-                                     float(temperature), 0.0 if clip is None else float(clip), clip is not None,
-                                     c.feedback, c.decay, self.scale, self.lr, c.momentum, p.weights, p.allowed))
+        return int(_replay_recurrent_lessons(
+            self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, p.inputs, p.actions, p.rewards, p.terminated,
+            p.in_start, p.step_start, p.order, np.asarray(thresholds, dtype=np.float64), float(gamma), float(lam),
+            float(temperature), 0.0 if clip is None else float(clip), clip is not None, c.feedback, c.decay,
+            self.scale, self.lr, c.momentum, p.weights, p.allowed))
 
     # -- plain-format persistence (NPZ, no pickle)
     def state_dict(self) -> dict[str, np.ndarray]:

@@ -28,9 +28,8 @@ from connrl.core.boltzmann_kernel import _boltzmann_choice, _nanmax, compiled_ch
 from connrl.core.rollout import TrialStats, run_trial
 from connrl.envs.cup import INSTANCES, N_CELLS, OFF, ON, CupCollectionEnv
 from connrl.nets import OAON
-from connrl.nets.kernels import _values_any
+from connrl.nets.kernels import _forward_all, _values_any
 from connrl.nets.recurrent import RecurrentOAON
-from connrl.nets.recurrent_kernels import _forward_all
 from connrl.tasks import hidden_state
 from connrl.tasks.robot_train import NOT_RESTRICTED, _online_q_step
 

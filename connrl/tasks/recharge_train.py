@@ -30,9 +30,8 @@ from connrl.envs.robot.constants import N_RAYS
 from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS
 from connrl.envs.robot.step import _room, leave, room_table
 from connrl.nets import OAON
-from connrl.nets.kernels import _values_any
+from connrl.nets.kernels import _forward_all, _values_any
 from connrl.nets.recurrent import RecurrentOAON
-from connrl.nets.recurrent_kernels import _forward_all
 from connrl.tasks.recharge_play import (
     _applicable,
     _chg_step,

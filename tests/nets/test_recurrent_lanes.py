@@ -12,7 +12,7 @@ import numba
 import numpy as np
 import pytest
 
-from connrl.nets.recurrent_kernels import (
+from connrl.nets.kernels import (
     _bptt,
     _bptt_backward,
     _forward_sequence,
