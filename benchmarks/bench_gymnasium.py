@@ -51,7 +51,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from gymnasium_report import Run, summarize, write_block  # noqa: E402
 
 import connrl  # noqa: E402
-from connrl.settings import task_settings  # noqa: E402
+from connrl.own.settings import task_settings  # noqa: E402
 from connrl.storage import atomic_write_text, read_json, strict_json  # noqa: E402
 
 TASKS = {"CartPole-v1": (475.0, 50_000), "Acrobot-v1": (-100.0, 100_000), "MountainCar-v0": (-110.0, 120_000),

@@ -7,8 +7,8 @@ __version__ = "0.1.0"
 _API = ("make_agent", "load", "evaluate", "record_lessons", "Agent", "AgentOptions")
 
 
-def __getattr__(name):  # the own-task API (connrl.api) is imported on first use: ``import connrl`` stays light
+def __getattr__(name):  # the own-task API (connrl.own.api) is imported on first use: ``import connrl`` stays light
     if name in _API:
-        from connrl import api
+        from connrl.own import api
         return getattr(api, name)
     raise AttributeError(f"module 'connrl' has no attribute {name!r}")

@@ -8,10 +8,10 @@ import os
 import sys
 from pathlib import Path
 
-from connrl.cli_task import _positive_int, _seed, _writable, add_own_task_commands
-from connrl.cli_tune import add_tune_command
 from connrl.cli_world import add_world_family_command
 from connrl.experiments.spec import PROFILES
+from connrl.own.cli import _positive_int, _seed, _writable, add_own_task_commands
+from connrl.own.cli_tune import add_tune_command
 
 
 def _experiments():
@@ -200,7 +200,7 @@ def cmd_plot(args) -> int:
     from connrl.report.plots import plot_from_disk
 
     if (Path(args.name) / "progress.csv").exists():  # a `connrl train` folder: its training log
-        from connrl.cli_task import plot_training
+        from connrl.own.cli import plot_training
 
         try:
             print(plot_training(Path(args.name)))

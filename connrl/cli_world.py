@@ -7,7 +7,7 @@ import importlib.util
 import os
 from pathlib import Path
 
-from connrl.cli_task import _int_at_least, _positive_int, _writable, folder_name, one_writer
+from connrl.own.cli import _int_at_least, _positive_int, _writable, folder_name, one_writer
 
 STAGES = ("search", "recheck", "predict", "all")
 

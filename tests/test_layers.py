@@ -35,6 +35,8 @@ FORBIDDEN = {
     "connrl.core": ("connrl.envs", "connrl.tasks", "connrl.experiments", "connrl.report", "connrl.cli"),
     "connrl.nets": ("connrl.envs", "connrl.tasks", "connrl.experiments", "connrl.report", "connrl.cli"),
     "connrl.agents": ("connrl.envs", "connrl.tasks", "connrl.experiments", "connrl.report", "connrl.cli"),
+    # the own-task API knows the learners, not the thesis's worlds or experiments
+    "connrl.own": ("connrl.envs", "connrl.tasks", "connrl.experiments", "connrl.report", "connrl.cli"),
     # the worlds know no learner: of connrl they may use only themselves and connrl.storage
     "connrl.envs": ("connrl.core", "connrl.nets", "connrl.agents", "connrl.tasks", "connrl.experiments",
                     "connrl.report", "connrl.cli"),

@@ -3,13 +3,12 @@ accepts this driver."""
 
 from __future__ import annotations
 
-import contextlib
-import errno
 import os
 import socket
 import subprocess
 import sys
-from pathlib import Path
+
+from connrl.storage import run_lock  # noqa: F401  (the runner's lock, re-exported)
 
 
 class ExecutorError(RuntimeError):
@@ -108,26 +107,3 @@ else:
     print("ok")
 """
 
-
-@contextlib.contextmanager
-def run_lock(folder: Path, other: str = "--out"):
-    """Hold ``FOLDER/.connrl-run.lock`` while a run writes there: a second ``connrl run``, ``train`` or ``tune`` into
-    the same folder is refused at once (``BlockingIOError`` in one line; ``other`` names the option that picks another
-    folder) instead of computing twice or losing one writer's work. The lock is the OS's (released even when the
-    holder is killed); where ``fcntl`` is missing (Windows) there is none."""
-    try:
-        import fcntl
-    except ImportError:
-        yield
-        return
-    fd = os.open(folder / ".connrl-run.lock", os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
-    try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            then = " (its finished runs are then reused)" if other == "--out" else ""
-            raise BlockingIOError(errno.EWOULDBLOCK, f"another connrl command is writing to {folder}; wait for it "
-                                  f"to finish{then} or give another {other}") from None
-        yield
-    finally:
-        os.close(fd)

@@ -1,4 +1,4 @@
-"""Issue 30: why AHCON-R barely learns CartPole-v1 through connrl.api, measured.
+"""Issue 30: why AHCON-R barely learns CartPole-v1 through connrl.own.api, measured.
 
 Trains an agent (AHCON-R by default) on CartPole-v1 and, every ``--every`` steps, logs on a fixed probe set of
 states (1,000 states a random policy visits, drawn once): V's mean, the merits' mean and spread (|m1 - m0|), the
@@ -26,7 +26,7 @@ import numpy as np
 
 import connrl
 import connrl.agents.ahcon as ahcon_module
-from connrl.callbacks import Callback
+from connrl.own.callbacks import Callback
 
 
 def probe_states(env, n: int = 1000, seed: int = 12345) -> list:

@@ -1,4 +1,4 @@
-"""How connrl.api's defaults were chosen: QCON-R on CartPole-v1 and Acrobot-v1 with each default varied one at a
+"""How connrl.own.api's defaults were chosen: QCON-R on CartPole-v1 and Acrobot-v1 with each default varied one at a
 time (the others kept), on development seeds (100-108; the README's held-out seeds are 0-2 and 200-204); prints
 the greedy return (mean of 10 episodes, evaluation seeds 500-509) after ``--steps`` steps, per seed and averaged.
 

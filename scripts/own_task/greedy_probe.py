@@ -19,7 +19,7 @@ import gymnasium as gym
 import numpy as np
 
 import connrl
-from connrl.api import options_from
+from connrl.own.api import options_from
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sample_efficiency import _pairs, _value  # noqa: E402

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.api import KINDS, options_from
+from connrl.own.api import KINDS, options_from
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from bench_gymnasium import TASKS, connrl_options, run_connrl  # noqa: E402

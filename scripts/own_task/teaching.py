@@ -1,4 +1,4 @@
-"""Teaching on a user's task (3.7 through connrl.api): QCON-R against QCON-T given three episodes of a hand-written
+"""Teaching on a user's task (3.7 through connrl.own.api): QCON-R against QCON-T given three episodes of a hand-written
 teacher (``TEACHERS``: CartPole's is the README's), and AHCON-R, each on the same seeds and step budget; prints the
 greedy return (mean of 10 episodes, evaluation seeds 500-509) per seed, and with ``--every N`` along the way.
 

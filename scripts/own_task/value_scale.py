@@ -1,18 +1,17 @@
-"""How connrl.api's value scale was chosen (issue 29): QCON-R with the old rule (value_range = max |warm-up reward| /
-(1 - gamma), at least 0.1, never changed) against the new one (connrl.value_scale: |r| / (1 - gamma) for rewards that
-recur, |r| for one that ends the episode, set by the first non-zero reward when the warm-up saw none, grown by larger
-rewards; "new-nogrow" without the growth, "new-h2" / "new-h2-T" with nets spanning twice that), on development tasks
-(the rule was chosen on these, seeds 100-102) and on held-out tasks and seeds (never used to choose: seeds 200-202).
-A run succeeds when its greedy evaluation return (mean over the task's evaluation episodes, seeds 500...) reaches
-the task's threshold; the table gives per-seed returns and the successes, and the first seed's value_range after the
-warm-up and at the end (nan: provisional, no non-zero reward seen yet).
+"""How connrl.own.api's value scale was chosen (issue 29): QCON-R with the old rule (value_range = max |warm-up reward|
+/ (1 - gamma), at least 0.1, never changed) against the new one (connrl.own.value_scale: |r| / (1 - gamma) for
+rewards that recur, |r| for one that ends the episode, set by the first non-zero reward when the warm-up saw none,
+grown by larger rewards; "new-nogrow" without the growth, "new-h2" / "new-h2-T" with nets spanning twice that), on
+development tasks (the rule was chosen on these, seeds 100-102) and on held-out tasks and seeds (never used to
+choose: seeds 200-202). A run succeeds when its greedy evaluation return (mean over the task's evaluation episodes,
+seeds 500...) reaches the task's threshold; the table gives per-seed returns and the successes, and the first seed's
+value_range after the warm-up and at the end (nan: provisional, no non-zero reward seen yet).
 
-    python scripts/own_task/value_scale.py [--quick] [--set dev|held-out|all] [--rules old new] [--workers 2]
-        [--seeds ...] [--tasks ...] [--out FILE.json]
+python scripts/own_task/value_scale.py [--quick] [--set dev|held-out|all] [--rules old new] [--workers 2] [--seeds
+...] [--tasks ...] [--out FILE.json]
 
 --quick runs the small tasks only (a few minutes on 2 cores); without it CartPole-v1, Acrobot-v1, MountainCar-v0,
-Taxi-v4 and FrozenLake8x8 are run too, at 50,000 steps each.
-"""
+Taxi-v4 and FrozenLake8x8 are run too, at 50,000 steps each."""
 
 from __future__ import annotations
 
@@ -28,7 +27,7 @@ from gymnasium import spaces
 from gymnasium.wrappers import TimeLimit
 
 import connrl
-import connrl.api
+import connrl.own.api
 
 
 class SparseGrid(gym.Env):
@@ -112,7 +111,7 @@ def no_growth(self, sizes):
         CHECK(self, sizes)
 
 
-NEW, TEMPERATURE, CHECK = connrl.api.range_for, connrl.api.Agent.temperature, connrl.api.Agent._check_range
+NEW, TEMPERATURE, CHECK = connrl.own.api.range_for, connrl.own.api.Agent.temperature, connrl.own.api.Agent._check_range
 # name: (range rule, temperature factor, whether larger rewards seen while learning grow the range)
 RULES = {"old": (old_range_for, 1.0, False), "new": (NEW, 1.0, True), "new-nogrow": (NEW, 1.0, False),
          "new-h2": headroom(2, False), "new-h2-T": headroom(2, True)}
@@ -121,9 +120,9 @@ RULES = {"old": (old_range_for, 1.0, False), "new": (NEW, 1.0, True), "new-nogro
 def one(job):
     task, rule, seed = job
     make, steps, threshold, episodes, _ = TASKS[task]
-    connrl.api.range_for, t_factor, grow = RULES[rule]  # this worker's rule (make_agent and learn() read it)
-    connrl.api.Agent._check_range = CHECK if grow else no_growth
-    connrl.api.Agent.temperature = (TEMPERATURE if t_factor == 1.0 else
+    connrl.own.api.range_for, t_factor, grow = RULES[rule]  # this worker's rule (make_agent and learn() read it)
+    connrl.own.api.Agent._check_range = CHECK if grow else no_growth
+    connrl.own.api.Agent.temperature = (TEMPERATURE if t_factor == 1.0 else
                                     lambda self, trial: t_factor * TEMPERATURE(self, trial))
     env = make()
     t0 = time.process_time()

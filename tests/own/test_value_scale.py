@@ -1,6 +1,6 @@
-"""The value scale of connrl.api (connrl.value_scale, issue 29): the rule on hand-made rewards, the provisional range
-set by the first reward, growth by larger ones, save / load, and a small sparse-reward grid the defaults solve where
-the old rule (max |reward| / (1 - gamma)) did not."""
+"""The value scale of connrl.own.api (connrl.own.value_scale, issue 29): the rule on hand-made rewards, the provisional
+range set by the first reward, growth by larger ones, save / load, and a small sparse-reward grid the defaults solve
+where the old rule (max |reward| / (1 - gamma)) did not."""
 
 import json
 import warnings
@@ -12,9 +12,9 @@ from gymnasium import spaces
 from gymnasium.wrappers import TimeLimit
 
 import connrl
-import connrl.api
-from connrl.api import make_agent
-from connrl.value_scale import range_for, rescale, reward_sizes
+import connrl.own.api
+from connrl.own.api import make_agent
+from connrl.own.value_scale import range_for, rescale, reward_sizes
 
 
 class Grid(gym.Env):
@@ -95,8 +95,8 @@ def test_rescale_changes_every_net_of_every_kind():
         agent = make_agent(grid(8, limit=20), kind, seed=0, warmup_steps=20)
         assert not agent.range_set, kind
         state = {k: v.copy() for k, v in agent.nets.state_dict().items()}
-        rescale(connrl.api._all_nets(agent), 3.0)
-        assert all(net.scale == 6.0 for net in connrl.api._all_nets(agent)), kind
+        rescale(connrl.own.api._all_nets(agent), 3.0)
+        assert all(net.scale == 6.0 for net in connrl.own.api._all_nets(agent)), kind
         assert all(np.array_equal(state[k], v) for k, v in agent.nets.state_dict().items()), kind  # weights kept
 
 
@@ -131,5 +131,5 @@ def test_the_defaults_solve_a_small_sparse_grid_on_three_seeds():
 
 def test_the_old_rule_fails_the_same_grid(monkeypatch):
     # the test above can fail: with value_range = max |reward| / (1 - gamma) (100 for the goal's +1) it does
-    monkeypatch.setattr(connrl.api, "range_for", lambda s, e, gamma: max(s, e, 1e-3) / max(1 - gamma, 1e-3))
+    monkeypatch.setattr(connrl.own.api, "range_for", lambda s, e, gamma: max(s, e, 1e-3) / max(1 - gamma, 1e-3))
     assert not all(_solves(seed) for seed in (0, 1, 2))

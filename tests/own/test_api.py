@@ -1,4 +1,4 @@
-"""The own-task API (connrl.api): input and value scales by hand, refusals in one line, save -> load -> evaluate
+"""The own-task API (connrl.own.api): input and value scales by hand, refusals in one line, save -> load -> evaluate
 identical, determinism, and a short CartPole smoke run."""
 
 import gymnasium as gym
@@ -7,7 +7,7 @@ import pytest
 from gymnasium import spaces
 
 import connrl
-from connrl.api import InputScaler, make_agent
+from connrl.own.api import InputScaler, make_agent
 
 
 class Toy(gym.Env):
@@ -111,7 +111,7 @@ def test_cli_refuses_bad_input_in_one_line(args, message, tmp_path):
 
 def test_the_readme_snippets_run(tmp_path, monkeypatch):
     from pathlib import Path
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     section = readme[readme.index("## Using the techniques on your own task"):readme.index("## Layout")]
     blocks = [b.split("```", 1)[0] for b in section.split("```python\n")[1:]]
     assert len(blocks) == 2 and "connrl.make_agent" in blocks[0] and "connrl.load" in blocks[0]
@@ -216,13 +216,13 @@ def test_recorded_lessons_hold_the_raw_observations_and_qcon_t_replays_them_scal
 def test_the_cli_offers_the_apis_kinds():
     import argparse
 
-    from connrl.api import KINDS
-    from connrl.cli_task import add_own_task_commands
+    from connrl.own.api import KINDS
+    from connrl.own.cli import add_own_task_commands
     sub = argparse.ArgumentParser().add_subparsers()
     add_own_task_commands(sub)
     assert tuple(sub.choices["train"]._option_string_actions["--agent"].choices) == KINDS
-    from connrl.api import TAUGHT_KINDS
-    from connrl.cli_tune import add_tune_command
+    from connrl.own.api import TAUGHT_KINDS
+    from connrl.own.cli_tune import add_tune_command
     add_tune_command(sub)
     assert tuple(sub.choices["tune"]._option_string_actions["--agent"].choices) == tuple(
         k for k in KINDS if k not in TAUGHT_KINDS)

@@ -1,4 +1,4 @@
-"""Per-task settings files (connrl.settings, RL Zoo's shape) and `connrl tune`'s input: every wrong value is one
+"""Per-task settings files (connrl.own.settings, RL Zoo's shape) and `connrl tune`'s input: every wrong value is one
 line naming the file and entry, reading YAML never builds Python objects, the command line overrides the file."""
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ import json
 import pytest
 
 from connrl import cli
-from connrl.api import AgentOptions
-from connrl.settings import SETTINGS_DIR, check_entry, read_settings, settings_yaml, task_settings
-from connrl.tune import Dimension, parse_dimension
+from connrl.own.api import AgentOptions
+from connrl.own.settings import SETTINGS_DIR, check_entry, read_settings, settings_yaml, task_settings
+from connrl.own.tune import Dimension, parse_dimension
 
 
 def test_a_settings_entry_is_read_and_the_command_line_overrides_it(tmp_path, capsys):

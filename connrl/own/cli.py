@@ -1,4 +1,4 @@
-"""The command line's own-task commands (``connrl train``, ``connrl evaluate``: connrl.api) and the argument
+"""The command line's own-task commands (``connrl train``, ``connrl evaluate``: connrl.own.api) and the argument
 helpers every command shares."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import signal
 import sys
 from pathlib import Path
 
-from connrl.settings import MAX_STEPS
+from connrl.own.settings import MAX_STEPS
 
 DEFAULT_TRAIN_STEPS = 50_000
 
@@ -62,7 +62,7 @@ def _make_env(env_id: str, env_kwargs: dict | None = None):
     import gymnasium as gym
 
     import connrl  # noqa: F401  (registers the thesis's worlds)
-    from connrl.api_spaces import check_render_dependency
+    from connrl.own.spaces import check_render_dependency
 
     try:
         env = gym.make(env_id, **(env_kwargs or {}))
@@ -146,9 +146,9 @@ def _uninterrupted(deliver: bool):
 def _train_settings(args) -> dict:
     """What `connrl train` will do: the agent, steps, options and env kwargs from the settings file (shipped or
     --hyperparams) overridden by the command line, all checked before anything is made."""
-    from connrl.api import TAUGHT_KINDS, options_from
     from connrl.core.lesson_files import load_lessons
-    from connrl.settings import task_settings
+    from connrl.own.api import TAUGHT_KINDS, options_from
+    from connrl.own.settings import task_settings
 
     args.agent = args.agent or ("QCON-T" if args.teach else "QCON-R")
     try:
@@ -208,9 +208,9 @@ def _resumed_settings(out: Path, settings: dict, args) -> dict:
 
 @contextlib.contextmanager
 def one_writer(out: Path, option: str):
-    """The folder's lock (``connrl.experiments.guards.run_lock``, as `connrl run` takes it) for the block; a second
-    writer is refused in one line before any work."""
-    from connrl.experiments.guards import run_lock
+    """The folder's lock (``connrl.storage.run_lock``, as `connrl run` takes it) for the block; a second writer is
+    refused in one line before any work."""
+    from connrl.storage import run_lock
 
     with contextlib.ExitStack() as stack:
         try:  # only taking the lock is refused here; the block's own errors pass through
@@ -236,8 +236,8 @@ def cmd_train(args) -> int:
 def _train(args, out: Path, settings: dict, env, eval_env, fresh: bool) -> int:
     import json
 
-    from connrl.api import load, make_agent
-    from connrl.callbacks import EvalCallback, ProgressLog, TensorBoardLog, write_training_curve
+    from connrl.own.api import load, make_agent
+    from connrl.own.callbacks import EvalCallback, ProgressLog, TensorBoardLog, write_training_curve
     from connrl.storage import atomic_write_text
 
     saved: list[int] = []  # the steps of the latest good save
@@ -315,7 +315,7 @@ def _train_folder(args, settings: dict) -> tuple[Path, dict]:
 def _checkpoints(every: int, saved: list[int], save):
     """`connrl train`'s own keeper: a diverged agent stops training; every ``every`` steps the agent, the log and
     the curve are saved as one (a signal waits for the save, then stops as it would have)."""
-    from connrl.callbacks import Callback
+    from connrl.own.callbacks import Callback
 
     class Checkpoints(Callback):
         def on_trial_end(self, agent, stats):
@@ -373,7 +373,7 @@ def _finish(agent, out: Path, fresh: bool, stopped, saved: list[int], save) -> i
 
 def plot_training(folder: Path) -> Path:
     """Redraw a trained agent's curve.png from its progress.csv (``connrl plot FOLDER``)."""
-    from connrl.callbacks import read_progress, write_training_curve
+    from connrl.own.callbacks import read_progress, write_training_curve
 
     rows = read_progress(folder / "progress.csv")
     title = str(folder)
@@ -392,8 +392,8 @@ def _saved_env_id(path: str) -> str | None:
     import gymnasium as gym
 
     import connrl  # noqa: F401  (registers the thesis's worlds)
-    from connrl.api import KINDS
-    from connrl.api_files import read_agent
+    from connrl.own.api import KINDS
+    from connrl.own.files import read_agent
     from connrl.storage import FileError
 
     m, _ = read_agent(Path(path), KINDS)
@@ -427,7 +427,7 @@ def _saved_env_kwargs(path: Path) -> dict:
 def cmd_evaluate(args) -> int:
     import numpy as np
 
-    from connrl.api import episode_cap, evaluate, load
+    from connrl.own.api import episode_cap, evaluate, load
 
     try:
         env_id = args.env or _saved_env_id(args.path)
@@ -448,12 +448,12 @@ def cmd_evaluate(args) -> int:
 
 
 def add_own_task_commands(sub) -> None:
-    """train, evaluate (connrl.api)."""
+    """train, evaluate (connrl.own.api)."""
     s = sub.add_parser("train", help="train a thesis learner on any Gymnasium task", description="Train a thesis "
-                       "learner on ENV_ID with inputs and values scaled from the task (connrl.api), then save it "
+                       "learner on ENV_ID with inputs and values scaled from the task (connrl.own.api), then save it "
                        "(agent.json, agent.npz) and its learning curve (curve.png).")
     s.add_argument("env_id", help="a Gymnasium environment id, e.g. CartPole-v1 or connrl/PoleBalancing-v0")
-    # connrl.api.KINDS, written out so that `connrl --help` does not import the agents (tests/test_api.py pins it)
+    # connrl.own.api.KINDS, written out so that `connrl --help` does not import the agents (tests/test_api.py pins it)
     kinds = ("QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q", "recurrent-Q")
     s.add_argument("--agent", default=None, choices=kinds, metavar="AGENT",
                    help=f"one of {', '.join(kinds)} (default QCON-R, or QCON-T with --teach)")
@@ -483,7 +483,7 @@ def add_own_task_commands(sub) -> None:
     s.add_argument("--save", type=folder_name, default=None,
                    help="folder to save in (default runs/train/ENV-AGENT-seedS)")
     s.add_argument("--option", action="append", type=key_value, default=[], metavar="KEY=VALUE",
-                   help="an AgentOptions field (connrl/api.py), e.g. --option gamma=0.95; repeat for several")
+                   help="an AgentOptions field (connrl/own/api.py), e.g. --option gamma=0.95; repeat for several")
     s.add_argument("--quiet", action="store_true", help="no progress line")
     s.set_defaults(func=cmd_train)
 

@@ -106,7 +106,7 @@ def test_train_on_a_full_disk_says_the_agent_was_not_saved(tiny_disk, tmp_path):
 
 
 def test_a_signal_that_meets_a_checkpoint_waits_for_the_save_and_then_stops_training():
-    from connrl.cli_task import _uninterrupted
+    from connrl.own.cli import _uninterrupted
 
     done = []
     before = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a foreground process

@@ -1,5 +1,5 @@
-"""Training budgets, episode caps and callbacks of the own-task API (connrl.api, connrl.callbacks): learn(N) takes
-exactly N steps with the cut trial truncated and replayed, an env without a time limit is still learnt from and
+"""Training budgets, episode caps and callbacks of the own-task API (connrl.own.api, connrl.own.callbacks): learn(N)
+takes exactly N steps with the cut trial truncated and replayed, an env without a time limit is still learnt from and
 evaluated, evaluation leaves learning as it was, a checkpoint resumes, progress.csv holds every trial."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ import pytest
 from gymnasium import spaces
 
 import connrl
-from connrl.api import MAX_EPISODE_STEPS, episode_cap
-from connrl.callbacks import CheckpointCallback, EvalCallback, ProgressLog, read_progress
+from connrl.own.api import MAX_EPISODE_STEPS, episode_cap
+from connrl.own.callbacks import CheckpointCallback, EvalCallback, ProgressLog, read_progress
 
 
 class Endless(gym.Env):
@@ -134,7 +134,7 @@ def test_bad_callback_settings_are_one_line(make, message):
 
 def test_a_callback_of_another_kind_is_refused_before_training():
     agent = connrl.make_agent(gym.make("CartPole-v1"), "QCON-R", seed=0, hidden=4)
-    with pytest.raises(ValueError, match="callback must be a connrl.callbacks.Callback"):
+    with pytest.raises(ValueError, match="callback must be a connrl.own.callbacks.Callback"):
         agent.learn(100, callback=42)
     assert agent.steps_done == 0
 

@@ -1,4 +1,4 @@
-"""The own-task API's files (connrl.api): an agent as ``agent.json`` + ``agent.npz`` (no pickle), and lesson files
+"""The own-task API's files (connrl.own.api): an agent as ``agent.json`` + ``agent.npz`` (no pickle), and lesson files
 of a teacher's episodes on any Gymnasium task (``record_lessons``, read back by ``make_agent(env, "QCON-T",
 lessons=...)``).
 
@@ -17,10 +17,10 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
-from connrl.api_options import MAX_VALUE_RANGE
-from connrl.api_spaces import COMPOSITE, binary_units, check_single, check_space, flatten
 from connrl.core.lesson_files import LessonFileError, load_lessons, save_lessons
 from connrl.core.lessons import Lesson
+from connrl.own.options import MAX_VALUE_RANGE
+from connrl.own.spaces import COMPOSITE, binary_units, check_single, check_space, flatten
 from connrl.storage import (
     MAX_NPZ_BYTES,
     FileError,

@@ -14,13 +14,13 @@ hand-tuning the scales the thesis's tasks set by hand (``Graph``, ``Text`` and `
   mean and spread of the observations a random policy sees in the first ``warmup_steps`` steps (frozen then, so learning
   sees one fixed input code); a ``Discrete`` observation is one-hot (+-0.5, the thesis's binary code, 5.3.2), a
   ``MultiDiscrete`` one its one-hots side by side, a ``MultiBinary`` bit +-0.5; a ``Dict`` / ``Tuple`` is its parts'
-  codes in ``gymnasium.spaces.flatten`` order (connrl.api_spaces).
+  codes in ``gymnasium.spaces.flatten`` order (connrl.own.spaces).
 - **Values**: the nets' outputs span +-``value_range``, by default the largest |discounted return| the warm-up's rewards
   allow: max |reward| / (1 - gamma) for rewards that can recur every step, but only |reward| for one that ends the
   episode (a goal's +1 gives 1, not 100); until a non-zero reward is seen the range is provisional and the first ones
-  set it, and larger rewards seen later grow it, the Q-values kept (connrl.value_scale). The temperature acts on
+  set it, and larger rewards seen later grow it, the Q-values kept (connrl.own.value_scale). The temperature acts on
   Q / value_range, so the scale does not change exploration; AHC's merits get a hotter one than Q-learning's, as in
-  the thesis (connrl.api_options.TEMPERATURES).
+  the thesis (connrl.own.options.TEMPERATURES).
 - **Schedules** run over environment steps (``anneal_steps``), not trials: a user states a budget in steps.
 
 Frameworks by the thesis's names: ``"QCON"`` (on-line Q-learning, Fig. 3.4), ``"QCON-R"`` (with backward TD(lambda)
@@ -29,7 +29,7 @@ every trial, 3.7: ``make_agent(env, "QCON-T", lessons="file.json")``, a file ``r
 adaptive heuristic critic ``"AHCON"`` / ``"AHCON-R"`` / ``"AHCON-T"`` (a V-net and policy nets, Fig. 3.2, with
 replay and teaching likewise), and for tasks with hidden state Ch. 7's ``"window-Q"`` (the ``window`` latest
 observations and actions as input) and ``"recurrent-Q"`` (recurrent Q-nets, batch BPTT replay).
-Files are ``agent.json`` and ``agent.npz`` (no pickle; connrl.api_files).
+Files are ``agent.json`` and ``agent.npz`` (no pickle; connrl.own.files).
 """
 
 from __future__ import annotations
@@ -44,15 +44,20 @@ from gymnasium import spaces
 
 from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
 from connrl.agents.memory import RecurrentQ, RecurrentQConfig, WindowQ, window_input_size
-from connrl.api_files import (
+from connrl.core.divergence import network_problem
+from connrl.core.lessons import Lesson
+from connrl.core.rollout import MAX_EPISODE_STEPS, episode_cap, run_trial  # noqa: F401  (MAX_EPISODE_STEPS: API)
+from connrl.nets import NetConfig
+from connrl.nets.recurrent import RecurrentNetConfig
+from connrl.own.files import (
     check_arrays,
     read_agent,
     read_taught,
     record_lessons,
     write_agent,
 )
-from connrl.api_options import MAX_NET_WEIGHTS, MAX_VALUE_RANGE, AgentOptions, options_from, temperatures
-from connrl.api_spaces import (
+from connrl.own.options import MAX_NET_WEIGHTS, MAX_VALUE_RANGE, AgentOptions, options_from, temperatures
+from connrl.own.spaces import (
     affine_scales,
     check_observation_space,
     check_single,
@@ -61,13 +66,8 @@ from connrl.api_spaces import (
     space_from,
     space_json,
 )
-from connrl.core.divergence import network_problem
-from connrl.core.lessons import Lesson
-from connrl.core.rollout import MAX_EPISODE_STEPS, episode_cap, run_trial  # noqa: F401  (MAX_EPISODE_STEPS: API)
-from connrl.nets import NetConfig
-from connrl.nets.recurrent import RecurrentNetConfig
+from connrl.own.value_scale import PROVISIONAL, range_for, rescale, reward_sizes
 from connrl.storage import FileError
-from connrl.value_scale import PROVISIONAL, range_for, rescale, reward_sizes
 
 KINDS = ("QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q", "recurrent-Q")
 MEMORY_KINDS = ("window-Q", "recurrent-Q")  # act on a history: predict() needs one, evaluate() keeps it
@@ -102,7 +102,7 @@ class InputScaler:
         if isinstance(space, spaces.Box):
             offset, scale = affine_scales(space.low, space.high, samples)
             return cls("affine", offset.size, offset, scale)
-        offset, scale = flat_scales(space, samples)  # Dict, Tuple, MultiDiscrete, MultiBinary (connrl.api_spaces)
+        offset, scale = flat_scales(space, samples)  # Dict, Tuple, MultiDiscrete, MultiBinary (connrl.own.spaces)
         return cls("flat", offset.size, offset, scale, space)
 
     @property
@@ -137,7 +137,7 @@ class _Scaled(gym.ObservationWrapper):
         self.scaler = scaler
         self.observation_space = spaces.Box(-np.inf, np.inf, (scaler.n_inputs,), np.float64)
         self.steps = 0  # of the current trial: what a trial cut by Ctrl-C took
-        self.sizes = (0.0, 0.0)  # connrl.value_scale.reward_sizes of the rewards it has passed on
+        self.sizes = (0.0, 0.0)  # connrl.own.value_scale.reward_sizes of the rewards it has passed on
         self.on_sizes = None  # called with the new sizes when they grow
 
     def observation(self, observation):
@@ -186,7 +186,7 @@ class Agent:
                  value_range: float | None, seed: int, env_id: str | None):
         if kind not in KINDS:
             raise ValueError(f"unknown agent {kind!r}; available: {', '.join(KINDS)}")
-        # value_range None: provisional until the first non-zero reward sets it (connrl.value_scale)
+        # value_range None: provisional until the first non-zero reward sets it (connrl.own.value_scale)
         self.range_set = value_range is not None
         self.kind, self.options, self.scaler = kind, options, scaler
         self.value_range = float(value_range) if self.range_set else PROVISIONAL
@@ -237,9 +237,9 @@ class Agent:
         default). A trial the budget cuts is truncated, not failed, and replayed like any other (replay bootstraps
         through it); so is a trial longer than ``max_trial_steps`` (default: the env's own time limit, else
         ``MAX_EPISODE_STEPS``), so a task without a time limit is still learnt from. ``callback``: a
-        connrl.callbacks.Callback (evaluation, checkpoints, a log), a list of them, or ``f(agent, trial_return)``
+        connrl.own.callbacks.Callback (evaluation, checkpoints, a log), a list of them, or ``f(agent, trial_return)``
         after each trial; False from it stops training."""
-        from connrl.callbacks import as_callback
+        from connrl.own.callbacks import as_callback
 
         env = env if env is not None else self._env
         if env is None:
@@ -293,9 +293,9 @@ class Agent:
                                  f"{mine}; the given environment has {theirs}")
 
     def _check_range(self, sizes: tuple[float, float]) -> None:
-        """Called when the rewards seen while learning grow (``sizes``: connrl.value_scale.reward_sizes). The first
+        """Called when the rewards seen while learning grow (``sizes``: connrl.own.value_scale.reward_sizes). The first
         non-zero ones set a provisional range (the nets rescaled: every target so far was 0); later ones that allow
-        returns beyond +-value_range grow it, keeping the Q-values (connrl.value_scale.rescale). A range the user
+        returns beyond +-value_range grow it, keeping the Q-values (connrl.own.value_scale.rescale). A range the user
         set is kept, with a warning, once: such targets are cut off and the Q-values stop telling actions apart."""
         bound = range_for(*sizes, self.options.gamma)
         if bound is None or self.range_set and bound <= self.value_range * (1 + 1e-9):
@@ -330,7 +330,7 @@ class Agent:
         return network_problem(self.learner)
 
     def save(self, path) -> Path:
-        """``path/agent.json`` and ``path/agent.npz`` (no pickle; connrl.api_files), written as one (a failed save
+        """``path/agent.json`` and ``path/agent.npz`` (no pickle; connrl.own.files), written as one (a failed save
         leaves the old pair); returns ``path``. A diverged agent (``divergence()``) is refused with a ValueError."""
         problem = self.divergence()
         if problem:
@@ -428,7 +428,7 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options
 def load(path, env=None) -> Agent:
     """An agent written by ``Agent.save`` (weights, replay memory, taught lessons, random state: learning goes on as it
     would have); with ``env``, its spaces must be the saved ones. Every field and array is checked before anything
-    is built from it (connrl.api_files); a damaged or foreign file is a ValueError in one line naming it."""
+    is built from it (connrl.own.files); a damaged or foreign file is a ValueError in one line naming it."""
     if env is not None:
         check_single(env)
     path = Path(path)

@@ -72,7 +72,7 @@ class Dimension:
 
 def parse_dimension(text: str) -> Dimension:
     """``name=a,b,c`` (choices, JSON values), ``name=low:high`` or ``name=low:high:log``; ValueError in one line."""
-    from connrl.api import AgentOptions
+    from connrl.own.api import AgentOptions
 
     name, sep, spec = text.partition("=")
     allowed = list(AgentOptions.__dataclass_fields__)
@@ -106,7 +106,7 @@ def parse_dimension(text: str) -> Dimension:
 def check_space(space: list[Dimension], fixed: dict) -> None:
     """Every option a trial could draw must be valid with the fixed ones: checked on the ranges' ends and every
     choice before any training."""
-    from connrl.api import options_from
+    from connrl.own.api import options_from
 
     for d in space:
         for v in d.choices if d.choices is not None else (d.low, d.high):
@@ -119,7 +119,7 @@ def check_space(space: list[Dimension], fixed: dict) -> None:
 def score(env_fn, kind: str, options: dict, seeds: list[int], steps: int, eval_episodes: int) -> list[float]:
     """Mean greedy return over ``eval_episodes`` evaluation episodes of one agent per seed, each trained ``steps``
     steps; a diverged agent scores -inf."""
-    from connrl.api import evaluate, make_agent
+    from connrl.own.api import evaluate, make_agent
 
     out = []
     for seed in seeds:

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 import connrl
-from connrl import callbacks, cli
-from connrl.callbacks import read_progress
+from connrl import cli
+from connrl.own import callbacks
+from connrl.own.callbacks import read_progress
 
 
 def test_train_interrupt_resume_plot_tune_and_load_the_best(tmp_path, monkeypatch, capsys):

@@ -12,10 +12,10 @@ import pytest
 
 import connrl
 from connrl import cli
-from connrl.callbacks import read_progress
 from connrl.core.lessons import Lesson
 from connrl.core.replay import ReplayParams, replay_q
 from connrl.nets import OAON, NetConfig
+from connrl.own.callbacks import read_progress
 
 
 @pytest.fixture(scope="module")
@@ -153,8 +153,8 @@ def test_train_never_saves_a_diverged_agent_and_says_so(tmp_path, capsys):
 
 def test_train_checkpoints_as_it_goes(tmp_path, monkeypatch, capsys):
     saves = []
-    real = connrl.api.Agent.save
-    monkeypatch.setattr(connrl.api.Agent, "save", lambda self, p: saves.append(self.steps_done) or real(self, p))
+    real = connrl.own.api.Agent.save
+    monkeypatch.setattr(connrl.own.api.Agent, "save", lambda self, p: saves.append(self.steps_done) or real(self, p))
     out = tmp_path / "ck"
     assert cli.main(["train", "CartPole-v1", "--steps", "1500", "--quiet", "--save", str(out),
                      "--checkpoint-every", "500", "--option", "warmup_steps=100"]) == 0

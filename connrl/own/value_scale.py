@@ -1,4 +1,4 @@
-"""The nets' value scale for ``connrl.api``: the range +-value_range their outputs span, set from rewards seen.
+"""The nets' value scale for ``connrl.own.api``: the range +-value_range their outputs span, set from rewards seen.
 
 A return is ``r_0 + g r_1 + ... + g^k r_k``. Rewards of steps that do not end the episode by termination can recur
 every step, so they allow up to ``max |r_step| / (1 - g)``; a reward that terminates the episode comes once, at the

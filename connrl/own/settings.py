@@ -4,7 +4,7 @@
     CartPole-v1:
       n_timesteps: 50000     # connrl train's --steps
       env_kwargs: {}         # gymnasium.make(id, **env_kwargs)
-      hidden: 16             # any connrl.api.AgentOptions field
+      hidden: 16             # any connrl.own.api.AgentOptions field
       lr: 0.05
 
 ``connrl train ENV`` uses the shipped entry for ENV and its agent when there is one (and says so); ``--hyperparams
@@ -20,7 +20,7 @@ from pathlib import Path
 
 from connrl.storage import MAX_NESTING, FileError, read_limited_text, shown
 
-SETTINGS_DIR = Path(__file__).parent / "data" / "hyperparams"
+SETTINGS_DIR = Path(__file__).parents[1] / "data" / "hyperparams"
 RESERVED = ("n_timesteps", "env_kwargs")
 MAX_SETTINGS_BYTES = 2**20
 MAX_STEPS = 10**10  # environment steps of one `connrl train` (and a settings file's n_timesteps): months of compute
@@ -81,7 +81,7 @@ def read_settings(path) -> dict[str, dict]:
 def check_entry(path, env_id: str, entry) -> dict:
     """An entry with its options checked as ``AgentOptions`` fields, ``n_timesteps`` a whole number >= 1 and
     ``env_kwargs`` a mapping with string keys."""
-    from connrl.api import options_from
+    from connrl.own.api import options_from
 
     where = f"{path}: entry {env_id!r}"
     if entry is None:
@@ -125,7 +125,7 @@ def task_settings(env_id: str, kind: str, path=None) -> tuple[dict | None, str |
     entries = read_settings(file)
     if env_id not in entries:
         return None, None
-    return entries[env_id], f"{file.relative_to(Path(__file__).parent.parent)} [{env_id}]"
+    return entries[env_id], f"{file.relative_to(Path(__file__).parents[2])} [{env_id}]"
 
 
 def settings_yaml(env_id: str, n_timesteps: int | None, env_kwargs: dict, options: dict, comment: str = "") -> str:

@@ -1,4 +1,4 @@
-"""The own-task learner's settings (``AgentOptions``), each checked on construction (connrl.api uses them)."""
+"""The own-task learner's settings (``AgentOptions``), each checked on construction (connrl.own.api uses them)."""
 
 from __future__ import annotations
 

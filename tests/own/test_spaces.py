@@ -1,4 +1,4 @@
-"""Which environments the own-task API takes (connrl.api_spaces): a vector env is refused first in one line;
+"""Which environments the own-task API takes (connrl.own.spaces): a vector env is refused first in one line;
 Dict / Tuple / MultiDiscrete / MultiBinary / image-shaped Box observations are encoded by hand-checkable rules, learn,
 and round-trip through agent.json; a damaged space description is refused in one line."""
 
@@ -10,7 +10,7 @@ import pytest
 from gymnasium import spaces
 
 import connrl
-from connrl.api import InputScaler
+from connrl.own.api import InputScaler
 
 
 class Cue(gym.Env):

@@ -1,4 +1,4 @@
-"""``connrl tune ENV``: the command line of connrl.tune (a search over an agent's settings)."""
+"""``connrl tune ENV``: the command line of connrl.own.tune (a search over an agent's settings)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import sys
 from argparse import SUPPRESS, ArgumentDefaultsHelpFormatter
 from pathlib import Path
 
-from connrl.cli_task import (
+from connrl.own.cli import (
     MAX_STEPS,
     _int_at_least,
     _make_env,
@@ -30,8 +30,8 @@ class _Defaults(ArgumentDefaultsHelpFormatter):
 
 
 def cmd_tune(args) -> int:
-    from connrl.api import options_from
-    from connrl.tune import DEFAULT_SPACE, check_space, parse_dimension, run_search
+    from connrl.own.api import options_from
+    from connrl.own.tune import DEFAULT_SPACE, check_space, parse_dimension, run_search
 
     kind = args.agent
     try:
@@ -65,7 +65,7 @@ def cmd_tune(args) -> int:
 
 
 def _write_best(out: Path, study: dict, trials: list[dict]) -> int:
-    from connrl.settings import settings_yaml
+    from connrl.own.settings import settings_yaml
     from connrl.storage import atomic_write_text
 
     best = trials[0]
@@ -93,8 +93,8 @@ def _seed_list(text: str) -> list[int]:
 
 
 def add_tune_command(sub) -> None:
-    """tune (connrl.tune)."""
-    kinds = ("QCON", "QCON-R", "AHCON", "AHCON-R", "window-Q", "recurrent-Q")  # connrl.api.KINDS without a teacher
+    """tune (connrl.own.tune)."""
+    kinds = ("QCON", "QCON-R", "AHCON", "AHCON-R", "window-Q", "recurrent-Q")  # connrl.own.api.KINDS without a teacher
     s = sub.add_parser("tune", help="search an agent's settings for a task",
                        formatter_class=_Defaults, description="Search AgentOptions "
                        "for ENV_ID: each trial trains one agent per tuning seed and scores its mean greedy return "
@@ -105,7 +105,7 @@ def add_tune_command(sub) -> None:
                    help=f"the learner: {', '.join(kinds)}")
     s.add_argument("--space", action="append", default=None, metavar="NAME=SPEC", help="a searched option: "
                    "NAME=a,b,c or NAME=low:high[:log]; repeat for several (none given: lr, hidden, lam and "
-                   "lessons_per_trial over connrl.tune.DEFAULT_SPACE)")
+                   "lessons_per_trial over connrl.own.tune.DEFAULT_SPACE)")
     s.add_argument("--option", action="append", type=key_value, default=[], metavar="KEY=VALUE",
                    help="a fixed option (an AgentOptions field); repeat for several")
     s.add_argument("--trials", type=_int_at_least(1, 10_000), default=20, help="settings tried")

@@ -1,6 +1,6 @@
 """Watching and keeping an agent while it learns, in Stable-Baselines3's shape (``agent.learn(n, callback=...)``).
 
-    from connrl.callbacks import CheckpointCallback, EvalCallback, ProgressLog
+    from connrl.own.callbacks import CheckpointCallback, EvalCallback, ProgressLog
     eval_cb = EvalCallback(gym.make("CartPole-v1"), every=5_000, episodes=5, best_path="runs/cp/best", stop_at=475)
     agent.learn(50_000, callback=[ProgressLog("runs/cp/progress.csv"), eval_cb, CheckpointCallback(10_000, "runs/cp")])
 
@@ -78,7 +78,7 @@ def as_callback(callback) -> Callback:
         return CallbackList(callback)
     if callable(callback):
         return _Function(callback)
-    raise ValueError(f"callback must be a connrl.callbacks.Callback, a function (agent, trial_return) or a list of "
+    raise ValueError(f"callback must be a connrl.own.callbacks.Callback, a function (agent, trial_return) or a list of "
                      f"them, got {type(callback).__name__}")
 
 

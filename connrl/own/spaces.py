@@ -1,4 +1,4 @@
-"""Which Gymnasium environments and spaces the own-task API (connrl.api) takes, the input code of composite
+"""Which Gymnasium environments and spaces the own-task API (connrl.own.api) takes, the input code of composite
 observations, and spaces as strict JSON in ``agent.json`` (written by ``space_json``, checked by ``check_space``,
 rebuilt by ``space_from``; no pickle).
 
