@@ -13,6 +13,7 @@ whole lesson in one Numba kernel, ``connrl.core.replay_kernel``), and the refere
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
@@ -50,6 +51,13 @@ class ReplayParams:
     p_threshold: float = 0.0  # P_t: actions with P(a|x) below it are non-policy, not replayed (3.5.1)
     batch: bool = False  # batch mode: targets from the nets as before the lesson (5.1.2, 7.5)
     clip: float | None = None  # truncate targets above this value (4.2.4)
+
+    @functools.cached_property
+    def kernel_settings(self) -> tuple:
+        """``(lam, temperature, p_threshold, clip, has_clip)``: the replay as a compiled kernel takes it
+        (``connrl.nets.kernels``; gamma goes per step, in the discounts)."""
+        return (float(self.lam), float(self.temperature), float(self.p_threshold),
+                0.0 if self.clip is None else float(self.clip), self.clip is not None)
 
 
 def is_policy_action(merits: np.ndarray, a: int, params: ReplayParams, weights: np.ndarray | None = None) -> bool:

@@ -59,24 +59,18 @@ def replay_oaon(net: OAON, lesson, params, repair: int = 0, weights=None, allowe
     d = _gammas(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
     w = _none(a, np.float64) if weights is None else np.ascontiguousarray(weights, dtype=np.float64)
     m = _none(a, np.bool_) if allowed is None else np.ascontiguousarray(allowed, dtype=np.bool_)
-    return int(_replay_q_kernel(net.w1, net.w2, net.d1, net.d2, net._h, np.empty(a), *_lesson_arrays(lesson),
-                                bool(lesson.terminated), d, float(params.lam), float(params.temperature),
-                                float(params.p_threshold), 0.0 if params.clip is None else float(params.clip),
-                                params.clip is not None, net.scale, net.lr, net.config.momentum, int(repair),
-                                net.config.linear_output, w, m))
+    return int(_replay_q_kernel(net.kernel_arrays, net.kernel_settings, np.empty(a), *_lesson_arrays(lesson),
+                                bool(lesson.terminated), d, params.kernel_settings, int(repair), w, m))
 
 
 def replay_oaon_lessons(net: OAON, pack: LessonPack, thresholds: np.ndarray, params) -> int:
     """Compiled ``replay_oaon`` on ``pack.order``'s lessons in turn, the k-th at P_t ``thresholds[k]``, in one call:
     the fast path of ``connrl.core.replay.replay_q_lessons`` (its checks made)."""
-    return int(_replay_q_lessons(net.w1, net.w2, net.d1, net.d2, net._h, np.empty(net.n_nets), pack.inputs,
+    return int(_replay_q_lessons(net.kernel_arrays, net.kernel_settings, np.empty(net.n_nets), pack.inputs,
                                  pack.actions, pack.rewards, pack.terminated,
                                  _gammas(int(pack.step_start[-1]), float(params.gamma)), pack.in_start,
                                  pack.step_start, pack.order, np.asarray(thresholds, dtype=np.float64),
-                                 float(params.lam), float(params.temperature),
-                                 0.0 if params.clip is None else float(params.clip), params.clip is not None,
-                                 net.scale, net.lr, net.config.momentum, net.config.linear_output, pack.weights,
-                                 pack.allowed))
+                                 params.kernel_settings, pack.weights, pack.allowed))
 
 
 def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=None, allowed=None,
@@ -89,11 +83,9 @@ def replay_rotated(net: RotatedNet, lesson, params, repair: int = 0, weights=Non
         return None
     n, o = len(lesson), net.net
     d = _gammas(n, float(params.gamma)) if discounts is None else np.ascontiguousarray(discounts, dtype=np.float64)
-    return int(_replay_rotated_kernel(o.w1, o.w2, o.d1, o.d2, o._h, net._xr, np.empty(net.n_actions), net.perms,
-                                      *_lesson_arrays(lesson), bool(lesson.terminated), d, float(params.lam),
-                                      float(params.temperature), float(params.p_threshold),
-                                      0.0 if params.clip is None else float(params.clip), params.clip is not None,
-                                      o.scale, o.lr, net.config.momentum))
+    return int(_replay_rotated_kernel(o.kernel_arrays, (o.scale, o.lr, net.config.momentum), net._xr,
+                                      np.empty(net.n_actions), net.perms, *_lesson_arrays(lesson),
+                                      bool(lesson.terminated), d, params.kernel_settings))
 
 
 def replay_ahc_rotated(v_net: OAON, policy: RotatedNet, lesson, params) -> int | None:
@@ -103,8 +95,6 @@ def replay_ahc_rotated(v_net: OAON, policy: RotatedNet, lesson, params) -> int |
         return None  # a perceptron V-net is not compiled: the reference loop
     p = policy.net
     return int(_replay_ahc_rotated_kernel(
-        v_net.w1, v_net.w2, v_net.d1, v_net.d2, v_net._h, v_net.scale, v_net.lr, v_net.config.momentum,
-        p.w1, p.w2, p.d1, p.d2, p._h, policy._xr, np.empty(policy.n_actions), policy.perms, p.scale, p.lr,
-        policy.config.momentum, *_lesson_arrays(lesson), bool(lesson.terminated), float(params.gamma),
-        float(params.lam), float(params.temperature), float(params.p_threshold),
-        0.0 if params.clip is None else float(params.clip), params.clip is not None))
+        v_net.kernel_arrays, (v_net.scale, v_net.lr, v_net.config.momentum), p.kernel_arrays,
+        (p.scale, p.lr, policy.config.momentum), policy._xr, np.empty(policy.n_actions), policy.perms,
+        *_lesson_arrays(lesson), bool(lesson.terminated), float(params.gamma), params.kernel_settings))

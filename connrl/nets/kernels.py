@@ -1,8 +1,10 @@
 """Every Numba kernel over the nets' stacked weight arrays, in one file: the forward pass and momentum update of
 ``connrl.nets.mlp``, the rotated net of ``connrl.nets.rotated``, the recurrent OAON of ``connrl.nets.recurrent``
 (forward passes, BPTT, batch replay) and the whole-lesson backward replays (Fig. 5.1) that ``connrl.core.replay_kernel``
-and the recurrent net run. Fig. 5.1's step 4, the lambda-return, is one kernel, ``_lambda_target``, that every replay
-calls: ``connrl.core.returns.td_lambda_target`` compiled, to the bit (tests/nets/test_lambda_step.py).
+and the recurrent net run. Fig. 5.1's step 4, the lambda-return, is written here once for each of its two roundings:
+``_lambda_target`` (``connrl.core.returns.td_lambda_target`` compiled, to the bit) for the kernels compiled without
+fastmath, ``_lambda_target_fused`` (the form the fastmath OAON replay has always computed) for the OAON replay; no
+replay writes the recursion itself (tests/nets/test_lambda_step.py).
 
 They share one file because they call one another and Numba inlines what a kernel calls, while ``cache=True``
 keys a compiled kernel on its own source file only: a cached replay kernel in another file went on running the
@@ -364,8 +366,8 @@ def _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, disc
                 for k in range(q.size):
                     q[k] = scale * _forward_at(w1, w2, k, x, (t + 1) * n_in, h)
             u = _allowed_max(q, allowed, t + 1) if allowed.shape[0] > 0 else q.max()
-        e = _lambda_target(rewards[t], discounts[t], lam if (t < n - 1 and next_policy) else 0.0, u, e_next, clip,
-                           has_clip)
+        e = _lambda_target_fused(rewards[t], discounts[t], lam if (t < n - 1 and next_policy) else 0.0, u, e_next,
+                                 clip, has_clip)
         a = actions[t]
         changed = -1
         if p_threshold > 0.0:
@@ -395,9 +397,12 @@ def _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, disc
 
 
 @numba.njit(cache=True, fastmath=True)
-def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, discounts, lam, temperature,
-                     p_threshold, clip, has_clip, scale, lr, momentum, repair, linear, weights, allowed):
+def _replay_q_kernel(net, hyper, q, inputs, actions, rewards, terminated, discounts, replay, repair, weights, allowed):
     """Fig. 5.1(a) in incremental mode over a whole lesson; same arithmetic as ``replay_q_reference``.
+
+    ``net`` is the OAON's ``(w1, w2, d1, d2, h)`` (``OAON.kernel_arrays``), ``hyper`` its ``(scale, lr, momentum,
+    linear)`` (``OAON.kernel_settings``) and ``replay`` the replay's ``(lam, temperature, p_threshold, clip,
+    has_clip)`` (``connrl.core.replay.ReplayParams.kernel_settings``).
 
     ``discounts[t]`` is step t's discount (gamma, or gamma^n for a group of n steps, 6.6.4); ``weights`` (n, A) each
     step's W of Eq. 6.6 for the non-policy test, ``allowed`` (n+1, A) the choices the target's max ranges over in
@@ -410,6 +415,9 @@ def _replay_q_kernel(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated,
     Nets with a hidden layer and no repairs take ``_replay_mlp``, the same arithmetic with less work; the others
     ``_replay_q_steps``.
     """
+    w1, w2, d1, d2, h = net
+    scale, lr, momentum, linear = hyper
+    lam, temperature, p_threshold, clip, has_clip = replay
     if w1.shape[1] > 0 and repair == 0:
         return _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, discounts, lam, temperature,
                            p_threshold, clip, has_clip, scale, lr, momentum, weights, allowed)
@@ -441,8 +449,8 @@ def _replay_q_steps(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, 
             else:
                 _values_any(w1, w2, inputs[t + 1], h, scale, q, linear)
             u = _allowed_max(q, allowed, t + 1) if allowed.shape[0] > 0 else q.max()
-        e = _lambda_target(rewards[t], discounts[t], lam if (t < n - 1 and next_policy) else 0.0, u, e_next, clip,
-                           has_clip)
+        e = _lambda_target_fused(rewards[t], discounts[t], lam if (t < n - 1 and next_policy) else 0.0, u, e_next,
+                                 clip, has_clip)
         a = actions[t]
         changed = -1
         if p_threshold > 0.0:
@@ -479,12 +487,11 @@ def _replay_q_steps(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, 
 
 
 @numba.njit(cache=True)
-def _replay_q_lessons(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, discounts, in_start, step_start,
-                      order, thresholds, lam, temperature, clip, has_clip, scale, lr, momentum, linear, weights,
-                      allowed):
+def _replay_q_lessons(net, hyper, q, inputs, actions, rewards, terminated, discounts, in_start, step_start, order,
+                      thresholds, replay, weights, allowed):
     """``_replay_q_kernel`` on lessons ``order[0]``, ``order[1]``, ... in turn, each at its own P_t
-    (``thresholds[k]``; no repairs): the lessons stored end to end, lesson i's n_i steps at rows
-    ``step_start[i]..step_start[i+1]`` of actions, rewards, discounts and weights and its n_i + 1 states at rows
+    (``thresholds[k]``, in place of ``replay``'s; no repairs): the lessons stored end to end, lesson i's n_i steps at
+    rows ``step_start[i]..step_start[i+1]`` of actions, rewards, discounts and weights and its n_i + 1 states at rows
     ``in_start[i]..`` of inputs and allowed (0-row weights / allowed: none). One call for a trial's replays:
     one call instead of a thousand from Python (issue 45)."""
     used = 0
@@ -494,9 +501,9 @@ def _replay_q_lessons(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated
         x1 = x0 + (s1 - s0) + 1
         w = weights[s0:s1] if weights.shape[0] > 0 else weights
         m = allowed[x0:x1] if allowed.shape[0] > 0 else allowed
-        used += _replay_q_kernel(w1, w2, d1, d2, h, q, inputs[x0:x1], actions[s0:s1], rewards[s0:s1],
-                                 terminated[i], discounts[s0:s1], lam, temperature, thresholds[k], clip, has_clip,
-                                 scale, lr, momentum, 0, linear, w, m)
+        at_k = (replay[0], replay[1], thresholds[k], replay[3], replay[4])
+        used += _replay_q_kernel(net, hyper, q, inputs[x0:x1], actions[s0:s1], rewards[s0:s1], terminated[i],
+                                 discounts[s0:s1], at_k, 0, w, m)
     return used
 
 
@@ -525,8 +532,21 @@ def _boltzmann_probability(q, a, temperature):
 
 @numba.njit(cache=True)
 def _lambda_target(reward, discount, lam_t, u, e_next, clip, has_clip):
-    """Eq. 5.5 / Fig. 5.1 step 4 as ``connrl.core.returns.td_lambda_target`` computes it, truncated at ``clip``."""
+    """Eq. 5.5 / Fig. 5.1 step 4 as ``connrl.core.returns.td_lambda_target`` computes it, truncated at ``clip``.
+    Called only from kernels compiled without fastmath: Numba compiles a plain kernel first called from a fastmath
+    one with the caller's flags, so its bits would depend on which kernel a process compiled first (issue 46;
+    tests/nets/test_lambda_step.py)."""
     e = reward + discount * ((1.0 - lam_t) * u + lam_t * e_next)
+    return clip if has_clip and e > clip else e
+
+
+@numba.njit(cache=True)
+def _lambda_target_fused(reward, discount, lam_t, u, e_next, clip, has_clip):
+    """Eq. 5.5 in the form the OAON replay (compiled with fastmath) has always computed it, and its stored results
+    hold: ``(1 - lam) u + lam e'`` rewritten ``u + lam (e' - u)``, and it and the discounted sum each one fused
+    multiply-add (two roundings fewer than ``_lambda_target``; equal to it to within an ulp or two). Written out with
+    explicit FMAs, so it is this form in whatever kernel it lands."""
+    e = _fma(discount, _fma(lam_t, e_next - u, u), reward)
     return clip if has_clip and e > clip else e
 
 
@@ -540,11 +560,14 @@ def _rotated_policy_test(w1, w2, x, perms, scale, q, xr, a, temperature, p_thres
 
 
 @numba.njit(cache=True)
-def _replay_rotated_kernel(w1, w2, d1, d2, h, xr, q, perms, inputs, actions, rewards, terminated, discounts, lam,
-                           temperature, p_threshold, clip, has_clip, scale, lr, momentum):
+def _replay_rotated_kernel(net, hyper, xr, q, perms, inputs, actions, rewards, terminated, discounts, replay):
     """Fig. 5.1(a) in incremental mode over a whole lesson into a rotated net: ``replay_q_reference``'s loop step
     for step (its TD arithmetic compiled without fastmath, so the targets are Python's to the bit; the net's own
-    kernels are those ``RotatedNet`` calls)."""
+    kernels are those ``RotatedNet`` calls). ``net``, ``hyper`` (without ``linear``) and ``replay`` as
+    ``_replay_q_kernel``'s."""
+    w1, w2, d1, d2, h = net
+    scale, lr, momentum = hyper
+    lam, temperature, p_threshold, clip, has_clip = replay
     n = actions.shape[0]
     used = 0
     e_next = 0.0
@@ -568,11 +591,16 @@ def _replay_rotated_kernel(w1, w2, d1, d2, h, xr, q, perms, inputs, actions, rew
 
 
 @numba.njit(cache=True)
-def _replay_ahc_rotated_kernel(vw1, vw2, vd1, vd2, vh, v_scale, v_lr, v_momentum, pw1, pw2, pd1, pd2, ph, xr, q,
-                               perms, p_scale, p_lr, p_momentum, inputs, actions, rewards, terminated, gamma, lam,
-                               temperature, p_threshold, clip, has_clip):
+def _replay_ahc_rotated_kernel(v_net, v_hyper, p_net, p_hyper, xr, q, perms, inputs, actions, rewards, terminated,
+                               gamma, replay):
     """Fig. 5.1(b) in incremental mode over a whole lesson: a V-net (one hidden layer) and a rotated policy net,
-    ``replay_ahc_reference``'s loop step for step (TD arithmetic without fastmath: Python's to the bit)."""
+    ``replay_ahc_reference``'s loop step for step (TD arithmetic without fastmath: Python's to the bit). The V-net's
+    and the policy net's arrays and ``(scale, lr, momentum)``, and ``replay``, as ``_replay_rotated_kernel``'s."""
+    vw1, vw2, vd1, vd2, vh = v_net
+    v_scale, v_lr, v_momentum = v_hyper
+    pw1, pw2, pd1, pd2, ph = p_net
+    p_scale, p_lr, p_momentum = p_hyper
+    lam, temperature, p_threshold, clip, has_clip = replay
     n = actions.shape[0]
     used = 0
     e_next = 0.0
@@ -844,15 +872,18 @@ def _policy_weights(ys, actions, temperature, p_threshold, bweights, weights):
 
 
 @numba.njit(cache=True)
-def _replay_recurrent_lesson(w1, w2, d1, d2, g1, g2, xs, actions, rewards, terminated, gamma, lam, temperature,
-                     p_threshold, clip, has_clip, feedback, decay, scale, lr, momentum, bweights, allowed):
+def _replay_recurrent_lesson(net, hyper, xs, actions, rewards, terminated, gamma, replay, bweights, allowed):
     """Batch replay of one lesson into a recurrent Q-net, whole (7.5; Fig. 5.1(a) in batch mode): every net's values
     along the lesson from c_0 = 0, the non-policy test (3.5.1, with Eq. 6.6's W per step in ``bweights`` (n, A)), the
     lambda-returns from those fixed values (Eq. 5.5; each state's max over its ``allowed`` (n+1, A) choices, all where
     none is), then one BPTT + momentum step on the policy steps. 0-row ``bweights`` / ``allowed``: none. The same
     arithmetic as ``connrl.agents.memory``'s ``replay_recurrent_q`` composes from ``batch_targets`` and
     ``train_sequence``; returns the steps replayed. ``xs`` (n+1, I) holds the lesson's inputs, the last one the state
-    after the last action."""
+    after the last action. ``net`` is ``(w1, w2, d1, d2, g1, g2)`` (``RecurrentOAON.kernel_arrays``: g1, g2 the
+    gradient buffers), ``hyper`` ``(feedback, decay, scale, lr, momentum)`` and ``replay`` as ``_replay_q_kernel``'s."""
+    w1, w2, d1, d2, g1, g2 = net
+    feedback, decay, scale, lr, momentum = hyper
+    lam, temperature, p_threshold, clip, has_clip = replay
     n = actions.shape[0]
     n_a = w1.shape[0]
     acts = np.zeros(n + 1, dtype=np.int64)  # the action at x_n does not affect the outputs at x_n
@@ -895,11 +926,10 @@ def _replay_recurrent_lesson(w1, w2, d1, d2, g1, g2, xs, actions, rewards, termi
 
 
 @numba.njit(cache=True)
-def _replay_recurrent_lessons(w1, w2, d1, d2, g1, g2, inputs, actions, rewards, terminated, in_start, step_start, order,
-                      thresholds, gamma, lam, temperature, clip, has_clip, feedback, decay, scale, lr, momentum,
-                      bweights, allowed):
+def _replay_recurrent_lessons(net, hyper, inputs, actions, rewards, terminated, in_start, step_start, order,
+                              thresholds, gamma, replay, bweights, allowed):
     """``_replay_recurrent_lesson`` on lessons ``order[0]``, ``order[1]``, ... in turn, each at its own P_t
-    (``thresholds[k]``): the lessons stored end to end as ``connrl.nets.kernels._replay_recurrent_lessons`` takes them
+    (``thresholds[k]``): the lessons stored end to end as ``_replay_q_lessons`` takes them
     (lesson i's steps at rows ``step_start[i]..step_start[i+1]``, its states from row ``in_start[i]``). One call
     for a trial's replays (issue 45)."""
     used = 0
@@ -909,7 +939,7 @@ def _replay_recurrent_lessons(w1, w2, d1, d2, g1, g2, inputs, actions, rewards, 
         x1 = x0 + (s1 - s0) + 1
         w = bweights[s0:s1] if bweights.shape[0] > 0 else bweights
         m = allowed[x0:x1] if allowed.shape[0] > 0 else allowed
-        used += _replay_recurrent_lesson(w1, w2, d1, d2, g1, g2, inputs[x0:x1], actions[s0:s1], rewards[s0:s1],
-                                 terminated[i], gamma, lam, temperature, thresholds[k], clip, has_clip, feedback,
-                                 decay, scale, lr, momentum, w, m)
+        at_k = (replay[0], replay[1], thresholds[k], replay[3], replay[4])
+        used += _replay_recurrent_lesson(net, hyper, inputs[x0:x1], actions[s0:s1], rewards[s0:s1], terminated[i],
+                                         gamma, at_k, w, m)
     return used

@@ -107,6 +107,16 @@ class OAON:
         self._h = np.zeros(max(c.n_hidden, 1))
         self.lr = c.lr  # mutable: an experiment may rescale it (Study 2 doubles it)
 
+    @property
+    def kernel_arrays(self) -> tuple:
+        """``(w1, w2, d1, d2, h)``: the arrays a compiled kernel reads and writes (``connrl.nets.kernels``)."""
+        return self.w1, self.w2, self.d1, self.d2, self._h
+
+    @property
+    def kernel_settings(self) -> tuple:
+        """``(scale, lr, momentum, linear)``: how a compiled kernel scales and steps them."""
+        return self.scale, self.lr, self.config.momentum, self.config.linear_output
+
     def values(self, x: np.ndarray) -> np.ndarray:
         q = np.empty(self.n_nets)
         x = self._checked(x, 0)

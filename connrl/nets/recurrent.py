@@ -61,6 +61,11 @@ from connrl.nets.kernels import (  # noqa: F401 (tests and benchmarks reach the 
 )
 
 
+def _replay_settings(lam, temperature, p_threshold, clip) -> tuple:
+    """``(lam, temperature, p_threshold, clip, has_clip)`` as the compiled replays take them."""
+    return float(lam), float(temperature), float(p_threshold), 0.0 if clip is None else float(clip), clip is not None
+
+
 @dataclass(frozen=True)
 class RecurrentNetConfig:
     """Shape and training constants of a recurrent OAON (Table B.1 gives the thesis's values)."""
@@ -222,6 +227,17 @@ class RecurrentOAON:
         self._y = np.zeros((n_nets, c.n_outputs))
         self._fresh = False  # True when _h_all holds a forward pass at the current context
 
+    @property
+    def kernel_arrays(self) -> tuple:
+        """``(w1, w2, d1, d2, g1, g2)``: the arrays the compiled replay reads and writes (g: gradient buffers)."""
+        return self.w1, self.w2, self.d1, self.d2, self._g1, self._g2
+
+    @property
+    def kernel_settings(self) -> tuple:
+        """``(feedback, decay, scale, lr, momentum)`` of the compiled replay's BPTT step."""
+        c = self.config
+        return c.feedback, c.decay, self.scale, self.lr, c.momentum
+
     # -- online (one step at a time)
     def reset(self) -> None:
         """Zero the context units (start of a trial, 7.4)."""
@@ -339,10 +355,9 @@ class RecurrentOAON:
             raise ValueError(f"rewards must have shape {actions.shape}, got {rewards.shape}")
         w, ok = _check_choices(weights, allowed, len(actions), self.n_nets)
         self._fresh = False
-        return int(_replay_recurrent_lesson(self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, xs, actions,
-                                            rewards, bool(terminated), float(gamma), float(lam), float(temperature),
-                                            float(p_threshold), 0.0 if clip is None else float(clip),
-                                            clip is not None, c.feedback, c.decay, self.scale, self.lr, c.momentum,
+        return int(_replay_recurrent_lesson(self.kernel_arrays, self.kernel_settings, xs, actions, rewards,
+                                            bool(terminated), float(gamma), _replay_settings(lam, temperature,
+                                                                                             p_threshold, clip),
                                             w, ok))
 
     def replay_q_lessons(self, lessons: list, thresholds: list[float], options, *, gamma: float, lam: float,
@@ -369,10 +384,9 @@ class RecurrentOAON:
         p = pack_lessons(lessons, options, self.n_nets, check)
         self._fresh = False
         return int(_replay_recurrent_lessons(
-            self.w1, self.w2, self.d1, self.d2, self._g1, self._g2, p.inputs, p.actions, p.rewards, p.terminated,
-            p.in_start, p.step_start, p.order, np.asarray(thresholds, dtype=np.float64), float(gamma), float(lam),
-            float(temperature), 0.0 if clip is None else float(clip), clip is not None, c.feedback, c.decay,
-            self.scale, self.lr, c.momentum, p.weights, p.allowed))
+            self.kernel_arrays, self.kernel_settings, p.inputs, p.actions, p.rewards, p.terminated, p.in_start,
+            p.step_start, p.order, np.asarray(thresholds, dtype=np.float64), float(gamma),
+            _replay_settings(lam, temperature, 0.0, clip), p.weights, p.allowed))
 
     # -- plain-format persistence (NPZ, no pickle)
     def state_dict(self) -> dict[str, np.ndarray]:
