@@ -23,7 +23,7 @@ from statistics import median
 
 from blocks import paste
 
-from connrl.experiments.registry import CHAPTERS, all_experiments, by_chapter
+from connrl.experiments.registry import all_experiments, by_chapter, chapters
 from connrl.experiments.runner import make_jobs, run_job, stored_runs
 from connrl.experiments.timing import computed
 
@@ -88,7 +88,7 @@ def how_called(args) -> str:
 
 
 def report(picks, kernel, args) -> str:
-    chapter_of = {spec.name: c for c in sorted(set(CHAPTERS.values())) for spec in by_chapter([c])}
+    chapter_of = {spec.name: c for c in chapters() for spec in by_chapter([c])}
     per_chapter: dict[int, list[float]] = {}
     for (name, _, _, run_s, total_s), k in zip(picks, kernel, strict=True):
         share = min(k / run_s, 1.0) if run_s > 0 else 0.0

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from blocks import paste
 
-from connrl.experiments.registry import CHAPTERS, all_experiments, by_chapter
+from connrl.experiments.registry import all_experiments, by_chapter, chapters
 from connrl.experiments.runner import make_jobs, run_job, stored_runs
 from connrl.experiments.timing import RUN_TIMES, computed, per_experiment, pool_usage, run_times_table
 
@@ -92,7 +92,7 @@ def main() -> None:
     chapter_of: dict[str, int] = {}
     specs = all_experiments()
     records, order = [], []
-    for chapter in sorted(set(CHAPTERS.values())):
+    for chapter in chapters():
         for spec in by_chapter([chapter]):
             chapter_of[spec.name] = chapter
             summary, recs = stored_runs(spec, out)

@@ -66,14 +66,15 @@ def cmd_run(args) -> int:
 def cmd_reproduce(args) -> int:
     import time
 
-    from connrl.experiments.registry import CHAPTERS, by_chapter
+    from connrl.experiments.registry import by_chapter
+    from connrl.experiments.registry import chapters as known_chapters
     from connrl.report.page import write_results
 
     try:
         chapters = sorted({int(c) for c in args.chapters.split(",")})
     except ValueError:
         chapters = []
-    known = sorted(set(CHAPTERS.values()))
+    known = known_chapters()
     if not chapters or not set(chapters) <= set(known):
         raise SystemExit(f"connrl: --chapters takes a comma-separated list of {', '.join(map(str, known))}, got "
                          f"{args.chapters!r}")

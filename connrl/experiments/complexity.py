@@ -151,6 +151,7 @@ QUANTITIES = (_exp("flat", "2"), _exp("single", "1.5; 1.4 in 2-D"), _exp("multi"
 PROFILES = {"tiny": {"runs": 1, "max_states": 729, "block_max": 5},
             "quick": {"runs": 2, "max_states": 6561}, "full": {"runs": 3}}
 
+CHAPTER = 6  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     ExperimentSpec(
         name="complexity", title="Learning a grid world flat, with one level of abstraction and with many: action "

@@ -254,6 +254,7 @@ def _fresh_spec(spec: ExperimentSpec) -> ExperimentSpec:
 
 _POLE_THESIS = {"window-Q": 206, "recurrent-Q": 552, "recurrent-model": 247}  # Table 7.1
 
+CHAPTER = 7  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     _cup_spec(1),
     _cup_spec(2),

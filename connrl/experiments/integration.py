@@ -144,6 +144,7 @@ RECURRENT = {"memory": "recurrent", "lr": 0.03, "hidden": 12, "context": 8, "les
 THESIS_RECURRENT = {**RECURRENT, "lr": 0.08, "lessons_per_trial": 100}  # as 8.3 (lr) and 8.1 (replays) state them
 SIXTY = "recurrent-Q, no X-Y, 60 lessons per trial (diagnostic)"
 MEMORYLESS_100 = "memoryless, no X-Y, 100 lessons per trial (8.1)"
+CHAPTER = 8  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     ExperimentSpec(
         name="integration", title="Exps 1-3: recharging without X-Y, memoryless and with recurrent Q-nets; the "

@@ -58,6 +58,7 @@ _PROFILES = {
     "full": {"runs": 10},
 }
 
+CHAPTER = 7  # 7.5.4's: Appendix C's task (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     ExperimentSpec(
         name="pole-full",

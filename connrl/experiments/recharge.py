@@ -215,6 +215,7 @@ PROFILES = {"tiny": {"runs": 1, "trials": 2, "test_every": 1, "tests_per_room": 
                      "max_steps": 20},
             "quick": {"runs": 2, "trials": 60, "tests_per_room": 5}, "full": {"runs": 7}}
 
+CHAPTER = 6  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     ExperimentSpec(
         name="recharge-behaviours", title="Exps 2 and 3: recharging over learned behaviours, without and with the "

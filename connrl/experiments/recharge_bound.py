@@ -144,6 +144,7 @@ QUANTITIES = (*(_q(f"docked_{r}", f"share of the test tasks from room {r} the ru
                 for r in ROOMS),
               _q("teacher_performance", "the scripted teacher on the same test tasks"))
 
+CHAPTER = 6  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     ExperimentSpec(
         name="recharge-bound", title="Ch. 6 bound: a fixed rule over the behaviour library on the learners' test "

@@ -22,6 +22,7 @@ def run_flat(p: FlatParams, rng: np.random.Generator, progress=lambda done, tota
     return result
 
 
+CHAPTER = 6  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     ExperimentSpec(
         name="recharge-flat", title="Exp. 1: recharging without the hierarchy (monolithic QCON-T, flat input)",

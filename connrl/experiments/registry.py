@@ -1,56 +1,43 @@
-"""All experiments, by name. Each module listed here defines ``EXPERIMENTS: list[ExperimentSpec]``."""
+"""All experiments, by name: every module of ``connrl.experiments`` that defines ``EXPERIMENTS: list[ExperimentSpec]``
+(and ``CHAPTER``, the thesis chapter they belong to) is found here, so a new figure's module needs no entry."""
 
 from __future__ import annotations
 
+import functools
 import importlib
+import pkgutil
+from pathlib import Path
 
 from connrl.experiments.spec import ExperimentSpec
 
-SPEC_MODULES = (
-    "connrl.experiments.pole",
-    "connrl.experiments.survival",
-    "connrl.experiments.hidden_state",
-    "connrl.experiments.robot",
-    "connrl.experiments.robot_bounds",
-    "connrl.experiments.robot_noise",
-    "connrl.experiments.td_depth",
-    "connrl.experiments.recharge",
-    "connrl.experiments.recharge_flat",
-    "connrl.experiments.recharge_bound",
-    "connrl.experiments.complexity",
-    "connrl.experiments.integration",
-    "connrl.experiments.steps",
-)
+
+@functools.cache
+def spec_modules() -> tuple:
+    """The experiment modules, chapter by chapter (by name within one)."""
+    found = []
+    for info in pkgutil.iter_modules([str(Path(__file__).parent)], "connrl.experiments."):
+        module = importlib.import_module(info.name)
+        if hasattr(module, "EXPERIMENTS"):
+            if not isinstance(getattr(module, "CHAPTER", None), int):
+                raise TypeError(f"{info.name} defines EXPERIMENTS but no CHAPTER (the thesis chapter, an int)")
+            found.append(module)
+    return tuple(sorted(found, key=lambda m: (m.CHAPTER, m.__name__)))
 
 
-# the thesis chapter each module's experiments belong to (`connrl reproduce --chapters`); the pole experiments are
-# 7.5.4's (Appendix C's task)
-CHAPTERS = {"connrl.experiments.survival": 4, "connrl.experiments.robot": 5, "connrl.experiments.robot_bounds": 5,
-            "connrl.experiments.robot_noise": 5, "connrl.experiments.td_depth": 5,
-            "connrl.experiments.recharge_flat": 6, "connrl.experiments.recharge": 6,
-            "connrl.experiments.recharge_bound": 6, "connrl.experiments.complexity": 6,
-            "connrl.experiments.pole": 7, "connrl.experiments.hidden_state": 7, "connrl.experiments.integration": 8,
-            "connrl.experiments.steps": 8}
+def chapters() -> list[int]:
+    """The thesis chapters that have experiments."""
+    return sorted({m.CHAPTER for m in spec_modules()})
 
 
 def by_chapter(chapters) -> list[ExperimentSpec]:
     """The experiments of the given chapters, chapter by chapter in the registry's order."""
-    out = []
-    for chapter in sorted(set(chapters)):
-        for mod in (m for m in SPEC_MODULES if CHAPTERS[m] == chapter):
-            out += list(importlib.import_module(mod).EXPERIMENTS)
-    return out
+    wanted = set(chapters)
+    return [spec for m in spec_modules() if m.CHAPTER in wanted for spec in m.EXPERIMENTS]
 
 
 def all_experiments() -> dict[str, ExperimentSpec]:
     out: dict[str, ExperimentSpec] = {}
-    for mod in SPEC_MODULES:
-        try:
-            module = importlib.import_module(mod)
-        except ModuleNotFoundError as exc:
-            if exc.name == mod:  # a chapter not built yet
-                continue
-            raise
+    for module in spec_modules():
         for spec in module.EXPERIMENTS:
             if spec.name in out:
                 raise ValueError(f"experiment name {spec.name!r} is defined twice")

@@ -167,6 +167,7 @@ _GEOMETRIES = ((SPEC_DP, {"door_width": 36.0, "edge_jump": 24.0}, (0, 3, 10)),
                ("36-in doors only", {"door_width": 36.0}, (0, 10)), ("24-in edges only", {"edge_jump": 24.0}, (0, 10)))
 _Q = (Q_FINAL, Q_MEAN)
 
+CHAPTER = 5  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     _spec("robot-teaching-dp", "Exp. 1: door passing (DP) with 0, 3 and 10 taught lessons", "5.4.1 Fig. 5.4a",
           {"task": "DP"},

@@ -87,6 +87,7 @@ Q_AGREE = Quantity("agreement", "share of taught states whose greedy action is t
 PROFILES = {"tiny": {"runs": 1, "test_tasks": 3, "copy_epochs": 2}, "quick": {"runs": 2, "test_tasks": 25},
             "full": {"runs": 7}}
 
+CHAPTER = 5  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     ExperimentSpec(
         name="robot-dp-copy", title="The copy bound: DP policies copied from the taught lessons, and the teacher "

@@ -17,6 +17,7 @@ from connrl.experiments.spec import ExperimentSpec, Variant
 TASK_LESSONS = (("DP", 10), ("DK", 10), ("WFL", 5))  # Exp. 1's most-taught variants (5.4.1)
 THESIS = "the robot's performance in the noisy world was almost the same as that in a noise-free world"  # 5.5
 
+CHAPTER = 5  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [ExperimentSpec(
     name="robot-noise", title="DP, DK and WFL learned with and without sensing and control noise", section="5.5",
     run="connrl.experiments.robot:run_robot", params=RobotParams(),

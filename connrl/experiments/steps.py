@@ -77,6 +77,7 @@ def run_steps(p: RobotParams, rng: np.random.Generator, progress=lambda done, to
     return result
 
 
+CHAPTER = 8  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     ExperimentSpec(
         name="steps-to-learn", title="The 8.5 table: teaching and experimental steps of the four behaviours",

@@ -210,6 +210,7 @@ _STUDIES = (
         x_label="plays", y_label="food per test play", y_reference={"8 food (4.5 table)": 8.0}),
 )
 
+CHAPTER = 4  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     *_STUDIES,
     *(replace(study, name=f"{study.name}-fresh", title=f"Survival, Study {k} on fresh seeds {FRESH_SEED}-"

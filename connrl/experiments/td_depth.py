@@ -94,6 +94,7 @@ QUANTITIES = (Quantity("max_rel_deviation", "largest |D - (-1/ln lambda)| / (-1/
 # rounding over thousands of steps) is a match
 THESIS = {"max_rel_deviation": 1e-6}
 
+CHAPTER = 5  # the thesis chapter of these experiments (`connrl reproduce --chapters`)
 EXPERIMENTS = [
     ExperimentSpec(
         name="td-depth", title="The effective depth D of TD(lambda) against lambda, from the code's lambda-returns",

@@ -204,6 +204,20 @@ def redraw_missing_curves(out: Path, specs: dict) -> None:
                 plot_experiment(spec, records, folder)
 
 
+def _plain_sections(out: Path, doc: Path, specs: dict, names: list[str], covered: set[str]) -> list[str]:
+    """A summary table and curve for each of ``names`` with stored results (added to ``covered``)."""
+    parts = []
+    for name in names:
+        summary = load_summary(out, name)
+        if summary is None:
+            continue
+        spec = specs[name]
+        parts += [f"## {name}: {spec.title} (thesis {spec.section})", "", summary_table(summary), "",
+                  figure(out / name / "curve.png", doc, name), ""]
+        covered.add(name)
+    return parts
+
+
 def write_results(out: Path, doc: Path) -> Path:
     specs = all_experiments()
     parts = [
@@ -225,14 +239,9 @@ def write_results(out: Path, doc: Path) -> Path:
             parts += [text, ""] + diverged_lines(out, names)
             covered.update(names)
             continue
-        for name in names:
-            summary = load_summary(out, name)
-            if summary is None:
-                continue
-            spec = specs[name]
-            parts += [f"## {name}: {spec.title} (thesis {spec.section})", "", summary_table(summary), "",
-                      figure(out / name / "curve.png", doc, name), ""]
-            covered.add(name)
+        parts += _plain_sections(out, doc, specs, names, covered)
+    # an experiment no section module reports (a new figure's, until it has one): its table and curve
+    parts += _plain_sections(out, doc, specs, [n for n in specs if n not in covered], covered)
     missing = sorted(set(specs) - covered)
     if missing:
         parts += ["## Not yet run", "", "No stored results for: " + ", ".join(f"`{m}`" for m in missing) + ".", ""]

@@ -61,3 +61,21 @@ def test_the_page_is_the_same_from_the_same_records_even_without_their_plots(tmp
     (out / "pole-full" / "curve.png").unlink()
     second = write_results(out, tmp_path / "a" / "RESULTS.md").read_text()
     assert first == second and (out / "pole-full" / "curve.png").exists()
+
+
+def test_an_experiment_no_section_reports_gets_its_table_not_not_yet_run(tmp_path, monkeypatch):
+    """A new figure needs no report module: once run, the page shows its summary table and curve."""
+    import dataclasses
+
+    from connrl.experiments.registry import all_experiments
+    from connrl.experiments.runner import run_experiment
+    from connrl.report import page
+    from tests.experiments.toy import spec
+
+    toy = dataclasses.replace(spec(), name="toy-figure", title="A toy figure")
+    monkeypatch.setattr(page, "all_experiments", lambda: {**all_experiments(), "toy-figure": toy})
+    out = tmp_path / "runs"
+    run_experiment(toy, profile="tiny", out=out, workers=1, show_progress=False)
+    text = write_results(out, tmp_path / "RESULTS.md").read_text()
+    assert "## toy-figure: A toy figure (thesis -)" in text and "`connrl run toy-figure --profile tiny" in text
+    assert "`toy-figure`" not in text[text.index("## Not yet run"):]
