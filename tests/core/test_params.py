@@ -1,11 +1,13 @@
 """A parameter is declared once (``connrl.core.params.param``): its range and choices are checked from the
 declaration, a subclass that changes a default keeps them, and the run key reads the declared defaults."""
 
+import hashlib
+import json
 from dataclasses import dataclass
 
 import pytest
 
-from connrl.core.params import check_types, declared, defaults, param
+from connrl.core.params import check_types, declared, defaults, param, run_key
 
 
 @dataclass(frozen=True)
@@ -50,3 +52,16 @@ def test_a_subclass_changing_a_default_keeps_the_declaration():
 def test_an_unknown_range_is_refused_where_it_is_declared():
     with pytest.raises(ValueError, match="unknown range '>1'; allowed: >0, >=0, >=1, 0..1, 0..<1, 0..180"):
         param(1, ">1")
+
+
+@dataclass(frozen=True)
+class Grown(Child):
+    m: int = param(3, ">=0", "declared later, at the default that keeps the old behaviour")
+
+
+def test_the_run_key_hashes_only_what_differs_from_the_defaults():
+    digest = lambda d: hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:10]  # noqa: E731
+    assert run_key(Child("A")) == digest({"task": "A"}) == run_key(Grown("A"))  # task has no default: always in
+    assert run_key(Child("A", lam=0.5)) == digest({"task": "A", "lam": 0.5}) == run_key(Grown("A", lam=0.5))
+    assert run_key(Grown("A", m=4)) == digest({"task": "A", "m": 4})
+    assert run_key(Child("A", lr=0.05)) == digest({"task": "A", "lr": 0.05})  # Base's default, not Child's

@@ -2,23 +2,12 @@
 declaring a parameter moves no stored run, a changed default is redone, and a folder named by an earlier key is
 adopted when its records are these runs'."""
 
-import hashlib
-import json
-
-from connrl.core.params import run_key
 from connrl.experiments import runner
-from tests.experiments.toy import ToyParams, ToyParamsGrown, ToyParamsNewDefault, grown_spec, spec
+from tests.experiments.toy import ToyParamsGrown, ToyParamsNewDefault, grown_spec, spec
 
 
 def _run(s, out, seed=0):
     return runner.run_experiment(s, profile="tiny", seed=seed, out=out, workers=1, show_progress=False)
-
-
-def test_the_key_hashes_only_what_differs_from_the_defaults():
-    digest = lambda d: hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:10]  # noqa: E731
-    assert run_key(ToyParams()) == digest({}) == run_key(ToyParamsGrown())
-    assert run_key(ToyParams(n=7)) == digest({"n": 7}) == run_key(ToyParamsGrown(n=7))
-    assert run_key(ToyParamsGrown(m=4)) == digest({"m": 4})
 
 
 def test_a_parameter_declared_later_moves_no_stored_run(tmp_path):
