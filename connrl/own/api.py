@@ -42,7 +42,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents.build import make_learner
 from connrl.agents.memory import RecurrentQ, RecurrentQConfig, WindowQ, window_input_size
 from connrl.core.divergence import network_problem
 from connrl.core.lessons import Lesson
@@ -384,13 +385,10 @@ def _learner(kind: str, o: AgentOptions, n_inputs: int, n_actions: int, value_ra
                           n_actions, rng)
     size = window_input_size(n_inputs, n_actions, o.window) if kind == "window-Q" else n_inputs
     net = NetConfig(size, o.hidden, value_range=value_range, init_range=o.init_range, lr=o.lr, momentum=o.momentum)
-    if ahc:  # the policy nets' merits share V's scale: Fig. 3.2 moves them by V's TD error
-        return AHCON(AHCONConfig(v_net=net, policy_net=net, temperature=temperature, gamma=o.gamma, lam=o.lam,
-                                 replay=replay), n_actions, rng)
-    cfg = QCONConfig(net=net, temperature=temperature, gamma=o.gamma, lam=o.lam, replay=replay)
     if kind == "window-Q":
+        cfg = QCONConfig(net=net, temperature=temperature, gamma=o.gamma, lam=o.lam, replay=replay)
         return WindowQ(cfg, n_actions, rng, n_sensation=n_inputs, window=o.window)
-    return QCON(cfg, n_actions, rng)
+    return make_learner(ahc, net, n_actions, rng, temperature=temperature, gamma=o.gamma, lam=o.lam, replay=replay)
 
 
 def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options) -> Agent:

@@ -10,7 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from connrl.agents import AHCON, QCON, AHCONConfig, LinearSchedule, QCONConfig, ReplayConfig
+from connrl.agents import LinearSchedule, ReplayConfig
+from connrl.agents.build import make_learner
 from connrl.core.exploration import TemperatureSchedule
 from connrl.core.params import check_types, param
 from connrl.core.rollout import run_trial
@@ -67,12 +68,9 @@ def make_agent(p: PoleParams, n_inputs: int, rng: np.random.Generator):
     replay = ReplayConfig(capacity=p.capacity, lessons_per_trial=LinearSchedule(p.lessons_per_trial,
                                                                                 p.lessons_per_trial),
                           p_threshold=p.p_threshold, p_threshold_oldest=p.p_threshold_oldest)
-    if p.agent == "qcon":
-        return QCON(QCONConfig(net=net, temperature=temp, gamma=p.gamma, lam=p.lam, online=p.online,
-                               replay=replay), 2, rng)
-    if p.agent == "ahcon":
-        return AHCON(AHCONConfig(v_net=net, policy_net=net, temperature=temp, gamma=p.gamma, lam=p.lam,
-                                 online=p.online, replay=replay), 2, rng)
+    if p.agent in ("qcon", "ahcon"):
+        return make_learner(p.agent == "ahcon", net, 2, rng, temperature=temp, gamma=p.gamma, lam=p.lam,
+                            replay=replay, online=p.online)
     raise ValueError(f"agent must be 'qcon' or 'ahcon', got {p.agent!r}")
 
 
