@@ -36,8 +36,8 @@ MUTANTS = [  # (file, text, mutated text, the tests of its folder)
     ("connrl/report/page.py",
      "    parts += _plain_sections(out, doc, specs, [n for n in specs if n not in covered], covered)\n", "",
      "tests/report"),
-    ("connrl/tasks/robot.py", "gamma=p.gamma, lam=p.lam, online=p.online", "gamma=p.gamma, lam=p.gamma, online=p.online",
-     "tests/tasks"),
+    ("connrl/tasks/robot.py", "gamma=p.gamma, lam=p.lam, online=p.online",
+     "gamma=p.gamma, lam=p.gamma, online=p.online", "tests/tasks"),
     ("connrl/own/settings.py", 'SETTINGS_DIR = Path(__file__).parents[1] / "data" / "hyperparams"',
      'SETTINGS_DIR = Path(__file__).parents[0] / "data" / "hyperparams"', "tests/own"),
 ]
