@@ -3,8 +3,8 @@
 (forward passes, BPTT, batch replay) and the whole-lesson backward replays (Fig. 5.1) that ``connrl.core.replay_kernel``
 and the recurrent net run. Fig. 5.1's step 4, the lambda-return, is written here once for each of its two roundings:
 ``_lambda_target`` (``connrl.core.returns.td_lambda_target`` compiled, to the bit) for the kernels compiled without
-fastmath, ``_lambda_target_fused`` (the form the fastmath OAON replay has always computed) for the OAON replay; no
-replay writes the recursion itself (tests/nets/test_lambda_step.py).
+fastmath, ``_lambda_target_fused`` (the same expression compiled with fastmath, as the OAON replay has always computed
+it) for the OAON replay; no replay writes the recursion itself (tests/nets/test_lambda_step.py).
 
 They share one file because they call one another and Numba inlines what a kernel calls, while ``cache=True``
 keys a compiled kernel on its own source file only: a cached replay kernel in another file went on running the
@@ -540,13 +540,14 @@ def _lambda_target(reward, discount, lam_t, u, e_next, clip, has_clip):
     return clip if has_clip and e > clip else e
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=True)
 def _lambda_target_fused(reward, discount, lam_t, u, e_next, clip, has_clip):
-    """Eq. 5.5 in the form the OAON replay (compiled with fastmath) has always computed it, and its stored results
-    hold: ``(1 - lam) u + lam e'`` rewritten ``u + lam (e' - u)``, and it and the discounted sum each one fused
-    multiply-add (two roundings fewer than ``_lambda_target``; equal to it to within an ulp or two). Written out with
-    explicit FMAs, so it is this form in whatever kernel it lands."""
-    e = _fma(discount, _fma(lam_t, e_next - u, u), reward)
+    """Eq. 5.5 as the OAON replay (compiled with fastmath) has always computed it, and its stored results hold:
+    ``_lambda_target``'s expression compiled with fastmath, which LLVM rewrites ``u + lam (e' - u)`` and turns, with
+    the discounted sum, into two fused multiply-adds (two roundings fewer; equal to the plain step to within an ulp or
+    two; tests/nets/test_lambda_step.py holds it to that form). Declared fastmath itself, so its arithmetic is the
+    same in whatever kernel it lands."""
+    e = reward + discount * ((1.0 - lam_t) * u + lam_t * e_next)
     return clip if has_clip and e > clip else e
 
 
