@@ -38,11 +38,12 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--against", type=Path, default=None, help="compare with the runs stored there; run nothing")
     ap.add_argument("--write", type=Path, default=None, help="paste the summary into this Markdown file's block")
+    ap.add_argument("--block", default="same_numbers", help="the block's name (default same_numbers)")
     args = ap.parse_args()
     if args.against:
         code, text = compare_folders(Path(args.out), args.against)
         if args.write:
-            paste(args.write, "same_numbers", f"python benchmarks/same_numbers.py --out {args.out} --against "
+            paste(args.write, args.block, f"python benchmarks/same_numbers.py --out {args.out} --against "
                   f"{args.against}", text)
         return code
     specs = all_experiments()

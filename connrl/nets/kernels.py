@@ -530,23 +530,23 @@ def _boltzmann_probability(q, a, temperature):
     return pa / s
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _lambda_target(reward, discount, lam_t, u, e_next, clip, has_clip):
     """Eq. 5.5 / Fig. 5.1 step 4 as ``connrl.core.returns.td_lambda_target`` computes it, truncated at ``clip``.
-    Called only from kernels compiled without fastmath: Numba compiles a plain kernel first called from a fastmath
-    one with the caller's flags, so its bits would depend on which kernel a process compiled first (issue 46;
-    tests/nets/test_lambda_step.py)."""
+    Inlined into, and called only from, kernels compiled without fastmath: Numba compiles a plain kernel first called
+    from a fastmath one with the caller's flags, so its bits would depend on which kernel a process compiled first
+    (issue 46; tests/nets/test_lambda_step.py)."""
     e = reward + discount * ((1.0 - lam_t) * u + lam_t * e_next)
     return clip if has_clip and e > clip else e
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, inline="always")
 def _lambda_target_fused(reward, discount, lam_t, u, e_next, clip, has_clip):
     """Eq. 5.5 as the OAON replay (compiled with fastmath) has always computed it, and its stored results hold:
     ``_lambda_target``'s expression compiled with fastmath, which LLVM rewrites ``u + lam (e' - u)`` and turns, with
     the discounted sum, into two fused multiply-adds (two roundings fewer; equal to the plain step to within an ulp or
-    two; tests/nets/test_lambda_step.py holds it to that form). Declared fastmath itself, so its arithmetic is the
-    same in whatever kernel it lands."""
+    two; tests/nets/test_lambda_step.py holds it to that form). Inlined into its callers (``inline="always"``: a
+    called step cost the small nets' replay 3%), which are all compiled with fastmath."""
     e = reward + discount * ((1.0 - lam_t) * u + lam_t * e_next)
     return clip if has_clip and e > clip else e
 
