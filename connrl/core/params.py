@@ -47,7 +47,8 @@ def declared(cls: type, name: str, what: str) -> Any:
 
 
 def run_key(params) -> str:
-    """The run folder's key: a hash of the values that differ from their class's defaults. Declaring a new
+    """The run folder's key: a hash of the values that differ from their class's defaults (a field with a default
+    factory, such as a dict, is always hashed: declare a new parameter with a plain default). Declaring a new
     parameter, with the default that keeps the old behaviour, therefore moves no stored run; a changed default is
     caught by the run records, which store every value (``connrl.experiments.store.check_record``)."""
     changed = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)
@@ -56,8 +57,14 @@ def run_key(params) -> str:
 
 
 def defaults(cls: type) -> dict[str, Any]:
-    """Every field's default (a field with a factory or none is left out)."""
-    return {f.name: f.default for f in dataclasses.fields(cls) if f.default is not dataclasses.MISSING}
+    """Every field's default, a factory's made afresh (a field without one is left out)."""
+    out = {}
+    for f in dataclasses.fields(cls):
+        if f.default is not dataclasses.MISSING:
+            out[f.name] = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            out[f.name] = f.default_factory()
+    return out
 
 
 def field_kinds(field: dataclasses.Field) -> list[str]:

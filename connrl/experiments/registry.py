@@ -17,7 +17,7 @@ def spec_modules() -> tuple:
     found = []
     for info in pkgutil.iter_modules([str(Path(__file__).parent)], "connrl.experiments."):
         module = importlib.import_module(info.name)
-        if hasattr(module, "EXPERIMENTS"):
+        if "EXPERIMENTS" in vars(module):  # its own, not one it imports
             if not isinstance(getattr(module, "CHAPTER", None), int):
                 raise TypeError(f"{info.name} defines EXPERIMENTS but no CHAPTER (the thesis chapter, an int)")
             found.append(module)

@@ -106,16 +106,23 @@ def make_jobs(spec: ExperimentSpec, profile: str, runs: int | None, seed: int, o
 def adopt_earlier_folder(jobs: list[Job]) -> Path | None:
     """Rename to the jobs' run folder an earlier one of the same profile (named by an earlier key: before
     ``run_key``, a hash of every value) whose records all belong to these jobs, so stored runs are reused, not
-    redone; returns the folder adopted (None: none fits, or the folder is there already)."""
+    redone; returns the folder adopted (None: none fits, the folder is there already, or the rename failed: a second
+    runner that lost the race finds the folder there). Only ``connrl run`` / ``reproduce`` adopt, never a reader such
+    as ``connrl results``. A folder whose records hold every field of these jobs' parameters was written under
+    ``run_key`` for other settings, and is left alone."""
     root = Path(jobs[0].path).parents[1]
     if root.exists() or not root.parent.is_dir():
         return None
     profile = root.name.split("-")[0]
+    fields = set(jobs[0].params)
     for old in sorted(d for d in root.parent.glob(f"{profile}-*") if d.is_dir() and not d.is_symlink()):
         found = [load_record(old / Path(j.path).relative_to(root), j) for j in jobs
                  if (old / Path(j.path).relative_to(root)).with_suffix(".json").exists()]
-        if found and all(rec is not None for rec, _ in found):
-            old.rename(root)
+        if found and all(rec is not None and not fields <= set(rec["params"]) for rec, _ in found):
+            try:
+                old.rename(root)
+            except OSError:
+                return None
             return old
     return None
 
@@ -385,8 +392,8 @@ def execute(jobs: list[Job], workers: int, show_progress: bool, title: str, kind
 
 
 def prepare_outputs(folder: Path, jobs: list[Job]) -> None:
-    """Make every folder the runs will write in, before any run (an earlier key's folder of these runs is adopted):
-    a path in the way fails now (``OSError`` naming it), not after the compute."""
+    """Make every folder the runs will write in, before any run (an earlier key's folder of these runs is adopted
+    first): a path in the way fails now (``OSError`` naming it), not after the compute."""
     adopt_earlier_folder(jobs)
     for where in sorted({Path(j.path).parent for j in jobs}):
         try:
@@ -412,7 +419,6 @@ def stored_runs(spec: ExperimentSpec, out: Path, on_damaged=None) -> tuple[dict 
         jobs = make_jobs(spec, summary["profile"], summary["runs_per_variant"], summary["base_seed"], Path(out))
     except ValueError as exc:
         raise DamagedFile(p, f"it does not fit experiment {spec.name}: {exc}") from None
-    adopt_earlier_folder(jobs)
     records = []
     for j in jobs:
         rec, damage = load_record(j.path, j)

@@ -475,7 +475,7 @@ def add_own_task_commands(sub) -> None:
     s.add_argument("--tensorboard", default=None, metavar="DIR", help="also write TensorBoard scalars to DIR "
                    "(pip install 'connrl[tensorboard]')")
     s.add_argument("--hyperparams", default=None, metavar="FILE", help="a settings file (RL Zoo's shape, "
-                   "connrl/settings.py); default: the shipped one for the agent, if it has ENV_ID")
+                   "connrl/own/settings.py); default: the shipped one for the agent, if it has ENV_ID")
     s.add_argument("--env-kwargs", action="append", type=key_value, default=[], metavar="KEY=VALUE",
                    help="an argument of gymnasium.make(ENV_ID, ...), e.g. --env-kwargs is_slippery=false; repeat "
                    "for several")

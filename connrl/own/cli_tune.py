@@ -98,7 +98,7 @@ def add_tune_command(sub) -> None:
     s = sub.add_parser("tune", help="search an agent's settings for a task",
                        formatter_class=_Defaults, description="Search AgentOptions "
                        "for ENV_ID: each trial trains one agent per tuning seed and scores its mean greedy return "
-                       "(connrl/tune.py). Writes OUT/trials.csv, OUT/study.json and OUT/best.yml (a settings file "
+                       "(connrl/own/tune.py). Writes OUT/trials.csv, OUT/study.json and OUT/best.yml (a settings file "
                        "for `connrl train --hyperparams`); the same command resumes an interrupted search.")
     s.add_argument("env_id", help="a Gymnasium environment id")
     s.add_argument("--agent", default="QCON-R", choices=kinds, metavar="AGENT",

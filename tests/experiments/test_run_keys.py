@@ -27,17 +27,22 @@ def test_a_changed_default_is_redone(tmp_path):
 
 
 def test_a_folder_of_an_earlier_key_is_adopted_when_its_records_fit(tmp_path):
-    _run(spec(), tmp_path)
+    """Runs stored before a parameter was declared, in a folder named by an earlier key, are these runs'."""
+    _run(spec(), tmp_path)  # ToyParams's records: no field m
     (folder,) = (tmp_path / "toy" / "runs").iterdir()
-    folder.rename(folder.with_name("tiny-0123456789"))
-    other = _run(spec(), tmp_path, seed=9)  # another seed's runs: the earlier folder is not theirs
-    assert (other.ran, other.reused) == (4, 0)
-    assert sorted(p.name for p in (tmp_path / "toy" / "runs").iterdir())[0] == "tiny-0123456789"
-    for p in (tmp_path / "toy" / "runs").iterdir():
-        if p.name != "tiny-0123456789":
-            for f in sorted(p.rglob("*"), reverse=True):
-                f.unlink() if f.is_file() else f.rmdir()
-            p.rmdir()
-    back = _run(spec(), tmp_path)
-    assert (back.ran, back.reused) == (0, 4)
+    earlier = folder.rename(folder.with_name("tiny-0123456789"))
+    other = _run(grown_spec(), tmp_path, seed=9)  # another seed's runs: the earlier folder is not theirs
+    assert (other.ran, other.reused) == (4, 0) and earlier.exists()
+    (mine,) = [p for p in (tmp_path / "toy" / "runs").iterdir() if p != earlier]
+    assert mine.name == folder.name
+    mine.rename(tmp_path / "elsewhere")  # out of the way: the earlier folder is the only candidate
+    back = _run(grown_spec(), tmp_path)
+    assert (back.ran, back.reused) == (0, 4) and not earlier.exists()
     assert [p.name for p in (tmp_path / "toy" / "runs").iterdir()] == [folder.name]
+
+
+def test_a_folder_written_under_the_current_key_for_other_settings_is_left_alone(tmp_path):
+    _run(grown_spec(ToyParamsGrown(m=4)), tmp_path)  # its records hold every field, m included
+    (theirs,) = (tmp_path / "toy" / "runs").iterdir()
+    mine = _run(grown_spec(ToyParamsGrown(m=5)), tmp_path)
+    assert (mine.ran, mine.reused) == (4, 0) and theirs.exists()
