@@ -42,7 +42,15 @@ def test_a_folder_of_an_earlier_key_is_adopted_when_its_records_fit(tmp_path):
 
 
 def test_a_folder_written_under_the_current_key_for_other_settings_is_left_alone(tmp_path):
-    _run(grown_spec(ToyParamsGrown(m=4)), tmp_path)  # its records hold every field, m included
+    """Two bases that differ only in a value every variant sets: their runs are the same, their folders are not,
+    and the second run must not take the first one's folder away from it."""
+    import dataclasses
+
+    from connrl.experiments.spec import Variant
+
+    variants = (Variant("a", {"n": 5}), Variant("b/c", {"n": 6}))
+    first = dataclasses.replace(grown_spec(ToyParamsGrown(n=7)), variants=variants)
+    _run(first, tmp_path)
     (theirs,) = (tmp_path / "toy" / "runs").iterdir()
-    mine = _run(grown_spec(ToyParamsGrown(m=5)), tmp_path)
-    assert (mine.ran, mine.reused) == (4, 0) and theirs.exists()
+    second = _run(dataclasses.replace(grown_spec(ToyParamsGrown(n=8)), variants=variants), tmp_path)
+    assert (second.ran, second.reused) == (4, 0) and theirs.exists()
