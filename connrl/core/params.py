@@ -51,8 +51,13 @@ def run_key(params) -> str:
     factory, such as a dict, is always hashed: declare a new parameter with a plain default). Declaring a new
     parameter, with the default that keeps the old behaviour, therefore moves no stored run; a changed default is
     caught by the run records, which store every value (``connrl.experiments.store.check_record``)."""
-    changed = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)
-               if f.default is dataclasses.MISSING or getattr(params, f.name) != f.default}
+    return values_key(type(params), as_dict(params))
+
+
+def values_key(cls: type, values: dict[str, Any]) -> str:
+    """``run_key`` of a plain dict of values (entries that are no field of ``cls`` are always hashed)."""
+    plain = {f.name: f.default for f in dataclasses.fields(cls) if f.default is not dataclasses.MISSING}
+    changed = {k: v for k, v in values.items() if k not in plain or v != plain[k]}
     return hashlib.sha256(json.dumps(changed, sort_keys=True, default=str).encode()).hexdigest()[:10]
 
 

@@ -25,6 +25,7 @@ from connrl.core.exploration import boltzmann_probabilities, weighted_boltzmann_
 from connrl.core.lessons import Lesson, pack_lessons
 from connrl.core.replay_kernel import replay_ahc_rotated, replay_oaon, replay_oaon_lessons, replay_rotated
 from connrl.core.returns import lambda_returns, td_lambda_target
+from connrl.nets.kernels import replay_settings
 from connrl.nets.mlp import OAON
 from connrl.nets.rotated import RotatedNet
 
@@ -55,9 +56,8 @@ class ReplayParams:
     @functools.cached_property
     def kernel_settings(self) -> tuple:
         """``(lam, temperature, p_threshold, clip, has_clip)``: the replay as a compiled kernel takes it
-        (``connrl.nets.kernels``; gamma goes per step, in the discounts)."""
-        return (float(self.lam), float(self.temperature), float(self.p_threshold),
-                0.0 if self.clip is None else float(self.clip), self.clip is not None)
+        (``connrl.nets.kernels.replay_settings``)."""
+        return replay_settings(self.lam, self.temperature, self.p_threshold, self.clip)
 
 
 def is_policy_action(merits: np.ndarray, a: int, params: ReplayParams, weights: np.ndarray | None = None) -> bool:

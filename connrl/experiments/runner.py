@@ -16,7 +16,6 @@ same jobs elsewhere.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import multiprocessing as mp
 import os
@@ -73,10 +72,6 @@ def variant_slug(label: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.=-]+", "_", label).strip("_") or "default"
 
 
-def params_hash(params: dict) -> str:
-    return hashlib.sha256(json.dumps(params, sort_keys=True, default=str).encode()).hexdigest()[:10]
-
-
 def remove_stale_temporaries(folder: Path) -> list[Path]:
     """Remove the temporary files (``.NAME.*.tmp``, ``connrl.storage``'s) a killed run left in ``folder``: those of
     the run records and the summary only, which only a run writes, and under the folder's lock, so no live writer's
@@ -116,8 +111,8 @@ def adopt_earlier_folder(jobs: list[Job]) -> Path | None:
     profile = root.name.split("-")[0]
     fields = set(jobs[0].params)
     for old in sorted(d for d in root.parent.glob(f"{profile}-*") if d.is_dir() and not d.is_symlink()):
-        found = [load_record(old / Path(j.path).relative_to(root), j) for j in jobs
-                 if (old / Path(j.path).relative_to(root)).with_suffix(".json").exists()]
+        there = [(old / Path(j.path).relative_to(root), j) for j in jobs]
+        found = [load_record(path, j) for path, j in there if path.with_suffix(".json").exists()]
         if found and all(rec is not None and not fields <= set(rec["params"]) for rec, _ in found):
             try:
                 old.rename(root)

@@ -9,6 +9,7 @@ reported by name with how to rebuild it (``DamagedFile``).
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import json
 import math
@@ -114,9 +115,9 @@ def check_record(rec: object, job=None) -> str | None:
                                                                    ("experiment", "variant"))):
         return "'copy_of' does not name the experiment and variant of the run it copies"
     if job is not None:
-        params = json.loads(json.dumps(job.params, default=json_default))  # as stored: tuples become lists
+        params = _as_stored(job.params)  # as stored: tuples become lists
         # a parameter declared after the record was written is the record's at its default (run_key's contract)
-        stored = {**_as_stored(defaults(load_callable(job.params_type))), **rec["params"]}
+        stored = {**_stored_defaults(job.params_type), **rec["params"]}
         for key, want, have in (("experiment", job.experiment, rec["experiment"]), ("variant", job.variant,
                                  rec["variant"]), ("seed", job.seed, rec["seed"]), ("params", params, stored)):
             if have != want:
@@ -127,6 +128,12 @@ def check_record(rec: object, job=None) -> str | None:
 
 def _as_stored(values: dict) -> dict:
     return json.loads(json.dumps(values, default=json_default))
+
+
+@functools.cache
+def _stored_defaults(params_type: str) -> dict:
+    """The defaults of the parameter class ``module:Name`` as records store them, once per class (read only)."""
+    return _as_stored(defaults(load_callable(params_type)))
 
 
 def _csv_problem(path: Path) -> str | None:

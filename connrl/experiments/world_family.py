@@ -24,10 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
-from connrl.core.params import defaults
+from connrl.core.params import values_key
 from connrl.envs.robot import Layout, RobotSim
 from connrl.experiments.robot import BEFORE_44, RobotParams, first_reaching
-from connrl.experiments.runner import Job, execute, params_hash
+from connrl.experiments.runner import Job, execute
 from connrl.experiments.spec import as_dict, qualified_name
 from connrl.experiments.store import load_record
 from connrl.storage import atomic_write_text, read_json, strict_json
@@ -111,8 +111,7 @@ def _jobs(out: Path, world: dict, seeds, label: str, trials: int, extra: dict | 
     params = as_dict(RobotParams(lessons=0, trials=trials, **world)) | (extra or {})
     if copy:
         params |= {"policy": "copy", "copy_epochs": 200}
-    base = defaults(RobotParams)  # the key hashes what differs from the defaults: a new field moves no folder
-    root = out / "runs" / params_hash({k: v for k, v in params.items() if k not in base or base[k] != v})
+    root = out / "runs" / values_key(RobotParams, params)  # as run_key: a new field moves no folder
     return [Job("world-family", _COPY if copy else _RUN, label, params, s, str(root / f"seed-{s}"),
                 _COPY_PARAMS if copy else _PARAMS) for s in seeds]
 

@@ -486,6 +486,21 @@ def _replay_q_steps(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, 
     return used
 
 
+@numba.njit(cache=True, inline="always")
+def _lesson_rows(k, order, step_start, in_start, thresholds, replay):
+    """Where the k-th lesson replayed, ``order[k]``, lies in lessons stored end to end: ``(i, s0, s1, x0, x1)``, its
+    steps at rows s0:s1 and its states at x0:x1, and the replay's settings at its own P_t ``thresholds[k]``."""
+    i = order[k]
+    s0, s1, x0 = step_start[i], step_start[i + 1], in_start[i]
+    return (i, s0, s1, x0, x0 + (s1 - s0) + 1), (replay[0], replay[1], thresholds[k], replay[3], replay[4])
+
+
+@numba.njit(cache=True, inline="always")
+def _rows(a, lo, hi):
+    """Rows lo:hi of a per-step array, or the 0-row array that stands for none."""
+    return a[lo:hi] if a.shape[0] > 0 else a
+
+
 @numba.njit(cache=True)
 def _replay_q_lessons(net, hyper, q, inputs, actions, rewards, terminated, discounts, in_start, step_start, order,
                       thresholds, replay, weights, allowed):
@@ -496,14 +511,9 @@ def _replay_q_lessons(net, hyper, q, inputs, actions, rewards, terminated, disco
     one call instead of a thousand from Python (issue 45)."""
     used = 0
     for k in range(order.shape[0]):
-        i = order[k]
-        s0, s1, x0 = step_start[i], step_start[i + 1], in_start[i]
-        x1 = x0 + (s1 - s0) + 1
-        w = weights[s0:s1] if weights.shape[0] > 0 else weights
-        m = allowed[x0:x1] if allowed.shape[0] > 0 else allowed
-        at_k = (replay[0], replay[1], thresholds[k], replay[3], replay[4])
+        (i, s0, s1, x0, x1), at_k = _lesson_rows(k, order, step_start, in_start, thresholds, replay)
         used += _replay_q_kernel(net, hyper, q, inputs[x0:x1], actions[s0:s1], rewards[s0:s1], terminated[i],
-                                 discounts[s0:s1], at_k, 0, w, m)
+                                 discounts[s0:s1], at_k, 0, _rows(weights, s0, s1), _rows(allowed, x0, x1))
     return used
 
 
@@ -528,6 +538,12 @@ def _boltzmann_probability(q, a, temperature):
         if k == a:
             pa = e
     return pa / s
+
+
+def replay_settings(lam, temperature, p_threshold, clip) -> tuple:
+    """``(lam, temperature, p_threshold, clip, has_clip)``: a replay's settings as the compiled replays take them
+    (gamma goes per step, in the discounts)."""
+    return float(lam), float(temperature), float(p_threshold), 0.0 if clip is None else float(clip), clip is not None
 
 
 @numba.njit(cache=True, inline="always")
@@ -935,12 +951,7 @@ def _replay_recurrent_lessons(net, hyper, inputs, actions, rewards, terminated, 
     for a trial's replays (issue 45)."""
     used = 0
     for k in range(order.shape[0]):
-        i = order[k]
-        s0, s1, x0 = step_start[i], step_start[i + 1], in_start[i]
-        x1 = x0 + (s1 - s0) + 1
-        w = bweights[s0:s1] if bweights.shape[0] > 0 else bweights
-        m = allowed[x0:x1] if allowed.shape[0] > 0 else allowed
-        at_k = (replay[0], replay[1], thresholds[k], replay[3], replay[4])
+        (i, s0, s1, x0, x1), at_k = _lesson_rows(k, order, step_start, in_start, thresholds, replay)
         used += _replay_recurrent_lesson(net, hyper, inputs[x0:x1], actions[s0:s1], rewards[s0:s1], terminated[i],
-                                         gamma, at_k, w, m)
+                                         gamma, at_k, _rows(bweights, s0, s1), _rows(allowed, x0, x1))
     return used

@@ -58,12 +58,8 @@ from connrl.nets.kernels import (  # noqa: F401 (tests and benchmarks reach the 
     _replay_recurrent_lesson,
     _replay_recurrent_lessons,
     _train_lessons,
+    replay_settings,
 )
-
-
-def _replay_settings(lam, temperature, p_threshold, clip) -> tuple:
-    """``(lam, temperature, p_threshold, clip, has_clip)`` as the compiled replays take them."""
-    return float(lam), float(temperature), float(p_threshold), 0.0 if clip is None else float(clip), clip is not None
 
 
 @dataclass(frozen=True)
@@ -356,9 +352,8 @@ class RecurrentOAON:
         w, ok = _check_choices(weights, allowed, len(actions), self.n_nets)
         self._fresh = False
         return int(_replay_recurrent_lesson(self.kernel_arrays, self.kernel_settings, xs, actions, rewards,
-                                            bool(terminated), float(gamma), _replay_settings(lam, temperature,
-                                                                                             p_threshold, clip),
-                                            w, ok))
+                                            bool(terminated), float(gamma),
+                                            replay_settings(lam, temperature, p_threshold, clip), w, ok))
 
     def replay_q_lessons(self, lessons: list, thresholds: list[float], options, *, gamma: float, lam: float,
                          temperature: float, clip: float | None = None) -> int:
@@ -386,7 +381,7 @@ class RecurrentOAON:
         return int(_replay_recurrent_lessons(
             self.kernel_arrays, self.kernel_settings, p.inputs, p.actions, p.rewards, p.terminated, p.in_start,
             p.step_start, p.order, np.asarray(thresholds, dtype=np.float64), float(gamma),
-            _replay_settings(lam, temperature, 0.0, clip), p.weights, p.allowed))
+            replay_settings(lam, temperature, 0.0, clip), p.weights, p.allowed))
 
     # -- plain-format persistence (NPZ, no pickle)
     def state_dict(self) -> dict[str, np.ndarray]:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from connrl.core.params import allowed_text, declared
+from connrl.core.params import allowed_text, declared, defaults
 from connrl.experiments.spec import ExperimentSpec
 
 
@@ -17,12 +17,6 @@ def _row(cells) -> str:
 
 def _name(cls: type) -> str:
     return f"{cls.__module__}.{cls.__qualname__}"
-
-
-def _default(f: dataclasses.Field) -> str:
-    if f.default is not dataclasses.MISSING:
-        return repr(f.default)
-    return "(required)" if f.default_factory is dataclasses.MISSING else repr(f.default_factory())
 
 
 def experiment_table(spec: ExperimentSpec) -> str:
@@ -52,7 +46,8 @@ def class_tables(specs: dict[str, ExperimentSpec]) -> str:
     for cls, names in sorted(users.items(), key=lambda kv: _name(kv[0])):
         out += [f"## `{_name(cls)}`", "", "Used by: " + ", ".join(f"`{n}`" for n in names) + ".", "",
                 "| parameter | default | allowed | note |", "|---|---|---|---|"]
-        out += [_row((f.name, _default(f),
-                      allowed_text(cls, f), declared(cls, f.name, "note") or "")) for f in dataclasses.fields(cls)]
+        given = defaults(cls)
+        out += [_row((f.name, repr(given[f.name]) if f.name in given else "(required)", allowed_text(cls, f),
+                      declared(cls, f.name, "note") or "")) for f in dataclasses.fields(cls)]
         out.append("")
     return "\n".join(out)
