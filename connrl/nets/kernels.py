@@ -276,47 +276,38 @@ def _value_any(w1, w2, a, x, h, scale, linear):
     return scale * _perceptron_forward(w2, a, x, linear)
 
 
-@numba.njit(cache=True, fastmath=True)
-def _policy_probability(q, a, temperature):
-    """Eq. 3.6 probability of action a (greedy, ties shared, at T = 0)."""
-    m = q.max()
-    if temperature == 0.0:
-        if q[a] < m:
-            return 0.0
-        n = 0
-        for k in range(q.size):
-            if q[k] == m:
-                n += 1
-        return 1.0 / n
-    s = 0.0
-    for k in range(q.size):
-        s += math.exp((q[k] - m) / temperature)
-    return math.exp((q[a] - m) / temperature) / s
-
-
-@numba.njit(cache=True, fastmath=True)
-def _weighted_policy_probability(q, w, row, a, temperature):
-    """Eq. 6.6 probability of choice a under weights w[row] (0 rules a choice out; greedy among the allowed at
-    T = 0). Rows are indexed, not sliced: a view costs a small net's replay more than its sums (issue 45)."""
-    if w[row, a] <= 0.0:
+@numba.njit(cache=True, inline="always")
+def _policy_probability(q, w, row, a, temperature):
+    """The probability of choice a that the non-policy test (3.5.1) compares with P_t: Eq. 3.6, or Eq. 6.6 under the
+    weights w[row] (``w`` with 0 rows: none; a weight of 0 rules a choice out); greedy among the allowed choices at
+    T = 0, ties sharing the mass. Every replay kernel's one Boltzmann probability. Inlined (``inline="always"``), so
+    each caller computes it with its own flags: the fastmath OAON replays as they always have, the plain ones in
+    ``connrl.core.replay.policy_mask``'s order (sums left to right, as NumPy's over fewer than 8 choices). Rows are
+    indexed, not sliced: a view costs a small net's replay more than its sums (issue 45). (The compiled choice,
+    which must draw as ``boltzmann_select`` does, has its own with NumPy's exp: ``connrl.core.boltzmann_kernel``.)"""
+    weighted = w.shape[0] > 0
+    if weighted and w[row, a] <= 0.0:
         return 0.0
-    top = q[a]  # no infinities: fastmath assumes there are none
+    top = q[a]
     for k in range(q.size):
-        if w[row, k] > 0.0 and q[k] > top:
+        if (not weighted or w[row, k] > 0.0) and q[k] > top:
             top = q[k]
     if temperature == 0.0:
-        if q[a] < top:
+        if not q[a] >= top:  # below the top, or NaN
             return 0.0
         n = 0
         for k in range(q.size):
-            if w[row, k] > 0.0 and q[k] == top:
+            if (not weighted or w[row, k] > 0.0) and q[k] == top:
                 n += 1
         return 1.0 / n
     s = 0.0
     for k in range(q.size):
-        if w[row, k] > 0.0:
+        if not weighted:
+            s += math.exp((q[k] - top) / temperature)
+        elif w[row, k] > 0.0:
             s += w[row, k] * math.exp((q[k] - top) / temperature)
-    return w[row, a] * math.exp((q[a] - top) / temperature) / s
+    e = math.exp((q[a] - top) / temperature)
+    return w[row, a] * e / s if weighted else e / s
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -379,10 +370,7 @@ def _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, disc
                     y_a = y
                     for j in range(h.size):
                         h_a[j] = h[j]
-            if weights.shape[0] > 0:
-                next_policy = _weighted_policy_probability(q, weights, t, a, temperature) >= p_threshold
-            else:
-                next_policy = _policy_probability(q, a, temperature) >= p_threshold
+            next_policy = _policy_probability(q, weights, t, a, temperature) >= p_threshold
             if next_policy:
                 _backward_at(w1, w2, d1, d2, a, x, t * n_in, h_a, y_a, e, False, scale, lr, momentum)
         else:
@@ -457,10 +445,7 @@ def _replay_q_steps(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, 
             _values_any(w1, w2, inputs[t], h, scale, q, linear)
             for k in range(q.size):
                 cached[k] = q[k]
-            if weights.shape[0] > 0:
-                next_policy = _weighted_policy_probability(q, weights, t, a, temperature) >= p_threshold
-            else:
-                next_policy = _policy_probability(q, a, temperature) >= p_threshold
+            next_policy = _policy_probability(q, weights, t, a, temperature) >= p_threshold
         else:
             next_policy = True
         if next_policy:
@@ -519,27 +504,6 @@ def _replay_q_lessons(net, hyper, q, inputs, actions, rewards, terminated, disco
 
 # ------------------------------------------ whole-lesson backward replay into a rotated net (4.2.4, Fig. 5.1a)
 
-@numba.njit(cache=True)
-def _boltzmann_probability(q, a, temperature):
-    """Eq. 3.6 probability of action a (greedy, ties shared, at T = 0), in ``boltzmann_probabilities``'s order of
-    operations (no fastmath: (q - max) / T, exp, a left-to-right sum, one division)."""
-    m = q[0]
-    for k in range(1, q.size):
-        m = max(m, q[k])
-    if temperature == 0.0:
-        ties = 0
-        for k in range(q.size):
-            ties += q[k] == m
-        return 1.0 / ties if q[a] == m else 0.0
-    s, pa = 0.0, 0.0
-    for k in range(q.size):
-        e = math.exp((q[k] - m) / temperature)
-        s += e
-        if k == a:
-            pa = e
-    return pa / s
-
-
 def replay_settings(lam, temperature, p_threshold, clip) -> tuple:
     """``(lam, temperature, p_threshold, clip, has_clip)``: a replay's settings as the compiled replays take them
     (gamma goes per step, in the discounts)."""
@@ -568,12 +532,12 @@ def _lambda_target_fused(reward, discount, lam_t, u, e_next, clip, has_clip):
 
 
 @numba.njit(cache=True)
-def _rotated_policy_test(w1, w2, x, perms, scale, q, xr, a, temperature, p_threshold):
-    """3.5.1: is ``a`` a policy action at x (always, with P_t = 0)?"""
+def _rotated_policy_test(w1, w2, x, perms, scale, q, xr, a, temperature, p_threshold, no_weights):
+    """3.5.1: is ``a`` a policy action at x (always, with P_t = 0)? ``no_weights``: a 0-row array (Eq. 3.6)."""
     if p_threshold <= 0.0:
         return True
     _rotated_values(w1, w2, x, perms, scale, q, xr)
-    return _boltzmann_probability(q, a, temperature) >= p_threshold
+    return _policy_probability(q, no_weights, 0, a, temperature) >= p_threshold
 
 
 @numba.njit(cache=True)
@@ -589,6 +553,7 @@ def _replay_rotated_kernel(net, hyper, xr, q, perms, inputs, actions, rewards, t
     used = 0
     e_next = 0.0
     next_policy = False
+    no_weights = np.empty((0, q.size))
     for t in range(n - 1, -1, -1):
         u = 0.0
         if not (t == n - 1 and terminated):
@@ -599,7 +564,8 @@ def _replay_rotated_kernel(net, hyper, xr, q, perms, inputs, actions, rewards, t
         e = _lambda_target(rewards[t], discounts[t], lam if (t < n - 1 and next_policy) else 0.0, u, e_next, clip,
                            has_clip)
         a = actions[t]
-        next_policy = _rotated_policy_test(w1, w2, inputs[t], perms, scale, q, xr, a, temperature, p_threshold)
+        next_policy = _rotated_policy_test(w1, w2, inputs[t], perms, scale, q, xr, a, temperature, p_threshold,
+                                           no_weights)
         if next_policy:
             _rotated_update(w1, w2, d1, d2, inputs[t], perms[a], xr, h, e, False, scale, lr, momentum)
             used += 1
@@ -622,13 +588,15 @@ def _replay_ahc_rotated_kernel(v_net, v_hyper, p_net, p_hyper, xr, q, perms, inp
     used = 0
     e_next = 0.0
     next_policy = False
+    no_weights = np.empty((0, q.size))
     for t in range(n - 1, -1, -1):
         u = 0.0
         if not (t == n - 1 and terminated):
             u = v_scale * _forward_at(vw1, vw2, 0, inputs[t + 1], 0, vh)
         e = _lambda_target(rewards[t], gamma, lam if (t < n - 1 and next_policy) else 0.0, u, e_next, clip, has_clip)
         a = actions[t]
-        next_policy = _rotated_policy_test(pw1, pw2, inputs[t], perms, p_scale, q, xr, a, temperature, p_threshold)
+        next_policy = _rotated_policy_test(pw1, pw2, inputs[t], perms, p_scale, q, xr, a, temperature, p_threshold,
+                                           no_weights)
         if next_policy:
             v_before = _mlp_update(vw1, vw2, vd1, vd2, 0, inputs[t], vh, e, False, v_scale, v_lr, v_momentum)
             _rotated_update(pw1, pw2, pd1, pd2, inputs[t], perms[a], xr, ph, e - v_before, True, p_scale, p_lr,
@@ -856,35 +824,11 @@ def _momentum_step(w, d, g, lr, momentum):
 
 @numba.njit(cache=True, inline="always")
 def _policy_weights(ys, actions, temperature, p_threshold, bweights, weights):
-    """The non-policy test (3.5.1) at every step, into ``weights`` (1 replayed, 0 not): the taken action's probability
-    by Eq. 3.6, or by Eq. 6.6 with each step's W (``bweights`` (n, A); 0 rows: none), against P_t; greedy ties share
-    the mass at T = 0. ``connrl.core.replay.policy_mask``'s arithmetic (its sums run left to right, as NumPy's do
-    over fewer than 8 choices)."""
-    n_a = ys.shape[1]
-    has_w = bweights.shape[0] > 0
+    """The non-policy test (3.5.1) at every step, into ``weights`` (1 replayed, 0 not): the taken action's
+    ``_policy_probability`` (Eq. 6.6 with each step's W in ``bweights`` (n, A); 0 rows: Eq. 3.6) against P_t.
+    ``connrl.core.replay.policy_mask``'s arithmetic."""
     for t in range(actions.shape[0]):
-        m, found = 0.0, False
-        for b in range(n_a):
-            if (not has_w or bweights[t, b] > 0.0) and (not found or ys[t, b, 0] > m):
-                m, found = ys[t, b, 0], True
-        a = actions[t]
-        if temperature == 0.0:
-            ties = 0
-            for b in range(n_a):
-                ties += (not has_w or bweights[t, b] > 0.0) and ys[t, b, 0] == m
-            p = 1.0 / ties if ((not has_w or bweights[t, a] > 0.0) and ys[t, a, 0] == m) else 0.0
-        else:
-            z, ea = 0.0, 0.0
-            for b in range(n_a):
-                e = 0.0
-                if not has_w:
-                    e = math.exp((ys[t, b, 0] - m) / temperature)
-                elif bweights[t, b] > 0.0:
-                    e = bweights[t, b] * math.exp((ys[t, b, 0] - m) / temperature)
-                z += e
-                if b == a:
-                    ea = e
-            p = ea / z
+        p = _policy_probability(ys[t, :, 0], bweights, t, actions[t], temperature)
         weights[t] = 1.0 if p >= p_threshold else 0.0
 
 

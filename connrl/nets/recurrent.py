@@ -47,14 +47,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from connrl.core.lessons import pack_lessons
-from connrl.nets.kernels import (  # noqa: F401 (tests and benchmarks reach the kernels here too)
+from connrl.nets.kernels import (
     _bptt,
     _forward_all,
     _forward_sequence,
-    _hidden,
     _momentum_step,
-    _output,
-    _policy_weights,
     _replay_recurrent_lesson,
     _replay_recurrent_lessons,
     _train_lessons,
