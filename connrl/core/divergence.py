@@ -3,13 +3,15 @@
 Back-propagation with too large a learning rate blows the weights up; with sigmoid outputs the values then
 saturate and the run merely *looks* slow. ``network_problem`` finds any network of an agent (every attribute
 with a ``state_dict()``: OAON, rotated and recurrent nets) whose weights are non-finite or beyond
-``WEIGHT_LIMIT``; the train-and-test loop checks after every training trial and stops the run with
-``Diverged``, which the runner records as diverged at that trial.
+``WEIGHT_LIMIT``; ``DivergenceCheck``, the first callback of every thesis run's training loop, checks after every
+training trial and stops the run with ``Diverged``, which the runner records as diverged at that trial.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from connrl.core.training import Callback
 
 # Full-profile runs of seed 0 stay far below this: max |w| over training 4.1 (pole-full), 14.8 (pole-full-ahc),
 # 27.6 (pole-hidden recurrent-model), 6.3 (cup-task1 recurrent-model), 4.6 / 2.5 (survival AHCON-R / QCON-R),
@@ -42,3 +44,17 @@ def network_problem(agent, limit: float = WEIGHT_LIMIT) -> str | None:
             if big > limit:
                 return f"exploding weights in {name}.{key} (|w| up to {big:.3g} > {limit:g})"
     return None
+
+
+class DivergenceCheck(Callback):
+    """Raises ``Diverged`` after the first training trial that leaves ``learner``'s networks diverged."""
+
+    def __init__(self, learner):
+        self.learner, self.trials = learner, 0
+
+    def on_trial_end(self, agent, stats):
+        self.trials += 1
+        problem = network_problem(self.learner)
+        if problem:
+            raise Diverged(self.trials, problem)
+        return True

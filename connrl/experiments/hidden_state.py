@@ -130,6 +130,7 @@ def run_cup(p: CupParams, rng: np.random.Generator, progress=lambda done, total:
         stats = cup_play.learning_play(train_env, agent, trial=k)
         last.update(train_steps=stats.steps, train_done=stats.terminated, **(getattr(agent, "last_model_error", None)
                                                                               or {}))
+        return stats
 
     def test(n):
         test_env.wasted = 0

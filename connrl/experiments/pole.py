@@ -29,6 +29,7 @@ def train_until_satisfactory(train_env, test_env, agent, max_trials: int, test_s
     def train(k):
         stats = run_trial(train_env, agent, trial=k, learning=True)
         last.update(train_steps=stats.steps, train_failed=stats.terminated)
+        return stats
 
     def test(n):
         ok = satisfactory(test_env, agent, test_steps)

@@ -94,8 +94,10 @@ def run_rooms(p, rng: np.random.Generator, make_env, make_agent, progress=lambda
 
     def train(k):
         nonlocal spent
-        spent += recharge_train.learning_play(env, agent, trial=k).steps
+        stats = recharge_train.learning_play(env, agent, trial=k)
+        spent += stats.steps
         after_trial(env)
+        return stats
 
     train_and_test(p.trials, train, test, test_every=p.test_every, test_first=True, progress=progress, agent=agent)
     last = rows[-3:]

@@ -108,6 +108,7 @@ def robot_run(p: RobotParams, rng: np.random.Generator,
         stats = run.train(k)
         successes += bool(stats.info.get("success"))
         spent += stats.steps
+        return stats
 
     def test(n):
         perf = run.test()

@@ -102,8 +102,7 @@ def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda do
               if hasattr(getattr(planner, "model", None), "probe_errors") else None)
     n_tests = (p.train_plays // p.test_every + 1) if p.test_every else 0
     total = p.train_plays + n_tests * p.test_envs + p.eval_envs
-    done = 0
-    rows, xs, ys, hyp = [], [], [], []
+    done, rows, xs, ys, hyp = 0, [], [], [], []
 
     def do_test(plays):
         nonlocal done
@@ -131,6 +130,7 @@ def run_survival(p: SurvivalParams, rng: np.random.Generator, progress=lambda do
         rows.append(row)
         done += 1
         progress(done, total)
+        return stats
 
     train_and_test(len(train), do_train, do_test, test_every=p.test_every, test_first=bool(n_tests),
                    test_last=False, agent=agent)

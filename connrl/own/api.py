@@ -48,6 +48,7 @@ from connrl.agents.memory import RecurrentQ, RecurrentQConfig, WindowQ, window_i
 from connrl.core.divergence import network_problem
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import MAX_EPISODE_STEPS, episode_cap, run_trial  # noqa: F401  (MAX_EPISODE_STEPS: API)
+from connrl.core.training import as_callback, train
 from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
 from connrl.own.files import (
@@ -240,8 +241,6 @@ class Agent:
         ``MAX_EPISODE_STEPS``), so a task without a time limit is still learnt from. ``callback``: a
         connrl.own.callbacks.Callback (evaluation, checkpoints, a log), a list of them, or ``f(agent, trial_return)``
         after each trial; False from it stops training."""
-        from connrl.own.callbacks import as_callback
-
         env = env if env is not None else self._env
         if env is None:
             raise ValueError("learn() needs the environment: make_agent(env, ...) keeps it, load(path, env) too")
@@ -250,26 +249,27 @@ class Agent:
         cap = episode_cap(env, max_trial_steps)
         callbacks = as_callback(callback)
         self.check_env(env)
-        scaled, end = _Scaled(env, self.scaler), self.steps_done + total_steps
-        callbacks.on_training_start(self, end)
+        scaled = _Scaled(env, self.scaler)
         scaled.on_sizes = self._check_range
-        while self.steps_done < end:
+
+        def play(k, left):
             self._set_learning_rate()  # a trial and its replay learn at the rate of the step it starts at
             try:  # a trial the budget or the cap cuts is a timeout: the learner bootstraps through it
                 stats = run_trial(scaled, self.learner, trial=self.trials_done, learning=True,
-                                  seed=int(self.rng.integers(2**31)), max_steps=min(cap, end - self.steps_done))
+                                  seed=int(self.rng.integers(2**31)), max_steps=min(cap, left))
             except BaseException:  # Ctrl-C inside a trial: its steps were taken; a lesson still being recorded is
-                self.steps_done += scaled.steps  # dropped, so the next learn() starts a trial of its own (one cut in
-                self.learner.book.recorder.discard()  # the replay after it is kept, partly replayed)
+                self.steps_done += scaled.steps  # dropped, so the next learn() starts a trial of its own (one cut
+                self.learner.book.recorder.discard()  # in the replay after it is kept, partly replayed)
                 raise
             self.steps_done += stats.steps
             self.trials_done += 1
             if progress:
                 print(f"\rsteps {self.steps_done}/{end}  trial {self.trials_done}  return {stats.total_reward:.1f}",
                       end="", flush=True)
-            if callbacks.on_trial_end(self, stats) is False:
-                break
-        callbacks.on_training_end(self)
+            return stats
+
+        end = self.steps_done + total_steps
+        train(play, callbacks, agent=self, steps=total_steps)
         if progress:
             print()
         return self

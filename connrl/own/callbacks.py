@@ -4,7 +4,8 @@
     eval_cb = EvalCallback(gym.make("CartPole-v1"), every=5_000, episodes=5, best_path="runs/cp/best", stop_at=475)
     agent.learn(50_000, callback=[ProgressLog("runs/cp/progress.csv"), eval_cb, CheckpointCallback(10_000, "runs/cp")])
 
-connrl's learners change their nets at the end of a trial (replay, 3.5), so every callback runs after a trial:
+The hooks (``Callback``, ``CallbackList``) are ``connrl.core.training``'s, the one loop every thesis run trains
+with too. connrl's learners change their nets at the end of a trial (replay, 3.5), so every callback runs after a trial:
 ``every=N`` means at the first trial end at or past each multiple of N steps (SB3 checks after any step). A callback
 returning False from ``on_trial_end`` stops training. A plain function ``f(agent, trial_return)`` still works.
 Evaluation is greedy (T = 0) on its own environment and seeds (``eval_seed`` on), so it never moves the learner's
@@ -21,65 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
+from connrl.core.training import Callback, CallbackList, as_callback  # noqa: F401 (the hooks' home)
 from connrl.storage import atomic_write_text
 
 # progress.csv's columns: one row per training trial; the eval_* cells are filled on trials that ended an evaluation
 LOG_COLUMNS = ("steps", "trial", "return", "length", "temperature", "seconds", "eval_mean", "eval_std", "eval_min")
-
-
-class Callback:
-    """Hooks of ``Agent.learn``; subclasses override what they need."""
-
-    def on_training_start(self, agent, total_steps: int) -> None:
-        """Before the first trial; ``total_steps`` is the step count training stops at."""
-
-    def on_trial_end(self, agent, stats) -> bool | None:
-        """After each training trial (``stats``: connrl.core.rollout.TrialStats); False stops training."""
-        return True
-
-    def on_training_end(self, agent) -> None:
-        """After the last trial, also when a callback stopped training."""
-
-
-class _Function(Callback):
-    def __init__(self, fn):
-        self.fn = fn
-
-    def on_trial_end(self, agent, stats):
-        return self.fn(agent, stats.total_reward)
-
-
-class CallbackList(Callback):
-    """Several callbacks in order; training stops when any returns False (the later ones still run)."""
-
-    def __init__(self, callbacks):
-        self.callbacks = [as_callback(c) for c in callbacks]
-
-    def on_training_start(self, agent, total_steps):
-        for c in self.callbacks:
-            c.on_training_start(agent, total_steps)
-
-    def on_trial_end(self, agent, stats):
-        go = [c.on_trial_end(agent, stats) is not False for c in self.callbacks]
-        return all(go)
-
-    def on_training_end(self, agent):
-        for c in self.callbacks:
-            c.on_training_end(agent)
-
-
-def as_callback(callback) -> Callback:
-    """A Callback from None, a Callback, a function ``f(agent, trial_return)`` or a list of these."""
-    if callback is None:
-        return Callback()
-    if isinstance(callback, Callback):
-        return callback
-    if isinstance(callback, (list, tuple)):
-        return CallbackList(callback)
-    if callable(callback):
-        return _Function(callback)
-    raise ValueError(f"callback must be a connrl.own.callbacks.Callback, a function (agent, trial_return) or a list of "
-                     f"them, got {type(callback).__name__}")
 
 
 def _trial_temperature(agent) -> float:

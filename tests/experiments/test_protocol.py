@@ -1,5 +1,7 @@
 """The train-and-test loop every experiment shares: the exact order of training trials, tests and progress."""
 
+from types import SimpleNamespace
+
 import pytest
 
 from connrl.experiments.protocol import train_and_test
@@ -11,6 +13,7 @@ def record(trials, *, results=None, **kw):
 
     def train(k):
         log.append(("train", k))
+        return SimpleNamespace(steps=1, total_reward=0.0)
 
     def test(n):
         log.append(("test", n))

@@ -134,7 +134,7 @@ def test_bad_callback_settings_are_one_line(make, message):
 
 def test_a_callback_of_another_kind_is_refused_before_training():
     agent = connrl.make_agent(gym.make("CartPole-v1"), "QCON-R", seed=0, hidden=4)
-    with pytest.raises(ValueError, match="callback must be a connrl.own.callbacks.Callback"):
+    with pytest.raises(ValueError, match="callback must be a connrl Callback"):
         agent.learn(100, callback=42)
     assert agent.steps_done == 0
 
