@@ -40,6 +40,22 @@ MUTANTS = [  # (file, text, mutated text, the tests of its folder)
      "gamma=p.gamma, lam=p.gamma, online=p.online", "tests/tasks"),
     ("connrl/own/settings.py", 'SETTINGS_DIR = Path(__file__).parents[1] / "data" / "hyperparams"',
      'SETTINGS_DIR = Path(__file__).parents[0] / "data" / "hyperparams"', "tests/own"),
+    (K, "                n += 1\n        return 1.0 / n", "                n += 1\n        return 1.0", "tests/nets"),
+    (K, "            s += w[row, k] * math.exp((q[k] - top) / temperature)",
+     "            s += math.exp((q[k] - top) / temperature)", "tests/nets"),
+    ("connrl/core/training.py", "        if callbacks.on_trial_end(agent, stats) is False:\n            break",
+     "        if callbacks.on_trial_end(agent, stats) is False:\n            pass", "tests/core"),
+    ("connrl/core/training.py", "stats = play(k, None if steps is None else steps - done)", "stats = play(k, None)",
+     "tests/core"),
+    ("connrl/core/divergence.py", "raise Diverged(self.trials, problem)", "raise Diverged(self.trials - 1, problem)",
+     "tests/core"),
+    ("connrl/core/boltzmann_kernel.py", "p[k] = w[k] * p[k] if w[k] > 0 else 0.0", "p[k] = p[k] if w[k] > 0 else 0.0",
+     "tests/core"),
+    (X + "protocol.py", "(self.last and n == self.trials)", "(n == self.trials)", "tests/experiments"),
+    ("connrl/tasks/recharge_play.py", "goal = docked if b == 0 else (b == 1 and not collided and moved)",
+     "goal = docked if b == 0 else (b == 1 and not collided)", "tests/tasks"),
+    ("connrl/tasks/recharge_play.py", "obs[48:72], obs[72:76], obs[76:84] = dk[0:48], dp[24:48], dk[48:52]",
+     "obs[48:72], obs[72:76], obs[76:84] = dk[0:48], dp[0:24], dk[48:52]", "tests/tasks"),
 ]
 
 

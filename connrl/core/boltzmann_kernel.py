@@ -81,16 +81,23 @@ def _nanmax(q, n):
 
 
 @numba.njit(cache=False)
-def _boltzmann_probabilities(q, temperature, p, scratch):
-    """p[:] = ``boltzmann_probabilities(q, temperature)`` for ``temperature > 0`` and ``q.size < 8`` (NaN merits:
-    all NaN)."""
+def _probabilities(q, w, temperature, p, scratch):
+    """p[:] = ``boltzmann_probabilities(q, temperature)`` (``w`` empty) or ``weighted_boltzmann_probabilities(q, w,
+    temperature)`` (Eq. 6.6: a weight of 0 rules a choice out), as NumPy computes them, for ``temperature > 0`` and
+    ``q.size < 8``. A NaN merit (among the allowed) makes every entry NaN. The compiled choice's one probability."""
     n = q.size
-    top = _nanmax(q, n)
+    weighted = w.size > 0
+    top, seen = 0.0, False
+    for k in range(n):  # q.max(), or q[w > 0].max(): a NaN propagates
+        if (not weighted or w[k] > 0) and (not seen or q[k] > top or q[k] != q[k]) and top == top:
+            top, seen = q[k], True
     for k in range(n):
         p[k] = (q[k] - top) / temperature
     _numpy_exp(p, p, scratch)
     total = 0.0
-    for k in range(n):
+    for k in range(n):  # weighted: np.where(w > 0, w * exp, 0.0); summed by NumPy's plain loop
+        if weighted:
+            p[k] = w[k] * p[k] if w[k] > 0 else 0.0
         total += p[k]
     for k in range(n):
         p[k] /= total
@@ -100,7 +107,7 @@ def _boltzmann_probabilities(q, temperature, p, scratch):
 def _boltzmann_choice(q, temperature, rng, p, scratch):
     """``boltzmann_select(q, temperature, rng)`` for ``temperature > 0`` and ``q.size < 8``: returns the action, p
     its probabilities. NaN merits give action 0, as ``searchsorted`` of the NaN distribution does."""
-    _boltzmann_probabilities(q, temperature, p, scratch)
+    _probabilities(q, q[:0], temperature, p, scratch)
     u = rng.random() * 1.0
     acc = 0.0
     for k in range(q.size):  # searchsorted(cumsum, u, "right"): the first sum above u (a NaN sorts above everything)
@@ -117,19 +124,8 @@ def _weighted_choice(q, w, temperature, rng, p, scratch):
     sum divided by its last element and the first entry above one uniform draw. Returns the choice, or -1 without a
     draw where ``p`` holds a NaN (``rng.choice`` refuses it: "Probabilities contain NaN")."""
     n = q.size
-    top, seen = 0.0, False
-    for k in range(n):  # q[w > 0].max(): a NaN propagates
-        if w[k] > 0 and (not seen or q[k] > top or q[k] != q[k]) and top == top:
-            top, seen = q[k], True
+    _probabilities(q, w, temperature, p, scratch)
     for k in range(n):
-        p[k] = (q[k] - top) / temperature
-    _numpy_exp(p, p, scratch)
-    total = 0.0
-    for k in range(n):  # np.where(w > 0, w * exp, 0.0), summed by NumPy's plain loop
-        p[k] = w[k] * p[k] if w[k] > 0 else 0.0
-        total += p[k]
-    for k in range(n):
-        p[k] /= total
         if p[k] != p[k]:
             return -1
     last = 0.0

@@ -231,6 +231,12 @@ class RecurrentOAON:
         c = self.config
         return c.feedback, c.decay, self.scale, self.lr, c.momentum
 
+    @property
+    def play_arrays(self) -> tuple:
+        """``(w1, w2, scale, feedback, context, h_all, y)``: what a compiled play reads of the net, and the context
+        (and the last forward pass's activations) it moves on."""
+        return self.w1, self.w2, self.scale, self.config.feedback, self.context, self._h_all, self._y
+
     # -- online (one step at a time)
     def reset(self) -> None:
         """Zero the context units (start of a trial, 7.4)."""

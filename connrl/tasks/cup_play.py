@@ -115,10 +115,9 @@ def _play(env, agent, obs, learning: bool):
         qn, m = agent.q, agent.model
         qnet = (qn.w1, qn.w2, qn.d1, qn.d2, qn.scale, qn.lr, qn.config.momentum, qn.config.linear_output)
         agent._xq = np.empty(len(obs) + m.config.n_context)  # the last choice's Q-net input
-        steps, total, terminated = _model_loop(qnet, (m.w1, m.w2, m.scale, m.config.feedback, m.context, m._h_all,
-                                                      m._y), (learning and agent.config.online, agent.config.gamma, t),
-                                               spec, cups, cell, record, agent.rng, world.np_random, q, p, scratch,
-                                               agent._xq)
+        learner = (learning and agent.config.online, agent.config.gamma, t)
+        steps, total, terminated = _model_loop(qnet, m.play_arrays, learner, spec, cups, cell, record, agent.rng,
+                                               world.np_random, q, p, scratch, agent._xq)
     elif window:
         qn, now, last, last_obs = agent.q, np.array(obs, dtype=np.float64), np.array([-1]), np.empty(len(obs))
         qnet = (qn.w1, qn.w2, qn.d1, qn.d2, qn.scale, qn.lr, qn.config.momentum, qn.config.linear_output)
@@ -130,10 +129,8 @@ def _play(env, agent, obs, learning: bool):
                                                 world.np_random, q, p, scratch)
         agent._last_obs, agent._last_action = last_obs, None if last[0] < 0 else int(last[0])
     else:
-        n = agent.net
-        steps, total, terminated = _recurrent_loop((n.w1, n.w2, n.scale, n.config.feedback, n.context, n._h_all,
-                                                    n._y), t, spec, cups, cell, record, agent.rng, world.np_random,
-                                                   q, p, scratch)
+        steps, total, terminated = _recurrent_loop(agent.net.play_arrays, t, spec, cups, cell, record, agent.rng,
+                                                   world.np_random, q, p, scratch)
     world.position, world._collision, world._steps = int(cell[0]), int(cell[1]), int(cell[2])
     world.cups, world._done = frozenset(np.flatnonzero(cups).tolist()), True
     if world is not env:

@@ -125,42 +125,104 @@ def _chg_step(pose, a, rng, collision, segs, kinds, lights, control_noise, senso
     return collided, docked, success_reward if docked else (collision_penalty if collided else 0.0)
 
 
+def _world(world: RechargeEnv) -> tuple:
+    """What the loops read of the world: the simulator's surfaces and settings, the rooms, the sensors' settings, the
+    reinforcement and the time limit (last)."""
+    sim, layout = world.sim, world.layout
+    room_bits = np.array([ROOMS.index(r) if r in ROOMS else -1 for r in layout.rooms], dtype=np.int64)
+    return (sim._segs, sim._kinds, np.array(sim._light, dtype=np.float64), room_table(layout), room_bits,
+            np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
+            sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, world.binary_low, world.xy_scale,
+            world.dock_tolerance, world.success_reward, world.collision_penalty, world.max_steps)
+
+
+def _state(obs, info, world: RechargeEnv) -> tuple:
+    """The loops' world state from a reset: the learner's input, DK's, DP's and wall following's observations (as
+    the world hands them out), the pose, the collision bits and the poses visited."""
+    tasks = info["task_obs"]
+    state = (np.array(obs, dtype=np.float32), *(np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL")),
+             np.array(world.sim.pose, dtype=np.float64), np.zeros(4, dtype=np.uint8),
+             np.empty((world.max_steps + 1, 3)))
+    state[6][0] = state[4]
+    return state
+
+
 @numba.njit(cache=False)
-def _play_loop(qw1, qw2, qscale, qlinear, w1s, w2s, scales, linears, thresholds, obs, dk, dp, wf, applicable, pose,
-               collision, trace, rng, segs, kinds, lights, rooms, room_bits, size, control_noise, sensor_noise,
-               step_scale, partial, sonar_radius, edge_jump, edge_both, low, xy_scale, dock_tolerance, success_reward,
-               collision_penalty, max_steps, x, q, acted):
-    """The play from the world's state on (module docstring), until it docks or times out. Returns (steps, total
-    reward, docked, collided steps, the last behaviour, the last primitive action); the arrays end as the world and
-    learner leave them (``x``, ``q``, ``acted``: the last input the learner acted on, its values and the applicability
-    its choice read)."""
-    h = np.empty(max(qw1.shape[1], max(w1s[0].shape[1], w1s[1].shape[1], w1s[2].shape[1], w1s[3].shape[1]), 1))
-    xdk, xdp, xwf = np.empty(dk.size), np.empty(dp.size), np.empty(wf.size)
-    qdk, qdp, qwf, feat = np.empty(w2s[0].shape[0]), np.empty(w2s[1].shape[0]), np.empty(w2s[2].shape[0]), np.zeros(4)
-    ranges, sonar = np.empty(N_RAYS), np.empty(N_RAYS)
-    light, door = np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8)
-    top = np.empty(16, dtype=np.float32)
-    steps, total, hits, prim = 0, 0.0, 0, -1
-    _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)  # as reset's
+def _senses():
+    """The arrays ``_world_step`` fills: side features, ranges, sonar, light, door edges, the 16 high-level units."""
+    return (np.zeros(4), np.empty(N_RAYS), np.empty(N_RAYS), np.empty(N_RAYS, dtype=np.uint8),
+            np.empty(N_RAYS, dtype=np.uint8), np.empty(16, dtype=np.float32))
+
+
+@numba.njit(cache=False)
+def _world_step(a, world, state, rng, senses):
+    """``RechargeEnv.step`` for primitive ``a`` (``_chg_step``), the pose visited and the new observations: DK's,
+    DP's and wall following's into ``state``, the high-level units into ``senses``' last. Returns (collided, docked,
+    reward, whether the robot changed rooms)."""
+    (segs, kinds, lights, rooms, room_bits, size, control_noise, sensor_noise, step_scale, partial, sonar_radius,
+     edge_jump, edge_both, low, xy_scale, dock_tolerance, success_reward, collision_penalty, _) = world
+    _, dk, dp, wf, pose, collision, _ = state
+    feat, ranges, sonar, light, door, top = senses
+    before = _room(pose[0], pose[1], rooms)
+    collided, docked, reward = _chg_step(pose, a, rng, collision, segs, kinds, lights, control_noise, sensor_noise,
+                                         step_scale, partial, sonar_radius, edge_jump, edge_both, dock_tolerance,
+                                         success_reward, collision_penalty, ranges, sonar, light, door)
+    room = _room(pose[0], pose[1], rooms)
+    _observe(pose, room, collision, sonar, sonar_radius, light, door, low, xy_scale, size, room_bits, dk, dp, wf, top,
+             feat)
+    return collided, docked, reward, room != before
+
+
+@numba.njit(cache=False)
+def _scan_arrays(lib, dk, dp, wf, n_hidden):
+    """The arrays ``_behaviour_step`` fills (``_senses``' last), DK's and DP's values in the first state computed (as
+    reset's)."""
+    w1s, w2s, scales, linears, thresholds = lib
+    h = np.empty(max(n_hidden, w1s[0].shape[1], w1s[1].shape[1], w1s[2].shape[1], w1s[3].shape[1], 1))
+    scan = (np.empty(4, dtype=np.bool_), np.empty(dk.size), np.empty(dp.size), np.empty(wf.size), h,
+            np.empty(w2s[0].shape[0]), np.empty(w2s[1].shape[0]), np.empty(w2s[2].shape[0]), _senses())
+    _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, scan[1], scan[2], h, scan[5], scan[6], scan[0])
+    return scan
+
+
+@numba.njit(cache=False)
+def _behaviour_step(b, lib, world, state, rng, scan):
+    """``BehaviourEnv.step(b)`` after its checks: the behaviour's greedy primitive, the world's step and the new
+    state's observations and applicability (``scan[0]``). Returns (primitive, docked, reward, the behaviour's goal
+    reached: DK docked, DP into another room without a collision, whether it collided)."""
+    w1s, w2s, scales, linears, thresholds = lib
+    obs, dk, dp, wf, _, _, _ = state
+    applicable, xdk, xdp, xwf, h, qdk, qdp, qwf, senses = scan
+    if b >= 2:
+        _values_any(w1s[b], w2s[b], _as_input(wf, xwf), h, scales[b], qwf, linears[b])
+    prim = _first_max(qdk if b == 0 else qdp if b == 1 else qwf)
+    collided, docked, reward, moved = _world_step(prim, world, state, rng, senses)
+    top = senses[5]
+    for k in range(obs.size):
+        obs[k] = top[k]
+    _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)
+    goal = docked if b == 0 else (b == 1 and not collided and moved)
+    return prim, docked, reward, goal, collided
+
+
+@numba.njit(cache=False)
+def _play_loop(qnet, lib, world, state, rng, x, q, acted):
+    """The play from the world's state on (module docstring), until it docks or times out: ``qnet`` is the learner's
+    OAON ``(w1, w2, scale, linear)``, ``lib`` ``library_arrays``', ``world`` ``_world``'s, ``state`` ``_state``'s.
+    Returns (steps, total reward, docked, collided steps, the last behaviour, the last primitive action); the arrays
+    end as the world and learner leave them (``x``, ``q``, ``acted``: the last input the learner acted on, its values
+    and the applicability its choice read)."""
+    qw1, qw2, qscale, qlinear = qnet
+    scan = _scan_arrays(lib, state[1], state[2], state[3], qw1.shape[1])
+    applicable, h, pose, trace = scan[0], scan[4], state[4], state[6]
+    steps, total, hits, max_steps = 0, 0.0, 0, world[-1]
     while True:
         # BehaviourQCON.act(greedy=True): the first best applicable behaviour (Eq. 6.6 at T = 0)
-        _values_any(qw1, qw2, _as_input(obs, x), h, qscale, q, qlinear)
+        _values_any(qw1, qw2, _as_input(state[0], x), h, qscale, q, qlinear)
         b = _greedy_applicable(q, applicable, acted)
-        # BehaviourEnv.step: the behaviour's greedy primitive, the world's step
-        if b >= 2:
-            _values_any(w1s[b], w2s[b], _as_input(wf, xwf), h, scales[b], qwf, linears[b])
-        prim = _first_max(qdk if b == 0 else qdp if b == 1 else qwf)
-        collided, docked, reward = _chg_step(pose, prim, rng, collision, segs, kinds, lights, control_noise,
-                                             sensor_noise, step_scale, partial, sonar_radius, edge_jump, edge_both,
-                                             dock_tolerance, success_reward, collision_penalty, ranges, sonar, light,
-                                             door)
+        prim, docked, reward, _, collided = _behaviour_step(b, lib, world, state, rng, scan)
         steps += 1
         trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
-        _observe(pose, _room(pose[0], pose[1], rooms), collision, sonar, sonar_radius, light, door, low, xy_scale,
-                 size, room_bits, dk, dp, wf, top, feat)
-        for k in range(obs.size):
-            obs[k] = top[k]
-        _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)
         total += reward
         hits += collided
         if docked or steps >= max_steps:
@@ -198,26 +260,12 @@ def greedy_play(env: BehaviourEnv, agent: BehaviourQCON, seed: int, start) -> tu
     collision."""
     obs, info = env.reset(seed=seed, options={"start": start})
     agent.begin_trial(obs, info, trial=0, learning=False)
-    world, sim = env.world, env.world.sim
-    tasks = info["task_obs"]
-    obs = np.array(obs, dtype=np.float32)
-    dk, dp, wf = (np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL"))
-    applicable = np.array(info["applicable"], dtype=np.bool_)
-    pose = np.array(sim.pose, dtype=np.float64)
-    trace = np.empty((world.max_steps + 1, 3))
-    trace[0] = pose
-    collision = np.zeros(4, dtype=np.uint8)
-    layout = world.layout
-    rooms = room_table(layout)
-    room_bits = np.array([ROOMS.index(r) if r in ROOMS else -1 for r in layout.rooms], dtype=np.int64)
-    x, q, acted = np.empty(obs.size), np.empty(agent.q.n_nets), np.empty(4, dtype=np.bool_)
-    steps, total, docked, hits, _, prim = _play_loop(
-        agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output,
-        *library_arrays(env), obs, dk, dp, wf, applicable, pose, collision, trace, sim.rng, sim._segs, sim._kinds,
-        np.array(sim._light, dtype=np.float64), rooms, room_bits,
-        np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
-        sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, world.binary_low, world.xy_scale,
-        world.dock_tolerance, world.success_reward, world.collision_penalty, world.max_steps, x, q, acted)
+    state = _state(obs, info, env.world)
+    x, q, acted = np.empty(len(obs)), np.empty(agent.q.n_nets), np.empty(4, dtype=np.bool_)
+    qnet = (agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output)
+    steps, total, docked, hits, _, prim = _play_loop(qnet, library_arrays(env), _world(env.world), state,
+                                                     env.world.sim.rng, x, q, acted)
+    _, dk, dp, wf, pose, collision, trace = state
     _leave(env, agent, steps, pose, collision, prim, trace, dk, dp, wf, x, q, acted)
     info = {"success": bool(docked)}
     return TrialStats(steps, total, bool(docked), not docked, info), hits
@@ -244,29 +292,22 @@ def _leave(env, agent, steps, pose, collision, prim, trace, dk, dp, wf, x, q, ac
 # ------------------------------------------------------------------ Exp. 1: QCON over primitives on the flat input
 
 @numba.njit(cache=False)
-def _flat_loop(qw1, qw2, qscale, qlinear, obs, dk, dp, wf, pose, collision, trace, rng, segs, kinds, lights, rooms,
-               room_bits, size, control_noise, sensor_noise, step_scale, partial, sonar_radius, edge_jump, edge_both,
-               low, xy_scale, dock_tolerance, success_reward, collision_penalty, max_steps, x, q):
+def _flat_loop(qnet, world, state, rng, x, q):
     """Exp. 1's test play (6.6.1): the learner's greedy primitive on the flat input, the world's step, the flat
     input again (``RechargeEnv._observe``: DK's sonar and light, DP's door edges, the collision bits, wall following's
-    parallelism and clearance bits, then the high-level units). Returns (steps, total reward, docked, collided steps,
-    the last action)."""
-    h = np.empty(max(qw1.shape[1], 1))
-    ranges, sonar = np.empty(N_RAYS), np.empty(N_RAYS)
-    light, door = np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8)
-    top, feat = np.empty(16, dtype=np.float32), np.zeros(4)
-    steps, total, hits = 0, 0.0, 0
+    parallelism and clearance bits, then the high-level units). Arguments as ``_play_loop``'s; returns (steps, total
+    reward, docked, collided steps, the last action)."""
+    qw1, qw2, qscale, qlinear = qnet
+    obs, dk, dp, wf, pose, _, trace = state
+    h, senses = np.empty(max(qw1.shape[1], 1)), _senses()
+    top = senses[5]
+    steps, total, hits, max_steps = 0, 0.0, 0, world[-1]
     while True:
         _values_any(qw1, qw2, _as_input(obs, x), h, qscale, q, qlinear)
         a = _greedy_choice(q)
-        collided, docked, reward = _chg_step(pose, a, rng, collision, segs, kinds, lights, control_noise,
-                                             sensor_noise, step_scale, partial, sonar_radius, edge_jump, edge_both,
-                                             dock_tolerance, success_reward, collision_penalty, ranges, sonar, light,
-                                             door)
+        collided, docked, reward, _ = _world_step(a, world, state, rng, senses)
         steps += 1
         trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
-        _observe(pose, _room(pose[0], pose[1], rooms), collision, sonar, sonar_radius, light, door, low, xy_scale,
-                 size, room_bits, dk, dp, wf, top, feat)
         obs[0:48], obs[48:72], obs[72:76], obs[76:84] = dk[0:48], dp[24:48], dk[48:52], wf[28:36]
         for k in range(84, obs.size):
             obs[k] = top[k - 84]
@@ -291,21 +332,11 @@ def greedy_play_flat(env: RechargeEnv, agent, seed: int, start) -> tuple[TrialSt
     collision."""
     obs, info = env.reset(seed=seed, options={"start": start})
     agent.begin_trial(obs, info, trial=0, learning=False)
-    sim, layout, tasks = env.sim, env.layout, info["task_obs"]
-    obs = np.array(obs, dtype=np.float32)
-    dk, dp, wf = (np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL"))
-    pose = np.array(sim.pose, dtype=np.float64)
-    trace = np.empty((env.max_steps + 1, 3))
-    trace[0] = pose
-    collision = np.zeros(4, dtype=np.uint8)
-    room_bits = np.array([ROOMS.index(r) if r in ROOMS else -1 for r in layout.rooms], dtype=np.int64)
-    x, q = np.empty(obs.size), np.empty(agent.q.n_nets)
-    steps, total, docked, hits, a = _flat_loop(
-        agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output, obs, dk, dp, wf, pose, collision, trace,
-        sim.rng, sim._segs, sim._kinds, np.array(sim._light, dtype=np.float64), room_table(layout), room_bits,
-        np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
-        sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, env.binary_low, env.xy_scale,
-        env.dock_tolerance, env.success_reward, env.collision_penalty, env.max_steps, x, q)
+    state = _state(obs, info, env)
+    x, q = np.empty(len(obs)), np.empty(agent.q.n_nets)
+    qnet = (agent.q.w1, agent.q.w2, agent.q.scale, agent.q.config.linear_output)
+    steps, total, docked, hits, a = _flat_loop(qnet, _world(env), state, env.sim.rng, x, q)
+    _, _, _, _, pose, collision, trace = state
     leave(env, pose, collision, a, steps, trace)
     agent._x, agent.last_probabilities = x, boltzmann_probabilities(q, 0.0)
     agent.end_trial()

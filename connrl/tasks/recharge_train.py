@@ -26,18 +26,17 @@ from connrl.agents.base import Exploration, methods_replaced
 from connrl.agents.behaviour_level import BehaviourChoice, BehaviourQCON, BehaviourRecurrentQ
 from connrl.core.boltzmann_kernel import _weighted_choice, weighted_choice_fits
 from connrl.core.rollout import TrialStats, run_trial
-from connrl.envs.robot.constants import N_RAYS
-from connrl.envs.robot.recharge import BEHAVIOUR_TASKS, ROOMS
-from connrl.envs.robot.step import _room, leave, room_table
+from connrl.envs.robot.recharge import BEHAVIOUR_TASKS
+from connrl.envs.robot.step import leave
 from connrl.nets import OAON
 from connrl.nets.kernels import _forward_all, _values_any
 from connrl.nets.recurrent import RecurrentOAON
 from connrl.tasks.recharge_play import (
-    _applicable,
-    _chg_step,
-    _first_max,
+    _behaviour_step,
     _greedy_applicable,
-    _observe,
+    _scan_arrays,
+    _state,
+    _world,
     compiled_world,
     library_arrays,
 )
@@ -86,14 +85,13 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
         net, c = agent.q, agent.config
         learner = (c.online, c.gamma, 0.0 if c.target_clip is None else c.target_clip, c.target_clip is not None,
                    net.scale, net.lr, net.config.momentum, net.config.linear_output)
-        steps, total, docked, b, prim = _qcon_loop(net.w1, net.w2, net.d1, net.d2, learner, rule, library_arrays(env),
-                                                   _world(env), state, record, agent.rng, world.sim.rng, q, p,
-                                                   np.empty(n), scratch)
+        steps, total, docked, b, prim = _qcon_loop((net.w1, net.w2, net.d1, net.d2), learner, rule,
+                                                   library_arrays(env), _world(world), state, record, agent.rng,
+                                                   world.sim.rng, q, p, np.empty(n), scratch)
     else:
-        net = agent.net
-        steps, total, docked, b, prim = _recurrent_loop(net.w1, net.w2, net.scale, net.config.feedback, net.context,
-                                                        net._h_all, net._y, rule, library_arrays(env), _world(env),
-                                                        state, record, agent.rng, world.sim.rng, q, p, scratch)
+        steps, total, docked, b, prim = _recurrent_loop(agent.net.play_arrays, rule, library_arrays(env),
+                                                        _world(world), state, record, agent.rng, world.sim.rng, q, p,
+                                                        scratch)
     if steps < 0:
         raise ValueError("Probabilities contain NaN")  # as Generator.choice refuses Eq. 6.6's NaN distribution
     _, dk, dp, wf, pose, collision, trace = state
@@ -134,9 +132,8 @@ def greedy_play(env, agent, seed: int, start) -> tuple[TrialStats, int]:
     inputs, acted = np.empty((world.max_steps + 1, len(obs))), np.empty(len(BEHAVIOUR_TASKS), dtype=np.bool_)
     inputs[0] = agent._x
     q = np.empty(len(BEHAVIOUR_TASKS))
-    steps, total, docked, hits, prim = _greedy_loop(net.w1, net.w2, net.scale, net.config.feedback, net.context,
-                                                    net._h_all, net._y, library_arrays(env), _world(env), state, inputs,
-                                                    world.sim.rng, q, acted)
+    steps, total, docked, hits, prim = _greedy_loop(net.play_arrays, library_arrays(env), _world(world), state,
+                                                    inputs, world.sim.rng, q, acted)
     _, dk, dp, wf, pose, collision, trace = state
     leave(world, pose, collision, prim, steps, trace)
     env._task_obs = {"DK": dk, "DP": dp, "WFL": wf, "WFR": wf.copy()}
@@ -145,29 +142,6 @@ def greedy_play(env, agent, seed: int, start) -> tuple[TrialStats, int]:
     agent.last_probabilities = best / best.sum()
     agent.end_trial()
     return TrialStats(steps, total, bool(docked), not docked, {"success": bool(docked)}), hits
-
-
-def _state(obs, info, world) -> tuple:
-    """The loops' world state from a reset: the high-level input, DK's, DP's and wall following's observations (as
-    the world hands them out), the pose, the collision bits and the poses visited."""
-    tasks = info["task_obs"]
-    state = (np.array(obs, dtype=np.float32), *(np.array(tasks[t], dtype=np.float32) for t in ("DK", "DP", "WFL")),
-             np.array(world.sim.pose, dtype=np.float64), np.zeros(4, dtype=np.uint8),
-             np.empty((world.max_steps + 1, 3)))
-    state[6][0] = state[4]
-    return state
-
-
-def _world(env) -> tuple:
-    """What ``_behaviour_step`` reads of the world: the simulator's surfaces and settings, the rooms, the sensors'
-    settings, the reinforcement and the time limit."""
-    world = env.world
-    sim, layout = world.sim, world.layout
-    room_bits = np.array([ROOMS.index(r) if r in ROOMS else -1 for r in layout.rooms], dtype=np.int64)
-    return (sim._segs, sim._kinds, np.array(sim._light, dtype=np.float64), room_table(layout), room_bits,
-            np.array(layout.size, dtype=np.float64), sim.control_noise, sim.sensor_noise, sim.step_scale,
-            sim.partial_moves, sim.sonar_radius, sim.edge_jump, sim.edge_both, world.binary_low, world.xy_scale,
-            world.dock_tolerance, world.success_reward, world.collision_penalty, world.max_steps)
 
 
 @numba.njit(cache=False)
@@ -186,50 +160,11 @@ def _choice_weights(applicable, was, active, goal, persistence, persist, w):
 
 
 @numba.njit(cache=False)
-def _behaviour_step(b, lib, world, state, rng, scan):
-    """``BehaviourEnv.step(b)`` after its checks: the behaviour's greedy primitive, the world's step and the new
-    state's observations and applicability (``scan[0]``). Returns (primitive, docked, reward, the behaviour's goal
-    reached: DK docked, DP into another room without a collision, whether it collided)."""
-    w1s, w2s, scales, linears, thresholds = lib
-    (segs, kinds, lights, rooms, room_bits, size, control_noise, sensor_noise, step_scale, partial, sonar_radius,
-     edge_jump, edge_both, low, xy_scale, dock_tolerance, success_reward, collision_penalty, _) = world
-    obs, dk, dp, wf, pose, collision, _ = state
-    applicable, xdk, xdp, xwf, h, qdk, qdp, qwf, feat, ranges, sonar, light, door, top = scan
-    if b >= 2:
-        _values_any(w1s[b], w2s[b], _as_input(wf, xwf), h, scales[b], qwf, linears[b])
-    prim = _first_max(qdk if b == 0 else qdp if b == 1 else qwf)
-    before = _room(pose[0], pose[1], rooms)
-    collided, docked, reward = _chg_step(pose, prim, rng, collision, segs, kinds, lights, control_noise, sensor_noise,
-                                         step_scale, partial, sonar_radius, edge_jump, edge_both, dock_tolerance,
-                                         success_reward, collision_penalty, ranges, sonar, light, door)
-    room = _room(pose[0], pose[1], rooms)
-    _observe(pose, room, collision, sonar, sonar_radius, light, door, low, xy_scale, size, room_bits, dk, dp, wf, top,
-             feat)
-    for k in range(obs.size):
-        obs[k] = top[k]
-    _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)
-    goal = docked if b == 0 else (b == 1 and not collided and room != before)
-    return prim, docked, reward, goal, collided
-
-
-@numba.njit(cache=False)
-def _scan_arrays(lib, dk, dp, wf, n_hidden):
-    """The arrays ``_behaviour_step`` fills, DK's and DP's values in the first state computed (as reset's)."""
-    w1s, w2s, scales, linears, thresholds = lib
-    h = np.empty(max(n_hidden, w1s[0].shape[1], w1s[1].shape[1], w1s[2].shape[1], w1s[3].shape[1], 1))
-    scan = (np.empty(4, dtype=np.bool_), np.empty(dk.size), np.empty(dp.size), np.empty(wf.size), h,
-            np.empty(w2s[0].shape[0]), np.empty(w2s[1].shape[0]), np.empty(w2s[2].shape[0]), np.zeros(4),
-            np.empty(N_RAYS), np.empty(N_RAYS), np.empty(N_RAYS, dtype=np.uint8), np.empty(N_RAYS, dtype=np.uint8),
-            np.empty(16, dtype=np.float32))
-    _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, scan[1], scan[2], h, scan[5], scan[6], scan[0])
-    return scan
-
-
-@numba.njit(cache=False)
-def _qcon_loop(w1, w2, d1, d2, learner, rule, lib, world, state, record, agent_rng, rng, q, p, qn, scratch):
+def _qcon_loop(net, learner, rule, lib, world, state, record, agent_rng, rng, q, p, qn, scratch):
     """Ch. 6's ``BehaviourQCON`` over the trial: its act and observe (Fig. 3.4 with Eq. 6.6's choice) around the
     world's step, until docked or the time limit. Returns (steps, total reward, docked, the last behaviour, its
     primitive), steps -1 where a choice met NaN values; ``q``: the last choice's values, ``p`` its distribution."""
+    w1, w2, d1, d2 = net
     online, gamma, clip, has_clip, scale, lr, momentum, linear = learner
     persistence, persist, applicable_max, t = rule
     inputs, actions, rewards, weights, applicables = record
@@ -262,10 +197,11 @@ def _qcon_loop(w1, w2, d1, d2, learner, rule, lib, world, state, record, agent_r
 
 
 @numba.njit(cache=False)
-def _recurrent_loop(w1, w2, scale, feedback, context, h_all, y, rule, lib, world, state, record, agent_rng, rng, q, p,
-                    scratch):
+def _recurrent_loop(net, rule, lib, world, state, record, agent_rng, rng, q, p, scratch):
     """Ch. 8's ``BehaviourRecurrentQ`` over the trial: values at the context, Eq. 6.6's choice, the chosen net's
-    hidden units as the next context (7.4), the world's step; no on-line learning (8.3). Returns as ``_qcon_loop``."""
+    hidden units as the next context (7.4), the world's step; no on-line learning (8.3). Returns as ``_qcon_loop``.
+    ``net``: ``RecurrentOAON.play_arrays``."""
+    w1, w2, scale, feedback, context, h_all, y = net
     persistence, persist, _, t = rule
     inputs, actions, rewards, weights, applicables = record
     scan = _scan_arrays(lib, state[1], state[2], state[3], 0)
@@ -298,9 +234,10 @@ def _recurrent_loop(w1, w2, scale, feedback, context, h_all, y, rule, lib, world
 
 
 @numba.njit(cache=False)
-def _greedy_loop(w1, w2, scale, feedback, context, h_all, y, lib, world, state, inputs, rng, q, acted):
+def _greedy_loop(net, lib, world, state, inputs, rng, q, acted):
     """``greedy_play``'s trial: returns (steps, total reward, docked, collided steps, the last primitive); ``q`` and
-    ``acted``: the last choice's values and the applicability it read."""
+    ``acted``: the last choice's values and the applicability it read; ``net``: ``RecurrentOAON.play_arrays``."""
+    w1, w2, scale, feedback, context, h_all, y = net
     scan = _scan_arrays(lib, state[1], state[2], state[3], 0)
     applicable, pose, trace = scan[0], state[4], state[6]
     steps, total, hits, max_steps = 0, 0.0, 0, world[-1]

@@ -62,13 +62,15 @@ def learning_play(env, agent, *, trial: int, seed: int | None = None, options: d
     for i, p in enumerate(d._pos if d is not None else []):
         history[i] = p
     count = np.array([len(d._pos) if d is not None else 0])
-    stuck = (d is not None, window, d.config.radius if d is not None else 0.0, d.config.boost if d is not None else 1.0)
+    stuck = (d is not None, window, d.config.radius if d is not None else 0.0, d.config.boost if d is not None else 1.0,
+             history, count)
     learner = (agent.explore.base, agent.merit_scale, c.online, c.gamma, 0.0 if c.target_clip is None else
                c.target_clip, c.target_clip is not None, q.scale, q.lr, q.config.momentum, q.config.linear_output)
     p = np.empty(agent.n_actions)
+    state = (pose, trace, sweep, env._feat, env._feat_true)
     steps, total, success, a, collided, rel = _learning_loop(
-        q.w1, q.w2, q.d1, q.d2, learner, stuck, history, count, agent.rng, robot_world(env), pose, trace, sim.rng,
-        sweep, env._feat, env._feat_true, inputs, actions, rewards, np.empty(agent.n_actions), p, np.zeros(5, np.int64))
+        (q.w1, q.w2, q.d1, q.d2), learner, stuck, agent.rng, robot_world(env), state, (inputs, actions, rewards),
+        sim.rng, np.empty(agent.n_actions), p, np.zeros(5, np.int64))
     leave_sweep(env, pose, sweep, a, steps, trace)
     agent.took_compiled_trial(inputs[:steps + 1], actions[:steps], rewards[:steps], success, p)
     if d is not None:
@@ -130,14 +132,17 @@ def _stuck_factor(x, y, history, count, window, radius, boost):
 
 
 @numba.njit(cache=False)
-def _learning_loop(w1, w2, d1, d2, learner, stuck, history, count, agent_rng, world, pose, trace, rng, sweep, feat,
-                   feat_true, inputs, actions, rewards, q, p, scratch):
+def _learning_loop(net, learner, stuck, agent_rng, world, state, record, rng, q, p, scratch):
     """The trial from ``inputs[0]`` on: QCON's act and observe (Fig. 3.4) around the world's step, until success or
     the time limit. Returns (steps, total reward, success, the last action, whether it collided, the contact's
     direction); the experiences are left in ``inputs``/``actions``/``rewards``, the last choice's distribution in
-    ``p``."""
+    ``p``. ``net`` is the OAON's ``(w1, w2, d1, d2)``, ``stuck`` the detector's settings and its history of
+    positions, ``state`` the world's pose, poses visited and sensor arrays, ``record`` the trial's experiences."""
+    w1, w2, d1, d2 = net
     base, merit_scale, online, gamma, clip, has_clip, scale, lr, momentum, linear = learner
-    detect, window, radius, boost = stuck
+    detect, window, radius, boost, history, count = stuck
+    pose, trace, sweep, feat, feat_true = state
+    inputs, actions, rewards = record
     h = np.empty(max(w1.shape[1], 1))
     env_max_steps = world[-1]
     steps, total = 0, 0.0

@@ -26,7 +26,7 @@ import functools
 import numba
 import numpy as np
 
-from connrl.core.boltzmann_kernel import _boltzmann_probabilities, _nanmax
+from connrl.core.boltzmann_kernel import _nanmax, _probabilities
 from connrl.core.planning import RelaxationPlanner
 from connrl.envs.survival.world import N_INPUTS
 from connrl.nets.kernels import _forward_at, _mlp_update, _mlp_values, _rotated_update, _rotated_values
@@ -162,7 +162,7 @@ def _plan(net, v, ahcon, x, q, t, gamma, clip, has_clip, world, planning, bufs):
     planning[5][0] += 1
     if not planning[0]:
         return False
-    _boltzmann_probabilities(q, t, p, scratch)
+    _probabilities(q, q[:0], t, p, scratch)
     n = 0
     for k in range(q.size):  # step 3: the promising actions
         if p[k] > planning[1]:
