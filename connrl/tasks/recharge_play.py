@@ -211,18 +211,36 @@ def _play_loop(qnet, lib, world, state, rng, x, q, acted):
     OAON ``(w1, w2, scale, linear)``, ``lib`` ``library_arrays``', ``world`` ``_world``'s, ``state`` ``_state``'s.
     Returns (steps, total reward, docked, collided steps, the last behaviour, the last primitive action); the arrays
     end as the world and learner leave them (``x``, ``q``, ``acted``: the last input the learner acted on, its values
-    and the applicability its choice read)."""
+    and the applicability its choice read). The behaviour's step is written out here rather than called
+    (``_behaviour_step``): called, it cost this loop 5-10% (docs/PERFORMANCE.md, issue 46's last round)."""
     qw1, qw2, qscale, qlinear = qnet
-    scan = _scan_arrays(lib, state[1], state[2], state[3], qw1.shape[1])
-    applicable, h, pose, trace = scan[0], scan[4], state[4], state[6]
-    steps, total, hits, max_steps = 0, 0.0, 0, world[-1]
+    w1s, w2s, scales, linears, thresholds = lib
+    (segs, kinds, lights, rooms, room_bits, size, control_noise, sensor_noise, step_scale, partial, sonar_radius,
+     edge_jump, edge_both, low, xy_scale, dock_tolerance, success_reward, collision_penalty, max_steps) = world
+    obs, dk, dp, wf, pose, collision, trace = state
+    scan = _scan_arrays(lib, dk, dp, wf, qw1.shape[1])
+    applicable, xdk, xdp, xwf, h, qdk, qdp, qwf, senses = scan
+    feat, ranges, sonar, light, door, top = senses
+    steps, total, hits, prim = 0, 0.0, 0, -1
     while True:
         # BehaviourQCON.act(greedy=True): the first best applicable behaviour (Eq. 6.6 at T = 0)
-        _values_any(qw1, qw2, _as_input(state[0], x), h, qscale, q, qlinear)
+        _values_any(qw1, qw2, _as_input(obs, x), h, qscale, q, qlinear)
         b = _greedy_applicable(q, applicable, acted)
-        prim, docked, reward, _, collided = _behaviour_step(b, lib, world, state, rng, scan)
+        if b >= 2:
+            _values_any(w1s[b], w2s[b], _as_input(wf, xwf), h, scales[b], qwf, linears[b])
+        # BehaviourEnv.step: the behaviour's greedy primitive, the world's step
+        prim = _first_max(qdk if b == 0 else qdp if b == 1 else qwf)
+        collided, docked, reward = _chg_step(pose, prim, rng, collision, segs, kinds, lights, control_noise,
+                                             sensor_noise, step_scale, partial, sonar_radius, edge_jump, edge_both,
+                                             dock_tolerance, success_reward, collision_penalty, ranges, sonar, light,
+                                             door)
         steps += 1
         trace[steps, 0], trace[steps, 1], trace[steps, 2] = pose[0], pose[1], pose[2]
+        _observe(pose, _room(pose[0], pose[1], rooms), collision, sonar, sonar_radius, light, door, low, xy_scale,
+                 size, room_bits, dk, dp, wf, top, feat)
+        for k in range(obs.size):
+            obs[k] = top[k]
+        _applicable(w1s, w2s, scales, linears, thresholds, dk, dp, xdk, xdp, h, qdk, qdp, applicable)
         total += reward
         hits += collided
         if docked or steps >= max_steps:
