@@ -74,7 +74,12 @@ def main() -> int:
         print(f"{'MOVED' if diff else 'same '} {job.experiment}: {job.variant} seed {job.seed} "
               f"({rec['wall_time_s']:.1f} s now, {old['wall_time_s']:.1f} s stored)"
               + (f": {', '.join(diff)} differ" if diff else ""), flush=True)
-    print(f"{len(todo) - moved} of {len(todo)} runs gave the stored numbers bit for bit")
+    summary = f"{len(todo) - moved} of {len(todo)} runs gave the stored numbers bit for bit"
+    print(summary)
+    if args.write:
+        only = f" --only {args.only}" if args.only else ""
+        paste(args.write, args.block, f"python benchmarks/same_numbers.py --out {args.out} --per-experiment "
+              f"{args.per_experiment}{only}", summary)
     shutil.rmtree(scratch, ignore_errors=True)
     return 1 if moved else 0
 
