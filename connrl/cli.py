@@ -11,6 +11,7 @@ from pathlib import Path
 from connrl.cli_world import add_world_family_command
 from connrl.experiments.spec import PROFILES
 from connrl.own.cli import _positive_int, _seed, _writable, add_own_task_commands
+from connrl.own.cli_evaluate import add_evaluate_command
 from connrl.own.cli_tune import add_tune_command
 
 
@@ -200,14 +201,12 @@ def _print_summary(summary: dict) -> None:
 def cmd_plot(args) -> int:
     from connrl.report.plots import plot_from_disk
 
-    if (Path(args.name) / "progress.csv").exists():  # a `connrl train` folder: its training log
-        from connrl.own.cli import plot_training
-
-        try:
-            print(plot_training(Path(args.name)))
-        except (ValueError, OSError) as exc:
-            raise SystemExit(f"connrl: {exc}") from None
-        return 0
+    if any((Path(n) / "progress.csv").exists() for n in args.name):  # `connrl train` folders: their training logs
+        return _plot_training(args.name, args.to)
+    if len(args.name) > 1:
+        raise SystemExit("connrl: several names are `connrl train` folders, each holding a progress.csv; an "
+                         "experiment is plotted one at a time")
+    args.name = args.name[0]
     from connrl.experiments.registry import all_experiments
 
     if args.name not in all_experiments() and (Path(args.name).is_dir() or os.sep in args.name):
@@ -224,6 +223,23 @@ def cmd_plot(args) -> int:
         raise SystemExit(f"connrl: the plot could not be written: {exc}") from None
     for p in paths:
         print(p)
+    return 0
+
+
+def _plot_training(folders: list[str], to: str | None) -> int:
+    from connrl.own.plots import plot_training, write_runs_curve
+
+    missing = [f for f in folders if not (Path(f) / "progress.csv").exists()]
+    if missing:
+        raise SystemExit(f"connrl: {', '.join(missing)} holds no progress.csv (a `connrl train` folder has one)")
+    try:
+        if len(folders) == 1 and to is None:
+            print(plot_training(Path(folders[0])))
+        else:
+            out = Path(to) if to else Path(os.path.commonpath([Path(f).resolve() for f in folders])) / "curves.png"
+            print(write_runs_curve([Path(f) for f in folders], out))
+    except (ValueError, OSError) as exc:
+        raise SystemExit(f"connrl: {exc}") from None
     return 0
 
 
@@ -339,6 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_params_command(sub)
     _add_tool_commands(sub)
     add_own_task_commands(sub)
+    add_evaluate_command(sub)
     add_tune_command(sub)
     add_world_family_command(sub, _executor_options, _check_executor)
     return p
@@ -405,10 +422,13 @@ def _add_experiment_commands(sub) -> None:
     s.set_defaults(func=cmd_reproduce)
 
     s = sub.add_parser("plot", help="redraw an experiment's or a trained agent's plot", description="Redraw "
-                       "OUT/NAME/curve.png and .svg from the stored runs of the latest `connrl run NAME`, or, given "
-                       "the folder of a `connrl train` run, its curve.png from its progress.csv.")
-    s.add_argument("name", help="experiment name, or a `connrl train` folder")
+                       "OUT/NAME/curve.png and .svg from the stored runs of the latest `connrl run NAME`; given the "
+                       "folder of a `connrl train` run, its curve.png from its progress.csv; given several, their "
+                       "curves side by side with their mean and spread by steps (curves.png in their common folder, "
+                       "or --to FILE).")
+    s.add_argument("name", nargs="+", help="experiment name, or one or more `connrl train` folders")
     s.add_argument("--out", default="runs", help="output directory of the run (default ./runs)")
+    s.add_argument("--to", default=None, metavar="FILE", help="where the curves of `connrl train` folders go")
     s.set_defaults(func=cmd_plot)
 
     s = sub.add_parser("show", help="print an experiment's summary table", description="Print the table of "

@@ -46,6 +46,7 @@ from connrl.agents import LinearSchedule, QCONConfig, ReplayConfig
 from connrl.agents.build import make_learner
 from connrl.agents.memory import RecurrentQ, RecurrentQConfig, WindowQ, window_input_size
 from connrl.core.divergence import network_problem
+from connrl.core.exploration import boltzmann_select
 from connrl.core.lessons import Lesson
 from connrl.core.rollout import MAX_EPISODE_STEPS, episode_cap, run_trial  # noqa: F401  (MAX_EPISODE_STEPS: API)
 from connrl.core.training import as_callback, train
@@ -53,6 +54,7 @@ from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
 from connrl.own.files import (
     check_arrays,
+    check_evaluation,
     read_agent,
     read_taught,
     record_lessons,
@@ -67,6 +69,7 @@ from connrl.own.spaces import (
     flatten,
     space_from,
     space_json,
+    split_batch,
 )
 from connrl.own.value_scale import PROVISIONAL, range_for, rescale, reward_sizes
 from connrl.storage import FileError
@@ -195,6 +198,8 @@ class Agent:
         self.observation_space, self.action_space = observation_space, action_space
         self.env_id, self.seed = env_id, seed
         self.rng = np.random.default_rng(seed)
+        self._predict_rng, self._history = None, False  # predict()'s own draws; its memory agents' history begun
+        self.evaluation = None  # its latest greedy evaluation, as EvalCallback records it: saved and loaded with it
         self.steps_done, self.trials_done = 0, 0
         self._env = None  # the environment make_agent / load was given: learn() trains in it by default
         self._range_warned = False
@@ -269,6 +274,7 @@ class Agent:
             return stats
 
         end = self.steps_done + total_steps
+        self._history = False  # training begins trials of its own: predict's next call begins a history anew
         train(play, callbacks, agent=self, steps=total_steps)
         if progress:
             print()
@@ -281,6 +287,7 @@ class Agent:
         cap = episode_cap(env, max_episode_steps)
         self.check_env(env)
         scaled = _Scaled(env, self.scaler)  # the learner's own greedy trial (T = 0, no random draws, nothing learnt)
+        self._history = False
         return [run_trial(scaled, self.learner, trial=self.trials_done, learning=False, seed=seed + k,
                           max_steps=cap).total_reward for k in range(episodes)]
 
@@ -315,14 +322,42 @@ class Agent:
                           "(make_agent(..., value_range=...) or connrl train --option value_range=...)", RuntimeWarning,
                           stacklevel=3)
 
-    def predict(self, obs) -> int:
-        """The greedy action (T = 0) for a raw observation (memoryless agents: window-Q and recurrent-Q act on a
-        history, which ``evaluate`` keeps)."""
+    def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        """Stable-Baselines3's ``predict``: ``(action, state)`` for one observation, or for a batch of them (a vector
+        env's, one first axis over its environments), so SB3's ``evaluate_policy`` and RL Zoo's scripts run a connrl
+        agent. ``deterministic`` (the default, where SB3's is False: a trained policy is the greedy one here) gives
+        the greedy action (T = 0, the first of equal values); False draws from Eq. 3.4 at the temperature the
+        schedule gives at the agent's step (``temperature``), with a generator of its own (the learner's random
+        stream never moves). Memoryless agents hand ``state`` back as given. Window-Q and recurrent-Q keep their
+        history in the agent, for one environment: a true ``episode_start``, the first call, and the first call
+        after ``learn`` or ``evaluate`` begin a new one; they act greedily only."""
+        batch = split_batch(self.observation_space, observation)
+        observations = [observation] if batch is None else batch
         if self.kind in MEMORY_KINDS:
-            raise ValueError(f"{self.kind} acts on a history, not one observation: use connrl.evaluate(agent, env)")
+            if len(observations) != 1 or not deterministic:
+                raise ValueError(f"{self.kind} keeps one history in the agent: predict one environment's observation "
+                                 "at a time, greedily (deterministic=True)")
+            start = not self._history or (episode_start is not None and bool(np.asarray(episode_start).ravel()[0]))
+            actions = [self._history_action(observations[0], start)]
+        else:
+            actions = [self._action(o, deterministic) for o in observations]
+        return (np.array(actions[0]) if batch is None else np.array(actions)), state
+
+    def _action(self, obs, deterministic: bool) -> int:
         x = self.scaler.encode(obs)
         merits = self.learner.policy.values(x) if self.kind.startswith("AHCON") else self.learner.q.values(x)
-        return int(np.argmax(merits))
+        if deterministic:
+            return int(np.argmax(merits))
+        if self._predict_rng is None:
+            self._predict_rng = np.random.default_rng(None if self.seed is None else [self.seed, 1])
+        return boltzmann_select(merits, self.temperature(self.trials_done), self._predict_rng)[0]
+
+    def _history_action(self, obs, start: bool) -> int:
+        x = self.scaler.encode(obs)
+        if start:
+            self.learner.begin_trial(x, None, trial=self.trials_done, learning=False)
+            self._history = True
+        return int(self.learner.act(x, None, greedy=True))
 
     def divergence(self) -> str | None:
         """What shows that learning diverged (non-finite weights, or weights beyond connrl.core.divergence's limit,
@@ -347,7 +382,8 @@ class Agent:
             "action_space": space_json(self.action_space), "options": asdict(self.options),
             "scaler": self.scaler.to_json(), "value_range": self.value_range, "range_set": self.range_set,
             "seed": self.seed,
-            "steps_done": self.steps_done, "trials_done": self.trials_done, "rng": self.rng.bit_generator.state},
+            "steps_done": self.steps_done, "trials_done": self.trials_done, "rng": self.rng.bit_generator.state,
+            **({"evaluation": self.evaluation} if self.evaluation is not None else {})},
             self.nets.state_dict(), memory.lessons if memory is not None else [], self.learner.book.taught)
         return path
 
@@ -452,6 +488,7 @@ def load(path, env=None) -> Agent:
     except (ValueError, TypeError, KeyError, OverflowError) as exc:
         raise FileError(meta, f"is not a NumPy {type(agent.rng.bit_generator).__name__} state ({exc})", "rng") from None
     agent.steps_done, agent.trials_done = int(m["steps_done"]), int(m["trials_done"])
+    agent.evaluation = check_evaluation(meta, m.get("evaluation"), agent.steps_done)
     agent._set_learning_rate()  # the schedule's rate at the saved step, as learn() would set it
     if env is not None:
         try:

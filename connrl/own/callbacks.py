@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import math
+import shutil
 import time
 from pathlib import Path
 
@@ -63,7 +65,9 @@ class _Every:
 class EvalCallback(Callback):
     """Greedy evaluation every ``every`` steps on ``eval_env`` (``episodes`` episodes, seeds ``eval_seed`` on;
     keep them apart from the seeds you report); keeps the best agent in ``best_path`` (when given) and stops
-    training once the mean return reaches ``stop_at`` (when given). ``results`` holds (steps, mean, std, min)."""
+    training once the mean return reaches ``stop_at`` (when given). ``results`` holds (steps, mean, std, min); the
+    agent's ``evaluation`` the latest, saved with it (so ``connrl.load`` of the best says what it scored). A best
+    agent that cannot be written (a full disk) stops training, the error kept in ``save_error``."""
 
     def __init__(self, eval_env, every: int = 10_000, episodes: int = 5, eval_seed: int = 1_000_000,
                  best_path=None, stop_at: float | None = None, max_episode_steps: int | None = None,
@@ -79,6 +83,7 @@ class EvalCallback(Callback):
         self.results: list[tuple[int, float, float, float]] = []
         self.best_mean = -math.inf
         self.last: tuple[int, float, float, float] | None = None  # the latest evaluation
+        self.save_error: OSError | None = None  # why the best agent could not be kept, if it could not
 
     def on_training_start(self, agent, total_steps):
         agent.check_env(self.env)
@@ -100,10 +105,16 @@ class EvalCallback(Callback):
         self.last = (agent.steps_done, float(returns.mean()), float(returns.std()), float(returns.min()))
         self.results.append(self.last)
         new_best = self.last[1] > self.best_mean
+        agent.evaluation = {"steps": self.last[0], "mean": self.last[1], "std": self.last[2], "min": self.last[3],
+                            "episodes": self.episodes, "eval_seed": self.eval_seed, "best": new_best}
         if new_best:
             self.best_mean = self.last[1]
             if self.best_path is not None and not agent.divergence():
-                agent.save(self.best_path)
+                try:
+                    agent.save(self.best_path)
+                except OSError as exc:  # a full disk: training stops, and save_error says why
+                    self.save_error = exc
+                    return False
         if self.verbose:
             print(f"\neval at step {agent.steps_done}: mean return {self.last[1]:.2f} +- {self.last[2]:.2f}"
                   + (" (new best)" if new_best else ""), flush=True)
@@ -112,11 +123,14 @@ class EvalCallback(Callback):
 
 class CheckpointCallback(Callback):
     """Save the agent in ``path`` every ``every`` steps (one folder, replaced atomically: the latest checkpoint
-    survives a crash in the middle of the next; ``connrl.load(path)`` resumes it). A diverged agent is not saved,
-    and stops training."""
+    survives a crash in the middle of the next; ``connrl.load(path)`` resumes it); with ``keep`` N > 0 the last N
+    checkpoints are kept too, numbered (``keep_numbered``). A diverged agent is not saved, and stops training."""
 
-    def __init__(self, every: int, path):
+    def __init__(self, every: int, path, keep: int = 0):
         self.every, self.path = _Every(_check_every("every", every)), Path(path)
+        if isinstance(keep, bool) or not isinstance(keep, int) or keep < 0:
+            raise ValueError(f"keep must be a whole number of checkpoints >= 0, got {keep!r}")
+        self.keep = keep
 
     def on_training_start(self, agent, total_steps):
         self.every.start(agent.steps_done)
@@ -127,23 +141,41 @@ class CheckpointCallback(Callback):
         if agent.divergence():
             return False
         agent.save(self.path)
+        keep_numbered(agent, self.path, self.keep)
         return True
+
+
+def keep_numbered(agent, path, keep: int) -> None:
+    """Save ``agent`` also as ``path/checkpoints/step-<steps>`` and remove all but the ``keep`` latest such copies
+    (SB3's numbered checkpoints); nothing with ``keep`` 0."""
+    if not keep:
+        return
+    folder = Path(path) / "checkpoints"
+    agent.save(folder / f"step-{agent.steps_done:011d}")  # 11 digits: any step count up to MAX_STEPS sorts
+    for old in sorted(folder.glob("step-*"))[:-keep]:
+        shutil.rmtree(old, ignore_errors=True)
 
 
 class ProgressLog(Callback):
     """progress.csv (``LOG_COLUMNS``): one row per training trial, the evaluation of ``eval_callback`` (when given)
-    on the trial that ran it. Rewritten atomically every ``flush_every`` seconds and at the end, so a crash loses at
-    most that much; a resumed run (``resume=True``) keeps the rows up to the agent's step count and appends."""
+    on the trial that ran it; beside it ``monitor.csv``, the same trials in SB3's Monitor format (a JSON header line,
+    then ``r,l,t``: return, length, seconds since the start), which RL Zoo's plotting scripts and SB3's
+    ``load_results`` read. Rewritten atomically every ``flush_every`` seconds and at the end, so a crash loses at most
+    that much; a resumed run (``resume=True``) keeps the rows up to the agent's step count and appends."""
 
     def __init__(self, path, eval_callback: EvalCallback | None = None, resume: bool = False,
                  flush_every: float = 10.0):
         self.path, self.eval = Path(path), eval_callback
         self.rows: list[dict] = read_progress(self.path) if resume and self.path.exists() else []
         self.flush_every, self._flushed, self._t0 = flush_every, 0.0, 0.0
+        self.monitor_path = self.path.with_name("monitor.csv")
+        self._header = {"t_start": round(time.time(), 3), "env_id": ""}
 
-    def on_training_start(self, agent, total_steps):
+    def on_training_start(self, agent, total):
         self.rows = [r for r in self.rows if r["steps"] <= agent.steps_done]  # rows past the checkpoint are redone
-        self._t0 = time.perf_counter() - (self.rows[-1]["seconds"] if self.rows else 0.0)
+        before = self.rows[-1]["seconds"] if self.rows else 0.0
+        self._t0 = time.perf_counter() - before
+        self._header = {"t_start": round(time.time() - before, 3), "env_id": agent.env_id or ""}
         self._flushed = time.perf_counter()
 
     def on_trial_end(self, agent, stats):
@@ -174,6 +206,9 @@ class ProgressLog(Callback):
             w.writerow(["" if r[c] is None else f"{r[c]:.6g}" if isinstance(r[c], float) else r[c]
                         for c in LOG_COLUMNS])
         atomic_write_text(self.path, buf.getvalue())
+        monitor = [f"#{json.dumps(self._header)}", "r,l,t"]
+        monitor += [f"{round(r['return'], 6)},{r['length']},{r['seconds']}" for r in self.rows]
+        atomic_write_text(self.monitor_path, "\n".join(monitor) + "\n")
         self._flushed = time.perf_counter()
 
 
@@ -239,29 +274,3 @@ def read_progress(path) -> list[dict]:
             raise ValueError(f"{path}: line {n} holds a cell that is not a finite number within ±{MAX_LOGGED:.0e}")
         rows.append(row)
     return rows
-
-
-def write_training_curve(out: Path, rows: list[dict], title: str) -> Path:
-    """``out/curve.png``: each training trial's return and, where evaluated, the greedy mean (progress.csv's rows;
-    `connrl train` and `connrl plot FOLDER` draw it)."""
-    import io
-
-    import matplotlib.pyplot as plt
-
-    from connrl.storage import atomic_write_bytes
-
-    fig, ax = plt.subplots(figsize=(6, 3.5), dpi=110)
-    ax.plot([r["steps"] for r in rows], [r["return"] for r in rows], lw=0.8, label="training trial")
-    ev = [r for r in rows if r["eval_mean"] is not None]
-    if ev:
-        ax.plot([r["steps"] for r in ev], [r["eval_mean"] for r in ev], "o-", ms=3, lw=1, label="greedy evaluation")
-        ax.legend(fontsize=8)
-    ax.set_xlabel("environment steps")
-    ax.set_ylabel("return")
-    ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    plt.close(fig)
-    atomic_write_bytes(out / "curve.png", buf.getvalue())
-    return out / "curve.png"

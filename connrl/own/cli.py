@@ -163,7 +163,8 @@ def _train_settings(args) -> dict:
             raise ValueError(f"{args.agent} needs --teach FILE (a lesson file, connrl.record_lessons)")
         if args.teach:
             load_lessons(args.teach, env_id=args.env_id)
-        if args.stop_at is not None and not args.eval_every:
+        steps = args.steps or entry["n_timesteps"] or DEFAULT_TRAIN_STEPS
+        if args.stop_at is not None and args.eval_every == 0:
             raise ValueError("--stop-at stops when an evaluation reaches it: give --eval-every STEPS too")
         if args.tensorboard:
             import importlib.util
@@ -173,8 +174,18 @@ def _train_settings(args) -> dict:
     except (ValueError, TypeError) as exc:
         raise SystemExit(f"connrl: {exc}") from None
     return {"env_id": args.env_id, "env_kwargs": env_kwargs, "agent": args.agent, "seed": args.seed,
-            "steps": args.steps or entry["n_timesteps"] or DEFAULT_TRAIN_STEPS, "options": options,
-            "teach": args.teach, "settings_from": source}
+            "steps": steps, "options": options, "teach": args.teach, "settings_from": source}
+
+
+AUTO_EVALS, MIN_AUTO_EVAL = 20, 1000  # the default evaluations of a run, and the fewest steps between two
+
+
+def auto_eval_every(env, stop_at: float | None, steps: int) -> int:
+    """`connrl train`'s default --eval-every: where success is defined (the env's registered reward threshold, e.g.
+    CartPole-v1's 475, or --stop-at), ``AUTO_EVALS`` evaluations over the run, at least ``MIN_AUTO_EVAL`` steps
+    apart; else 0 (none)."""
+    threshold = getattr(getattr(env, "spec", None), "reward_threshold", None)
+    return max(MIN_AUTO_EVAL, steps // AUTO_EVALS) if stop_at is not None or threshold is not None else 0
 
 
 def _read_run_settings(file: Path) -> dict:
@@ -223,6 +234,8 @@ def one_writer(out: Path, option: str):
 def cmd_train(args) -> int:
     out, settings = _train_folder(args, _train_settings(args))
     env = _make_env(args.env_id, settings["env_kwargs"])
+    if args.eval_every is None:  # where success is defined, evaluate and keep the best agent by default
+        args.eval_every = auto_eval_every(env, args.stop_at, settings["steps"])
     eval_env = _make_env(args.env_id, settings["env_kwargs"]) if args.eval_every else None
     fresh = not out.exists()
     _writable(out)
@@ -237,7 +250,8 @@ def _train(args, out: Path, settings: dict, env, eval_env, fresh: bool) -> int:
     import json
 
     from connrl.own.api import load, make_agent
-    from connrl.own.callbacks import EvalCallback, ProgressLog, TensorBoardLog, write_training_curve
+    from connrl.own.callbacks import EvalCallback, ProgressLog, TensorBoardLog, keep_numbered
+    from connrl.own.plots import write_training_curve
     from connrl.storage import atomic_write_text
 
     saved: list[int] = []  # the steps of the latest good save
@@ -255,6 +269,7 @@ def _train(args, out: Path, settings: dict, env, eval_env, fresh: bool) -> int:
     def save(agent, deliver: bool = False) -> None:
         with _uninterrupted(deliver):
             agent.save(out)
+            keep_numbered(agent, out, args.keep)
             atomic_write_text(out / "settings.json", json.dumps(settings, indent=1) + "\n")  # --resume reads it
             log.flush()
             write_training_curve(out, log.rows, f"{args.env_id}, {settings['agent']}, seed {settings['seed']}")
@@ -284,9 +299,22 @@ def _train(args, out: Path, settings: dict, env, eval_env, fresh: bool) -> int:
             if not args.quiet and agent is not None:
                 print(flush=True)  # end the progress line
     code = _finish(agent, out, fresh, stopped, saved, save)
-    if evaluation is not None and evaluation.results and code == 0:
-        _say_best(log.rows, evaluation, args.stop_at, out)
-    return code
+    return _after_evaluation(evaluation, log.rows, args.stop_at, out, agent, code)
+
+
+def _after_evaluation(evaluation, rows: list[dict], stop_at: float | None, out: Path, agent, code: int) -> int:
+    """What the run's evaluations say once it is saved: where the best agent is, or (one line) that it could not be
+    kept. A run whose own save failed has said so already."""
+    if evaluation is None or code != 0:
+        return code
+    if evaluation.save_error is not None:
+        e = evaluation.save_error
+        print(f"connrl: training stopped at step {agent.steps_done}: the best agent could not be kept in {out / 'best'}"
+              f" ({e.strerror or e})", file=sys.stderr)
+        return 1
+    if evaluation.results:
+        _say_best(rows, evaluation, stop_at, out)
+    return 0
 
 
 def _say_best(rows: list[dict], evaluation, stop_at: float | None, out: Path) -> None:
@@ -371,84 +399,8 @@ def _finish(agent, out: Path, fresh: bool, stopped, saved: list[int], save) -> i
     return 0
 
 
-def plot_training(folder: Path) -> Path:
-    """Redraw a trained agent's curve.png from its progress.csv (``connrl plot FOLDER``)."""
-    from connrl.own.callbacks import read_progress, write_training_curve
-
-    rows = read_progress(folder / "progress.csv")
-    title = str(folder)
-    try:
-        s = _read_run_settings(folder / "settings.json")
-        title = f"{s['env_id']}, {s['agent']}, seed {s['seed']}"
-    except (ValueError, KeyError):  # no settings (an agent saved by the API): the folder names the plot
-        pass
-    return write_training_curve(folder, rows, title)
-
-
-def _saved_env_id(path: str) -> str | None:
-    """The registered environment id an agent folder names; FileError (one line) for a damaged agent file, and for
-    an id that is not registered: ``gym.make`` would import the module of a ``module:Env`` id, so a file never
-    chooses code to run (the user can, with --env)."""
-    import gymnasium as gym
-
-    import connrl  # noqa: F401  (registers the thesis's worlds)
-    from connrl.own.api import KINDS
-    from connrl.own.files import read_agent
-    from connrl.storage import FileError
-
-    m, _ = read_agent(Path(path), KINDS)
-    env_id = m.get("env_id")
-    if env_id is not None and (":" in env_id or env_id not in gym.registry):
-        raise FileError(Path(path) / "agent.json", f"is {env_id!r}, not a registered Gymnasium environment (a "
-                        "file never chooses code to import); give --env ENV_ID to choose the environment yourself",
-                        "env_id")
-    return env_id
-
-
-def _saved_env_kwargs(path: Path) -> dict:
-    """The env kwargs of the `connrl train` run an agent folder (or its best/ agent) came from; {} without one."""
-    for folder in (path, path.parent) if path.name == "best" else (path,):
-        file = folder / "settings.json"
-        if file.exists():
-            try:
-                kwargs = _read_run_settings(file).get("env_kwargs", {})
-            except ValueError as exc:
-                raise SystemExit(f"connrl: {exc}") from None
-            if not isinstance(kwargs, dict):
-                raise SystemExit(f"connrl: {file}: env_kwargs must be a mapping, got {kwargs!r}")
-            named = [k for k, v in kwargs.items() if isinstance(v, str) and ":" in v]
-            if named:  # some wrappers import a 'module:Class' they are given: a file never chooses code to run
-                raise SystemExit(f"connrl: {file}: env_kwargs {', '.join(named)} look like 'module:name' imports; a "
-                                 "file never chooses code to import: give them yourself with --env-kwargs")
-            return kwargs
-    return {}
-
-
-def cmd_evaluate(args) -> int:
-    import numpy as np
-
-    from connrl.own.api import episode_cap, evaluate, load
-
-    try:
-        env_id = args.env or _saved_env_id(args.path)
-    except ValueError as exc:
-        raise SystemExit(f"connrl: {exc}") from None
-    if not env_id:
-        raise SystemExit(f"connrl: {args.path} holds an agent without an environment id; give --env ENV_ID")
-    env_kwargs = {**_saved_env_kwargs(Path(args.path)), **_parse_options(args.env_kwargs, "--env-kwargs")}
-    env = _make_env(env_id, env_kwargs)
-    try:
-        cap = episode_cap(env, args.max_episode_steps)
-        returns = evaluate(load(args.path, env), env, args.episodes, seed=args.seed, max_episode_steps=cap)
-    except ValueError as exc:
-        raise SystemExit(f"connrl: {exc}") from None
-    print(f"{env_id}: greedy return over {len(returns)} episodes (at most {cap} steps each): mean "
-          f"{np.mean(returns):.2f}, min {min(returns):.2f}, max {max(returns):.2f}")
-    return 0
-
-
 def add_own_task_commands(sub) -> None:
-    """train, evaluate (connrl.own.api)."""
+    """train (connrl.own.api); ``connrl.own.cli_evaluate.add_evaluate_command`` adds evaluate."""
     s = sub.add_parser("train", help="train a thesis learner on any Gymnasium task", description="Train a thesis "
                        "learner on ENV_ID with inputs and values scaled from the task (connrl.own.api), then save it "
                        "(agent.json, agent.npz) and its learning curve (curve.png).")
@@ -464,11 +416,14 @@ def add_own_task_commands(sub) -> None:
     s.add_argument("--checkpoint-every", type=_int_at_least(0, MAX_STEPS), default=10_000, metavar="STEPS",
                    help="save the agent, progress.csv and curve.png every STEPS steps, so a crash loses at most that "
                    "much (default 10000; 0: only at the end). Ctrl-C or SIGTERM saves what was trained and stops")
+    s.add_argument("--keep", type=_int_at_least(0, 1000), default=0, metavar="N", help="also keep the last N "
+                   "checkpoints, numbered, in SAVE/checkpoints/step-STEPS (default 0: only the latest, in SAVE)")
     s.add_argument("--resume", action="store_true", help="continue the agent saved in the --save folder (its "
                    "latest checkpoint) up to --steps in all, with its settings")
-    s.add_argument("--eval-every", type=_int_at_least(0, MAX_STEPS), default=0, metavar="STEPS",
+    s.add_argument("--eval-every", type=_int_at_least(0, MAX_STEPS), default=None, metavar="STEPS",
                    help="greedy evaluation on a separate env every STEPS steps (at the next trial end); the best "
-                   "agent is kept in SAVE/best (default 0: none)")
+                   "agent is kept in SAVE/best. Default: where the env defines a reward threshold (CartPole-v1: "
+                   "475) or --stop-at is given, 20 evaluations a run (at least 1000 steps apart); else 0 (none)")
     s.add_argument("--eval-episodes", type=_positive_int, default=5, metavar="N", help="episodes per evaluation")
     s.add_argument("--stop-at", type=_finite_float, default=None, metavar="RETURN",
                    help="stop once an evaluation's mean return reaches RETURN (needs --eval-every)")
@@ -486,16 +441,4 @@ def add_own_task_commands(sub) -> None:
                    help="an AgentOptions field (connrl/own/api.py), e.g. --option gamma=0.95; repeat for several")
     s.add_argument("--quiet", action="store_true", help="no progress line")
     s.set_defaults(func=cmd_train)
-
-    s = sub.add_parser("evaluate", help="the greedy return of a saved agent", description="Load an agent saved "
-                       "by `connrl train` (or Agent.save) and print its greedy return over --episodes episodes.")
-    s.add_argument("path", help="the agent's folder")
-    s.add_argument("--episodes", type=_positive_int, default=10)
-    s.add_argument("--seed", type=_seed, default=0, help="seed of the first episode (default 0)")
-    s.add_argument("--env", default=None, help="environment id (default: the one it was trained on)")
-    s.add_argument("--env-kwargs", action="append", type=key_value, default=[], metavar="KEY=VALUE",
-                   help="an argument of gymnasium.make (default: those it was trained with); repeat for several")
-    s.add_argument("--max-episode-steps", type=_positive_int, default=None, metavar="N", help="cut each episode "
-                   "at N steps (default: the environment's time limit, else 1000)")
-    s.set_defaults(func=cmd_evaluate)
 

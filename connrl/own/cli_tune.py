@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 from argparse import SUPPRESS, ArgumentDefaultsHelpFormatter
+from functools import partial
 from pathlib import Path
 
 from connrl.own.cli import (
@@ -49,30 +50,43 @@ def cmd_tune(args) -> int:
     name = args.env_id.replace("/", "-").replace(":", "-")
     out = Path(args.out or f"runs/tune/{name}-{kind}")
     _writable(out)
+    if args.sampler == "tpe" and (args.workers > 1 or args.pruner != "none"):
+        raise SystemExit("connrl: --workers and --pruner go with --sampler random; TPE asks for each trial after the "
+                         "last one's whole result (--workers 1, --pruner none)")
     study = {"env_id": args.env_id, "env_kwargs": env_kwargs, "agent": kind, "steps": args.steps,
              "seeds": args.seeds, "eval_episodes": args.eval_episodes, "trials": args.trials, "fixed": fixed,
-             "space": [f"{d.name}={d.describe()}" for d in space], "sampler": args.sampler, "seed": args.study_seed}
+             "space": [f"{d.name}={d.describe()}" for d in space], "sampler": args.sampler, "seed": args.study_seed,
+             "pruner": args.pruner, "draws": "unrepeated"}  # a search drawn before planned() is not resumed by it
     with one_writer(out, "--out"):
         try:
-            trials = run_search(lambda: _make_env(args.env_id, env_kwargs), study, space, out, args.sampler)
+            trials = run_search(partial(_make_env, args.env_id, env_kwargs), study, space, out, args.sampler,
+                                workers=args.workers, pruner=args.pruner)
         except ValueError as exc:
             raise SystemExit(f"connrl: {exc}") from None
         except KeyboardInterrupt:
             print(f"\nconnrl: interrupted; the finished trials are in {out / 'trials.csv'} and the same command "
                   "resumes", file=sys.stderr)
             return 130
-        return _write_best(out, study, trials)
+        return _write_best(out, study, trials, args.train_steps)
 
 
-def _write_best(out: Path, study: dict, trials: list[dict]) -> int:
-    from connrl.own.settings import settings_yaml
+def _write_best(out: Path, study: dict, trials: list[dict], train_steps: int | None) -> int:
+    """best.yml: the best whole trial's settings; its n_timesteps the training budget (``--train-steps``, else the
+    shipped settings file's for the task, else none: `connrl train`'s default), never the search's budget."""
+    from connrl.own.settings import settings_yaml, task_settings
     from connrl.storage import atomic_write_text
 
     best = trials[0]
+    if len(best["scores"]) < len(study["seeds"]):
+        raise SystemExit("connrl: every trial was pruned; run more trials, or --pruner none")
+    if train_steps is None:
+        shipped, _ = task_settings(study["env_id"], study["agent"])
+        train_steps = (shipped or {}).get("n_timesteps")
     comment = (f"connrl tune {study['env_id']} --agent {study['agent']}: best of {len(trials)} trials, mean greedy "
-               f"return {best['mean']:.2f} over tuning seeds {study['seeds']} after {study['steps']} steps each\n"
-               "check it on other seeds before you report it")
-    atomic_write_text(out / "best.yml", settings_yaml(study["env_id"], study["steps"], study["env_kwargs"],
+               f"return {best['mean']:.2f} over tuning seeds {study['seeds']}, each agent trained {study['steps']} "
+               f"steps in the search\nn_timesteps is the training budget (--train-steps), not the search's; check "
+               "the settings on other seeds before you report them")
+    atomic_write_text(out / "best.yml", settings_yaml(study["env_id"], train_steps, study["env_kwargs"],
                                                       {**study["fixed"], **best["params"]}, comment))
     print(f"best: trial {best['trial'] + 1}, {best['params']}, mean greedy return {best['mean']:.2f}")
     print(f"wrote {out / 'best.yml'}: `connrl train {study['env_id']} --agent {study['agent']} --hyperparams "
@@ -109,7 +123,15 @@ def add_tune_command(sub) -> None:
     s.add_argument("--option", action="append", type=key_value, default=[], metavar="KEY=VALUE",
                    help="a fixed option (an AgentOptions field); repeat for several")
     s.add_argument("--trials", type=_int_at_least(1, 10_000), default=20, help="settings tried")
-    s.add_argument("--steps", type=_int_at_least(1, MAX_STEPS), default=20_000, help="training steps per agent")
+    s.add_argument("--steps", type=_int_at_least(1, MAX_STEPS), default=20_000, help="training steps per agent in "
+                   "the search")
+    s.add_argument("--train-steps", type=_int_at_least(1, MAX_STEPS), default=None, help="the training budget "
+                   "best.yml gives `connrl train` (none given: the shipped settings file's for the task, else train's "
+                   "default)")
+    s.add_argument("--workers", type=_int_at_least(1, 256), default=1, help="trials at once, each in a process "
+                   "(--sampler random)")
+    s.add_argument("--pruner", choices=("none", "median"), default="none", help="median: stop a trial whose running "
+                   "mean after a seed is below the median of the whole trials' (once 4 are whole)")
     s.add_argument("--seeds", type=_seed_list, default="1000,1001", help="tuning seeds, comma-separated, apart "
                    "from those you report")
     s.add_argument("--eval-episodes", type=_positive_int, default=5, help="greedy episodes that score an agent")

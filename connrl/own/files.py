@@ -97,6 +97,26 @@ def _field(meta: Path, m: dict, key: str, types: tuple, allowed: str):
     return v
 
 
+def check_evaluation(meta: Path, v, steps_done: int) -> dict | None:
+    """An agent file's optional ``evaluation`` (``EvalCallback``'s record of its latest greedy evaluation: steps,
+    mean, std, min, episodes, eval_seed, best), checked; None where the file has none."""
+    if v is None:
+        return None
+    if not isinstance(v, dict) or set(v) != {"steps", "mean", "std", "min", "episodes", "eval_seed", "best"}:
+        raise FileError(meta, "must hold steps, mean, std, min, episodes, eval_seed and best", "evaluation")
+    check_number(meta, "evaluation.steps", v["steps"], 0, steps_done, integer=True)
+    check_number(meta, "evaluation.episodes", v["episodes"], 1, 10**6, integer=True)
+    check_number(meta, "evaluation.eval_seed", v["eval_seed"], 0, 2**63 - 1, integer=True)
+    for key in ("mean", "min"):
+        check_number(meta, f"evaluation.{key}", v[key], -1e15, 1e15)
+    check_number(meta, "evaluation.std", v["std"], 0, 1e15)
+    if v["min"] > v["mean"] + 1e-9 * max(1.0, abs(v["mean"])):
+        raise FileError(meta, f"min {v['min']!r} is above the mean {v['mean']!r}", "evaluation")
+    if not isinstance(v["best"], bool):
+        raise FileError(meta, "must be true or false", "evaluation.best")
+    return dict(v)
+
+
 def check_record(meta: Path, m: dict, kinds: tuple[str, ...]) -> None:
     """Every field of an agent.json that loading reads: types, finite numbers, sizes inside their bounds, the scaler
     matching the observation space; ``kinds`` are the agents allowed. FileError naming the field otherwise."""

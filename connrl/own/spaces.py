@@ -82,6 +82,38 @@ def flatten(space, obs) -> np.ndarray:
     return np.asarray(spaces.flatten(space, obs), float)
 
 
+def split_batch(space, obs) -> list | None:
+    """The observations of a batch (a vector env's: one first axis over the environments, in every part of a
+    ``Dict`` / ``Tuple``), or None where ``obs`` is one observation of ``space``."""
+    n = _batch_size(space, obs)
+    if n is None:
+        return None
+    return [_item(space, obs, i) for i in range(n)]
+
+
+def _batch_size(space, obs) -> int | None:
+    if isinstance(space, (spaces.Dict, spaces.Tuple)):
+        parts = space.spaces.items() if isinstance(space, spaces.Dict) else enumerate(space.spaces)
+        sizes = {_batch_size(s, obs[k]) for k, s in parts}
+        if len(sizes) != 1:
+            raise ValueError(f"the parts of an observation of {space} must all be one observation or all a batch "
+                             "of the same size")
+        return sizes.pop()
+    extra = np.ndim(obs) - len(space.shape)
+    if extra not in (0, 1):
+        raise ValueError(f"an observation of {space} has shape {space.shape}, a batch of them one axis more; got "
+                         f"shape {np.shape(obs)}")
+    return np.shape(obs)[0] if extra else None
+
+
+def _item(space, obs, i):
+    if isinstance(space, spaces.Dict):
+        return {k: _item(s, obs[k], i) for k, s in space.spaces.items()}
+    if isinstance(space, spaces.Tuple):
+        return tuple(_item(s, o, i) for s, o in zip(space.spaces, obs, strict=True))
+    return np.asarray(obs)[i]
+
+
 # ------------------------------------------------------------------------------------------------- as JSON
 
 def space_json(space) -> dict:

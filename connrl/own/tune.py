@@ -4,11 +4,15 @@ Each trial draws settings from the search space, trains one agent per tuning see
 the mean greedy return over ``eval_episodes`` episodes on evaluation seeds (``EVAL_SEED`` on); a trial's score is the
 mean over its seeds. The tuning seeds (default 1000, 1001) are apart from the seeds connrl's own measurements report
 (0-2, development 100-119, fresh 200-206), so a tuned setting is checked on seeds it never saw. Samplers: ``random``
-(built in, seeded: trial k's settings are the same in every run) and ``tpe`` (Optuna's, the ``tune`` extra).
+(built in, seeded: trial k's settings are the same in every run, and no setting is tried twice: where the space is
+a few choices, its grid in a shuffled order; ``planned``) and ``tpe`` (Optuna's, the ``tune`` extra). ``workers``
+trials run at once in processes (random sampler); the median pruner stops a trial whose running mean after a seed is
+below the median of the finished trials' after that seed (``median_thresholds``).
 
 Files in ``out``: ``trials.csv`` (one row per finished trial, rewritten atomically after each: an interrupted search
 resumes where it stopped), ``study.json`` (what was searched: a resumed search must search the same) and
-``best.yml`` (the best trial as a settings file entry: ``connrl train ENV --hyperparams best.yml``).
+``best.yml`` (the best whole trial as a settings file entry: ``connrl train ENV --hyperparams best.yml``; its
+``n_timesteps`` is the training budget asked for, not the search's per-agent budget, which its comment states).
 """
 
 from __future__ import annotations
@@ -103,6 +107,50 @@ def parse_dimension(text: str) -> Dimension:
     return Dimension(name, choices=tuple(value(s) for s in spec.split(",")))
 
 
+MAX_GRID = 100_000  # combinations beyond which a finite space is drawn from, not enumerated
+MAX_INT_GRID = 256  # whole-number ranges up to this many values count as choices
+
+
+def grid_values(d: Dimension) -> tuple | None:
+    """A dimension's values when they are few enough to enumerate: its choices, or a short whole-number range
+    (not a log one: enumerated, its values would be drawn evenly)."""
+    if d.choices is not None:
+        return d.choices
+    if d.integer and not d.log and d.high - d.low < MAX_INT_GRID:
+        return tuple(range(d.low, d.high + 1))
+    return None
+
+
+def planned(space: list[Dimension], trials: int, seed: int) -> list[dict]:
+    """The settings of trials 0, 1, ..., none repeated. Where every option has few values and their combinations
+    are at most ``MAX_GRID``, the grid in one seeded shuffled order, its first ``trials`` (all of it when it is
+    smaller: a search never tries a setting twice); otherwise seeded draws, a repeat drawn again. Either way trial k's
+    settings do not depend on how many trials are asked: a resumed or extended search draws the same."""
+    values = [grid_values(d) for d in space]
+    size = math.prod(len(v) for v in values) if all(v is not None for v in values) else None
+    rng = np.random.default_rng(seed)
+    if size is not None and size <= MAX_GRID:
+        order = rng.permutation(size)[:trials]
+        out = []
+        for i in order.tolist():
+            params = {}
+            for d, vs in zip(reversed(space), reversed(values), strict=True):  # mixed radix, last option fastest
+                i, j = divmod(i, len(vs))
+                params[d.name] = vs[j]
+            out.append({d.name: params[d.name] for d in space})
+        return out
+    out, seen = [], set()
+    while len(out) < trials:
+        for _ in range(1000):
+            params = {d.name: d.sample(rng) for d in space}
+            key = json.dumps(params, sort_keys=True)
+            if key not in seen:
+                break
+        seen.add(key)
+        out.append(params)
+    return out
+
+
 def check_space(space: list[Dimension], fixed: dict) -> None:
     """Every option a trial could draw must be valid with the fixed ones: checked on the ranges' ends and every
     choice before any training."""
@@ -116,24 +164,131 @@ def check_space(space: list[Dimension], fixed: dict) -> None:
                 raise ValueError(f"--space {d.name}: {exc}") from None
 
 
-def score(env_fn, kind: str, options: dict, seeds: list[int], steps: int, eval_episodes: int) -> list[float]:
+def score(env_fn, kind: str, options: dict, seeds: list[int], steps: int, eval_episodes: int,
+          prune_below: tuple = ()) -> list[float]:
     """Mean greedy return over ``eval_episodes`` evaluation episodes of one agent per seed, each trained ``steps``
-    steps; a diverged agent scores -inf."""
+    steps; a diverged agent scores -inf. The trial is pruned (its later seeds not trained) when its running mean after
+    seed j is below ``prune_below[j]``: fewer scores than seeds mark a pruned trial."""
     from connrl.own.api import evaluate, make_agent
 
     out = []
-    for seed in seeds:
+    for j, seed in enumerate(seeds):
         agent = make_agent(env_fn(), kind, seed=seed, **options).learn(steps)
         if agent.divergence():
             out.append(-math.inf)
-            continue
-        out.append(float(np.mean(evaluate(agent, env_fn(), eval_episodes, seed=EVAL_SEED))))
+        else:
+            out.append(float(np.mean(evaluate(agent, env_fn(), eval_episodes, seed=EVAL_SEED))))
+        if j < len(seeds) - 1 and j < len(prune_below) and float(np.mean(out)) < prune_below[j]:
+            break
     return out
 
 
+PRUNE_AFTER = 4  # finished trials the median pruner needs before it prunes
+
+
+def median_thresholds(done: list[dict], n_seeds: int) -> tuple:
+    """The median pruner's bars: after seed j (all but the last), the median running mean of the whole (not pruned)
+    trials after seed j, once at least ``PRUNE_AFTER`` are whole (Optuna's MedianPruner, which reads completed trials
+    only, over seeds instead of steps)."""
+    whole = [t for t in done if len(t["scores"]) == n_seeds]
+    if len(whole) < PRUNE_AFTER:
+        return ()
+    return tuple(float(np.median([np.mean(t["scores"][:j + 1]) for t in whole])) for j in range(n_seeds - 1))
+
+
 def run_search(env_fn, study: dict, space: list[Dimension], out: Path, sampler: str = "random",
-               progress=print) -> list[dict]:
-    """Run (or resume) the search ``study`` describes; returns the finished trials, best first."""
+               progress=print, workers: int = 1, pruner: str = "none") -> list[dict]:
+    """Run (or resume) the search ``study`` describes; returns the finished trials, best first (a pruned trial
+    after every whole one). ``workers`` > 1 runs that many trials at once in processes (``env_fn`` must then be
+    picklable, e.g. a ``functools.partial``); with the median pruner their bars depend on which trials finished
+    first, so such a search is not repeatable to the trial."""
+    done = _resume(study, space, out, sampler)
+    optuna_study = _optuna_study(space, done, study["seed"]) if sampler == "tpe" else None  # Optuna missing:
+    atomic_write_text(out / "study.json", json.dumps(study, indent=1) + "\n")  # refused before it is written
+    plan = planned(space, study["trials"], study["seed"]) if optuna_study is None else None
+    total = study["trials"] if plan is None else len(plan)
+    if plan is not None and len(plan) < study["trials"]:
+        progress(f"the space holds {len(plan)} settings: {len(plan)} trials, each setting once")
+
+    def submit(run, k):
+        if plan is not None:
+            params, trial = plan[k], None
+        else:
+            trial = optuna_study.ask()
+            params = {d.name: _suggest(trial, d) for d in space}
+        bars = median_thresholds(done, len(study["seeds"])) if pruner == "median" else ()
+        return run(score, env_fn, study["agent"], {**study["fixed"], **params}, study["seeds"], study["steps"],
+                   study["eval_episodes"], bars), (k, params, trial, time.perf_counter())
+
+    def finish(scores, k, params, trial, t0):
+        mean = float(np.mean(scores))
+        if optuna_study is not None:
+            optuna_study.tell(trial, mean if math.isfinite(mean) else -1e300)
+        done.append({"trial": k, "params": params, "scores": scores, "mean": mean,
+                     "seconds": round(time.perf_counter() - t0, 2)})
+        done.sort(key=lambda t: t["trial"])
+        _write_trials(out / "trials.csv", _whole_prefix(done))
+        pruned = f" (pruned after {len(scores)} of {len(study['seeds'])} seeds)" if len(scores) < len(
+            study["seeds"]) else ""
+        progress(f"trial {k + 1}/{total}: {json.dumps(params)} -> mean greedy return {mean:.2f} "
+                 f"({', '.join(f'{s:.1f}' for s in scores)}){pruned}")
+
+    todo = list(range(len(done), total))
+    if workers <= 1 or optuna_study is not None:
+        for k in todo:
+            _serial(submit, finish, k)
+    else:
+        _parallel(submit, finish, todo, workers)
+    whole = [t for t in done if len(t["scores"]) == len(study["seeds"])]
+    return sorted(whole, key=lambda t: -t["mean"]) + [t for t in done if t not in whole]
+
+
+def _serial(submit, finish, k) -> None:
+    scores, meta = submit(lambda f, *a: f(*a), k)
+    finish(scores, *meta)
+
+
+def _parallel(submit, finish, todo: list[int], workers: int) -> None:
+    """Trials ``todo`` in a pool of ``workers`` fresh (spawned) processes, at most that many at a time; every trial
+    that finished is recorded before an error or Ctrl-C ends the search, and the workers are then ended, not waited
+    for (the pruner's bars follow the trials as they finish)."""
+    import multiprocessing
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    try:
+        waiting, queue = {}, list(todo)
+        while queue or waiting:
+            while queue and len(waiting) < workers:
+                future, meta = submit(pool.submit, queue.pop(0))
+                waiting[future] = meta
+            finished, _ = wait(waiting, return_when=FIRST_COMPLETED)
+            failed = [f for f in finished if f.exception() is not None]
+            for future in sorted(set(finished) - set(failed), key=lambda f: waiting[f][0]):
+                finish(future.result(), *waiting.pop(future))
+            if failed:
+                raise failed[0].exception()
+    except BaseException:
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+
+
+def _whole_prefix(done: list[dict]) -> list[dict]:
+    """The finished trials 0, 1, ... up to the first one still running (trials.csv holds a numbered prefix: a
+    resumed search redoes what follows it)."""
+    out = []
+    for t in done:
+        if t["trial"] != len(out):
+            break
+        out.append(t)
+    return out
+
+
+def _resume(study: dict, space: list[Dimension], out: Path, sampler: str) -> list[dict]:
+    """The trials a previous run of this search finished; ValueError where the folder holds another search."""
     out.mkdir(parents=True, exist_ok=True)
     meta, trials_file = out / "study.json", out / "trials.csv"
     if meta.exists():
@@ -142,35 +297,13 @@ def run_search(env_fn, study: dict, space: list[Dimension], out: Path, sampler: 
         except FileError as exc:
             raise ValueError(f"{exc}; remove the folder {out} to start over") from None
         if not isinstance(old, dict) or {**old, "trials": None} != {**study, "trials": None}:  # more trials may
-            raise ValueError(f"{out} holds another search ({meta} differs: env, agent, steps, seeds, space or "  # be
-                             "sampler); choose another --out or remove that folder")  # asked of a search
+            raise ValueError(f"{out} holds another search ({meta} differs: env, agent, steps, seeds, space, sampler "
+                             "or pruner, or it was drawn by an earlier connrl); choose another --out or remove that "
+                             "folder")  # more trials may be asked of a search
     elif trials_file.exists():
         raise ValueError(f"{trials_file} has no study.json beside it, so what it searched is unknown; remove the "
                          f"folder {out} to start over")
-    done = read_trials(trials_file, space) if trials_file.exists() else []
-    optuna_study = _optuna_study(space, done, study["seed"]) if sampler == "tpe" else None  # Optuna missing:
-    atomic_write_text(meta, json.dumps(study, indent=1) + "\n")  # refused before the study is written
-    rng = np.random.default_rng(study["seed"])
-    for k in range(study["trials"]):
-        if optuna_study is None:
-            params = {d.name: d.sample(rng) for d in space}  # drawn for every k: a resumed search draws the same
-        if k < len(done):
-            continue
-        if optuna_study is not None:
-            trial = optuna_study.ask()
-            params = {d.name: _suggest(trial, d) for d in space}
-        t0 = time.perf_counter()
-        scores = score(env_fn, study["agent"], {**study["fixed"], **params}, study["seeds"], study["steps"],
-                       study["eval_episodes"])
-        mean = float(np.mean(scores))
-        if optuna_study is not None:
-            optuna_study.tell(trial, mean if math.isfinite(mean) else -1e300)
-        done.append({"trial": k, "params": params, "scores": scores, "mean": mean,
-                     "seconds": round(time.perf_counter() - t0, 2)})
-        _write_trials(out / "trials.csv", done)
-        progress(f"trial {k + 1}/{study['trials']}: {json.dumps(params)} -> mean greedy return {mean:.2f} "
-                 f"({', '.join(f'{s:.1f}' for s in scores)})")
-    return sorted(done, key=lambda t: -t["mean"])
+    return read_trials(trials_file, space) if trials_file.exists() else []
 
 
 def _optuna_study(space: list[Dimension], done: list[dict], seed: int):

@@ -122,13 +122,14 @@ def main() -> None:
         results = list(pool.map(_job, jobs))
     print(f"{args.task}, QCON-R unless named, {TASKS[args.task][1]:,} steps, seeds {' '.join(map(str, args.seeds))}; "
           "extra: model steps per env step (plan), mean group size (group)")
-    print(f"{'arm':<28} {'held':>5} {'median held':>12} {'area':>8} {'at budget':>10}   per seed: held at / "
-          "greedy at budget")
+    print(f"{'arm':<28} {'held':>5} {'median held':>12} {'area':>8} {'at budget':>10} {'lost':>9}   per seed: "
+          "held at / greedy at budget")
     n = len(args.seeds)
     for i, arm in enumerate(args.arms):
         rs = results[i * n:(i + 1) * n]
         extra = [r["extra"] for r in rs if "extra" in r]
-        print(summary_line(arm, rs) + (f"   extra {np.mean(extra):.2f}" if extra else ""), flush=True)
+        line = summary_line(arm, rs, TASKS[args.task][0])
+        print(line + (f"   extra {np.mean(extra):.2f}" if extra else ""), flush=True)
 
 
 if __name__ == "__main__":

@@ -3,11 +3,12 @@
     python scripts/own_task/sample_efficiency.py --task CartPole-v1 [--seeds 100 101 102 103 104]
         [--base lr=0.05 ...] [--vary lr=0.02,0.1 lessons_per_trial=50] [--kind QCON-R] [--workers 1]
 
-Each row: the base settings (the shipped settings file's entry for the task, then ``--base``) with one option
-changed. Per row and seed the held-solve steps and the greedy return at the budget, with the median steps to a held
-solve (a run that never held counts as more than the budget), the mean greedy return over all evaluations (the area
-under the learning curve, which separates settings before either holds) and at the budget. The defaults and per-task
-settings of docs/PERFORMANCE.md were chosen with it on development seeds (100-104, 110-114), never on the
+Each row: the base settings (the shipped settings file's entry for the task, then ``--base``) with one option changed.
+Per row and seed the held-solve steps and the greedy return at the budget, with the median steps to a held solve (a run
+that never held counts as more than the budget), the mean greedy return over all evaluations (the area under the
+learning curve, which separates settings before either holds), at the budget, and the relapse ("lost": the share of
+evaluations after a run first reaches the threshold that fall below it, over the runs that reached it). The defaults and
+per-task settings of docs/PERFORMANCE.md were chosen with it on development seeds (100-104, 110-114), never on the
 benchmark's seeds (0-4) or the fresh ones (200+).
 """
 
@@ -51,16 +52,28 @@ def _job(args):
     return run_connrl(task, seed, options, kind)
 
 
-def summary_line(name: str, rs: list[dict]) -> str:
-    """One row of the table: held count, median held steps, area under the curve, greedy return at the budget and
-    per seed (held at / greedy at budget, ``!`` for a diverged run)."""
+def lost_share(curve: list, threshold: float) -> float | None:
+    """Relapse: the share of the evaluations after a run's first one at the threshold that fall below it (None for
+    a run that never reached it, or reached it only at its last evaluation)."""
+    values = [v for _, v in curve]
+    first = next((i for i, v in enumerate(values) if v >= threshold), None)
+    later = values[first + 1:] if first is not None else []
+    return sum(v < threshold for v in later) / len(later) if later else None
+
+
+def summary_line(name: str, rs: list[dict], threshold: float) -> str:
+    """One row of the table: held count, median held steps, area under the curve, greedy return at the budget, the
+    mean relapse (``lost_share``) over the runs that reached the threshold, and per seed (held at / greedy at budget,
+    ``!`` for a diverged run)."""
     held = [r["held"] if r["held"] is not None else math.inf for r in rs]
     med = float(np.median(held))
     area = np.mean([np.mean([p[1] for p in r["curve"]]) for r in rs])
     last = np.mean([r["curve"][-1][1] for r in rs])
+    lost = [x for x in (lost_share(r["curve"], threshold) for r in rs) if x is not None]
     per = "  ".join(f"{r['held'] or '-'}/{r['curve'][-1][1]:.0f}{'!' if r['diverged'] else ''}" for r in rs)
     return (f"{name:<28} {sum(math.isfinite(h) for h in held):>2}/{len(rs):<2} "
-            f"{f'{med:,.0f}' if math.isfinite(med) else '> budget':>12} {area:>8.1f} {last:>10.1f}   {per}")
+            f"{f'{med:,.0f}' if math.isfinite(med) else '> budget':>12} {area:>8.1f} {last:>10.1f} "
+            f"{f'{np.mean(lost):.2f} ({len(lost)})' if lost else '-':>9}   {per}")
 
 
 def main() -> None:
@@ -91,11 +104,11 @@ def main() -> None:
     budget = TASKS[args.task][1]
     print(f"{args.task}, {args.kind}, {budget:,} steps, seeds {' '.join(map(str, args.seeds))}; base "
           f"{base or 'the defaults'}")
-    print(f"{'setting':<28} {'held':>5} {'median held':>12} {'area':>8} {'at budget':>10}   per seed: held at / "
-          "greedy at budget")
+    print(f"{'setting':<28} {'held':>5} {'median held':>12} {'area':>8} {'at budget':>10} {'lost':>9}   per seed: "
+          "held at / greedy at budget")
     n = len(args.seeds)
     for i, (name, _) in enumerate(rows):
-        print(summary_line(name, results[i * n:(i + 1) * n]), flush=True)
+        print(summary_line(name, results[i * n:(i + 1) * n], TASKS[args.task][0]), flush=True)
 
 
 if __name__ == "__main__":

@@ -5,6 +5,7 @@ import json
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -157,7 +158,7 @@ def test_train_checkpoints_as_it_goes(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(connrl.own.api.Agent, "save", lambda self, p: saves.append(self.steps_done) or real(self, p))
     out = tmp_path / "ck"
     assert cli.main(["train", "CartPole-v1", "--steps", "1500", "--quiet", "--save", str(out),
-                     "--checkpoint-every", "500", "--option", "warmup_steps=100"]) == 0
+                     "--checkpoint-every", "500", "--eval-every", "0", "--option", "warmup_steps=100"]) == 0
     assert len(saves) >= 3 and all(b - a >= 500 for a, b in zip(saves[:-2], saves[1:-1], strict=True))
     assert saves[-1] >= 1500 and connrl.load(out).steps_done == saves[-1]
 
@@ -175,3 +176,50 @@ def test_a_failed_save_says_what_was_lost_and_leaves_no_temporary_file(tmp_path,
     err = capsys.readouterr().err.strip()
     assert code == 1 and err.startswith("connrl: the agent trained for ") and "was NOT saved: cannot write" in err
     assert "No space left on device" in err and not out.exists()  # nothing could be written: not even the log
+
+
+def test_train_keeps_the_best_by_default_where_success_is_defined_and_evaluate_says_which(tmp_path, capsys):
+    from connrl.own.cli import auto_eval_every
+
+    cup = gym.make("connrl/CupCollection-v0")  # no reward threshold
+    assert auto_eval_every(gym.make("CartPole-v1"), None, 2500) == 1000 == auto_eval_every(cup, 3.0, 2500)
+    assert auto_eval_every(cup, None, 50_000) == 0 and auto_eval_every(gym.make("CartPole-v1"), None, 60_000) == 3000
+    out = tmp_path / "cp"
+    assert cli.main(["train", "CartPole-v1", "--steps", "2500", "--quiet", "--save", str(out),
+                     "--option", "hidden=4", "--option", "warmup_steps=100"]) == 0  # no --eval-every: every 1000
+    rows = read_progress(out / "progress.csv")
+    evals = [r for r in rows if r["eval_mean"] is not None]
+    assert len(evals) == 2 and 1000 <= evals[0]["steps"] < 2000 <= evals[1]["steps"]
+    best = max(evals, key=lambda r: r["eval_mean"])
+    kept = connrl.load(out / "best")
+    assert kept.steps_done == best["steps"] and kept.evaluation["mean"] == pytest.approx(best["eval_mean"])
+    assert kept.evaluation["best"] is True and kept.evaluation["episodes"] == 5
+    capsys.readouterr()
+    assert cli.main(["evaluate", str(out / "best"), "--episodes", "1"]) == 0
+    said = capsys.readouterr().out
+    assert f"trained {best['steps']} steps; evaluated at step {best['steps']}: mean return" in said
+    assert "(the run's best so far then)" in said
+    assert cli.main(["evaluate", str(out), "--episodes", "1"]) == 0
+    assert f"{out / 'best'} holds the run's best agent" in capsys.readouterr().out
+    meta = json.loads((out / "best" / "agent.json").read_text())
+    meta["evaluation"]["episodes"] = 0
+    (out / "best" / "agent.json").write_text(json.dumps(meta))
+    with pytest.raises(ValueError, match=r"evaluation.episodes.*is 0; it must be a whole number >= 1"):
+        connrl.load(out / "best")
+
+
+def test_a_best_agent_that_cannot_be_kept_stops_training_and_says_so_in_one_line(tmp_path, monkeypatch, capsys):
+    real = connrl.own.api.Agent.save
+
+    def save(self, path):
+        if Path(path).name == "best":
+            raise OSError(28, "No space left on device")
+        return real(self, path)
+
+    monkeypatch.setattr(connrl.own.api.Agent, "save", save)
+    out = tmp_path / "cp"
+    code = cli.main(["train", "CartPole-v1", "--steps", "2500", "--quiet", "--save", str(out), "--option", "hidden=4",
+                     "--option", "warmup_steps=100"])
+    err = capsys.readouterr().err.strip()
+    assert code == 1 and "\n" not in err and "the best agent could not be kept in" in err and "No space left" in err
+    assert 1000 <= connrl.load(out).steps_done < 2000  # stopped at the first evaluation, the trained agent saved

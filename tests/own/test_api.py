@@ -92,9 +92,10 @@ def test_cli_train_then_evaluate(tmp_path, capsys):
     assert cli.main(["train", "CartPole-v1", "--steps", "300", "--save", str(tmp_path / "a"), "--quiet",
                      "--option", "hidden=4"]) == 0
     assert {p.name for p in (tmp_path / "a").iterdir()} == {"agent.json", "agent.npz", "curve.png", "progress.csv",
-                                                              "settings.json", ".connrl-run.lock"}  # one writer
+                                                              "monitor.csv", "settings.json", ".connrl-run.lock"}
     assert cli.main(["evaluate", str(tmp_path / "a"), "--episodes", "2"]) == 0
-    assert "CartPole-v1: greedy return over 2 episodes" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "CartPole-v1: greedy return over 2 episodes" in out and "QCON-R, trained 300 steps" in out
 
 
 @pytest.mark.parametrize("args, message", [
@@ -132,8 +133,14 @@ def test_memory_agents_learn_save_load_and_evaluate_on_a_hidden_state_task(kind,
     agent.save(tmp_path / kind)
     again = connrl.load(tmp_path / kind, env)
     assert connrl.evaluate(again, env, 3, seed=2) == connrl.evaluate(agent, env, 3, seed=2)
-    with pytest.raises(ValueError, match="acts on a history"):
-        agent.predict(env.reset(seed=0)[0])
+    obs, start, total = env.reset(seed=2)[0], True, 0.0  # predict keeps the history evaluate's trial keeps
+    while True:
+        a, _ = agent.predict(obs, episode_start=start)
+        obs, r, terminated, truncated, _ = env.step(a)
+        start, total = False, total + r
+        if terminated or truncated:
+            break
+    assert total == connrl.evaluate(agent, env, 1, seed=2)[0]
 
 
 def test_evaluating_does_not_move_the_learners_random_stream():
@@ -254,7 +261,7 @@ def test_ahcon_r_learns_cartpole_not_one_push_for_ever():
     rng, obs = np.random.default_rng(0), env.reset(seed=0)[0]
     greedy = []
     for _ in range(300):
-        greedy.append(agent.predict(obs))
+        greedy.append(int(agent.predict(obs)[0]))
         obs, _, term, trunc, _ = env.step(int(rng.integers(2)))
         if term or trunc:
             obs = env.reset(seed=int(rng.integers(1000)))[0]

@@ -4,6 +4,8 @@ evaluated, evaluation leaves learning as it was, a checkpoint resumes, progress.
 
 from __future__ import annotations
 
+import json
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -106,6 +108,10 @@ def test_progress_csv_has_a_row_per_trial_and_a_resumed_log_drops_rows_past_the_
     agent = connrl.make_agent(env, "QCON-R", seed=0, hidden=4).learn(600, callback=[ev, log])
     rows = read_progress(tmp_path / "progress.csv")
     assert len(rows) == agent.trials_done and sum(r["length"] for r in rows) == 600
+    header, columns, *lines = (tmp_path / "monitor.csv").read_text().splitlines()  # SB3's Monitor format
+    assert json.loads(header[1:])["env_id"] == "CartPole-v1" == agent.env_id and columns == "r,l,t"
+    assert [(float(r), int(n)) for r, n, _ in (line.split(",") for line in lines)] == [
+        (row["return"], row["length"]) for row in rows]
     assert [r["steps"] for r in rows if r["eval_mean"] is not None] == [s for s, *_ in ev.results]
     # the temperature the trial was played at, in Q units: t_start 0.05 to t_end 0.005 over 50,000 steps, from the
     # steps before it, times the range
@@ -121,11 +127,33 @@ def test_progress_csv_has_a_row_per_trial_and_a_resumed_log_drops_rows_past_the_
         read_progress(tmp_path / "bad.csv")
 
 
+def test_sb3s_load_results_reads_monitor_csv(tmp_path):
+    monitor = pytest.importorskip("stable_baselines3.common.monitor")
+    log = ProgressLog(tmp_path / "progress.csv")
+    connrl.make_agent(gym.make("CartPole-v1"), "QCON-R", seed=1, hidden=4).learn(300, callback=log)
+    frame = monitor.load_results(str(tmp_path))
+    rows = read_progress(tmp_path / "progress.csv")
+    assert frame["r"].tolist() == [r["return"] for r in rows] and frame["l"].tolist() == [r["length"] for r in rows]
+
+
+def test_keep_n_keeps_the_last_n_checkpoints_numbered(tmp_path):
+    ends = []
+    agent = connrl.make_agent(gym.make("CartPole-v1"), "QCON-R", seed=2, hidden=4)
+    keeper = CheckpointCallback(200, tmp_path / "ck", keep=2)
+    agent.learn(1000, callback=[keeper, lambda a, r: ends.append(a.steps_done)])
+    due = sorted({min(s for s in ends if s >= k) for k in range(200, 1001, 200) if any(s >= k for s in ends)})
+    kept = sorted((tmp_path / "ck" / "checkpoints").iterdir())
+    assert [p.name for p in kept] == [f"step-{s:011d}" for s in due[-2:]]
+    assert [connrl.load(p).steps_done for p in kept] == due[-2:]
+    assert connrl.load(tmp_path / "ck").steps_done == due[-1]
+
+
 @pytest.mark.parametrize("make, message", [
     (lambda: EvalCallback(gym.make("CartPole-v1"), every=0), "every must be a whole number of steps >= 1"),
     (lambda: EvalCallback(gym.make("CartPole-v1"), episodes=0), "episodes must be a whole number >= 1"),
     (lambda: EvalCallback(gym.make("CartPole-v1"), stop_at=float("nan")), "stop_at must be a finite number"),
     (lambda: CheckpointCallback(2.5, "x"), "every must be a whole number of steps >= 1"),
+    (lambda: CheckpointCallback(10, "x", keep=True), "keep must be a whole number of checkpoints >= 0"),
 ])
 def test_bad_callback_settings_are_one_line(make, message):
     with pytest.raises(ValueError, match=message):

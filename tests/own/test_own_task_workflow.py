@@ -65,11 +65,13 @@ def test_train_interrupt_resume_plot_tune_and_load_the_best(tmp_path, monkeypatc
     assert cli.main([*tune, "3"]) == 0  # one more trial: the first two are kept, not redone
     assert (tmp_path / "tune" / "trials.csv").read_text().splitlines()[:3] == trials
     capsys.readouterr()
+    assert "n_timesteps: 50000" in (tmp_path / "tune" / "best.yml").read_text()  # the shipped budget, not 300
+    assert cli.main([*tune, "3", "--train-steps", "400"]) == 0  # all trials done: best.yml rewritten
     assert cli.main(["train", "CartPole-v1", "--hyperparams", str(tmp_path / "tune" / "best.yml"), "--quiet",
                      "--save", str(tmp_path / "tuned")]) == 0
     settings = json.loads((tmp_path / "tuned" / "settings.json").read_text())
-    assert settings["steps"] == 300 and set(settings["options"]) == {"lr", "hidden"}
-    assert connrl.load(tmp_path / "tuned").steps_done == 300
+    assert settings["steps"] == 400 and set(settings["options"]) == {"lr", "hidden"}
+    assert connrl.load(tmp_path / "tuned").steps_done == 400
 
 
 def test_resume_keeps_the_runs_own_steps_and_damaged_files_are_one_line(tmp_path, capsys):
@@ -89,3 +91,15 @@ def test_resume_keeps_the_runs_own_steps_and_damaged_files_are_one_line(tmp_path
     (out / "settings.json").write_text(json.dumps(settings))
     with pytest.raises(SystemExit, match="look like 'module:name' imports"):
         cli.main(["evaluate", str(out)])
+
+
+def test_train_keep_n_keeps_the_last_numbered_checkpoints_and_monitor_csv(tmp_path, capsys):
+    out = tmp_path / "cp"
+    assert cli.main(["train", "CartPole-v1", "--steps", "900", "--checkpoint-every", "300", "--keep", "2", "--quiet",
+                     "--save", str(out), "--option", "hidden=4"]) == 0
+    kept = sorted((out / "checkpoints").iterdir())
+    steps = [connrl.load(p).steps_done for p in kept]
+    assert len(kept) == 2 and steps[-1] == 900 == connrl.load(out).steps_done and 600 <= steps[0] < 900
+    assert [p.name for p in kept] == [f"step-{s:011d}" for s in steps]
+    rows = read_progress(out / "progress.csv")
+    assert len((out / "monitor.csv").read_text().splitlines()) == len(rows) + 2
