@@ -232,6 +232,7 @@ def test_ctrl_c_inside_a_trial_counts_its_steps_and_the_next_learn_starts_a_tria
 def test_a_multi_file_write_holds_ctrl_c_until_both_files_are_in_place(tmp_path, monkeypatch):
     import os
     import signal
+    import threading
 
     from connrl import storage
 
@@ -240,7 +241,7 @@ def test_a_multi_file_write_holds_ctrl_c_until_both_files_are_in_place(tmp_path,
 
     def replace_and_signal(src, dst):
         if not moves:
-            os.kill(os.getpid(), signal.SIGINT)  # arrives between the two moves
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)  # between the two moves
         moves.append(dst)
         real(src, dst)
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
+import threading
 import time
 from pathlib import Path
 
@@ -112,10 +113,10 @@ def test_a_signal_that_meets_a_checkpoint_waits_for_the_save_and_then_stops_trai
     before = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a foreground process
     with pytest.raises(KeyboardInterrupt):
         with _uninterrupted(deliver=True):
-            os.kill(os.getpid(), signal.SIGINT)  # arrives mid-save
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)  # arrives mid-save
             done.append("saved")
     assert done == ["saved"]
     with _uninterrupted(deliver=False):  # the final save: already stopping, nothing more to do
-        os.kill(os.getpid(), signal.SIGTERM)
+        signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     signal.signal(signal.SIGINT, before)
