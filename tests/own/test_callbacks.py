@@ -246,6 +246,14 @@ def test_a_multi_file_write_holds_ctrl_c_until_both_files_are_in_place(tmp_path,
         real(src, dst)
 
     monkeypatch.setattr(storage.os, "replace", replace_and_signal)
-    with pytest.raises(KeyboardInterrupt):
-        storage.atomic_write_files({tmp_path / "a": b"new", tmp_path / "b": b"new"})
+    # as in a foreground process: another test in this pytest worker, or a library it loaded, may have left SIGINT
+    # handled otherwise or blocked (tests/test_cli_faults.py's _terminal_sigint)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    mask = signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            storage.atomic_write_files({tmp_path / "a": b"new", tmp_path / "b": b"new"})
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        signal.signal(signal.SIGINT, before)
     assert len(moves) == 2 and (tmp_path / "a").read_bytes() == (tmp_path / "b").read_bytes() == b"new"

@@ -111,6 +111,7 @@ def test_a_signal_that_meets_a_checkpoint_waits_for_the_save_and_then_stops_trai
 
     done = []
     before = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a foreground process
+    mask = signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})  # a worker may have blocked them
     with pytest.raises(KeyboardInterrupt):
         with _uninterrupted(deliver=True):
             signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)  # arrives mid-save
@@ -119,4 +120,5 @@ def test_a_signal_that_meets_a_checkpoint_waits_for_the_save_and_then_stops_trai
     with _uninterrupted(deliver=False):  # the final save: already stopping, nothing more to do
         signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    signal.pthread_sigmask(signal.SIG_SETMASK, mask)
     signal.signal(signal.SIGINT, before)
