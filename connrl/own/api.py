@@ -359,6 +359,13 @@ class Agent:
             self._history = True
         return int(self.learner.act(x, None, greedy=True))
 
+    def __repr__(self) -> str:
+        """Which agent this is and what its last evaluation said (``connrl.load`` of a run's best shows its score)."""
+        e = self.evaluation
+        said = "" if e is None else (f"; evaluated at step {e['steps']}: mean return {e['mean']:.2f} over "
+                                     f"{e['episodes']} episodes{' (best)' if e['best'] else ''}")
+        return f"<connrl Agent {self.kind} on {self.env_id or 'an unnamed env'}, trained {self.steps_done} steps{said}>"
+
     def divergence(self) -> str | None:
         """What shows that learning diverged (non-finite weights, or weights beyond connrl.core.divergence's limit,
         where every unit is saturated: a learning rate too large for the task), or None. A diverged agent is never

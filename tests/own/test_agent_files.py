@@ -194,6 +194,8 @@ def test_train_keeps_the_best_by_default_where_success_is_defined_and_evaluate_s
     kept = connrl.load(out / "best")
     assert kept.steps_done == best["steps"] and kept.evaluation["mean"] == pytest.approx(best["eval_mean"])
     assert kept.evaluation["best"] is True and kept.evaluation["episodes"] == 5
+    assert repr(kept) == (f"<connrl Agent QCON-R on CartPole-v1, trained {best['steps']} steps; evaluated at step "
+                          f"{best['steps']}: mean return {kept.evaluation['mean']:.2f} over 5 episodes (best)>")
     capsys.readouterr()
     assert cli.main(["evaluate", str(out / "best"), "--episodes", "1"]) == 0
     said = capsys.readouterr().out
