@@ -256,6 +256,7 @@ class Agent:
         self.check_env(env)
         scaled = _Scaled(env, self.scaler)
         scaled.on_sizes = self._check_range
+        end = self.steps_done + total_steps
 
         def play(k, left):
             self._set_learning_rate()  # a trial and its replay learn at the rate of the step it starts at
@@ -273,7 +274,6 @@ class Agent:
                       end="", flush=True)
             return stats
 
-        end = self.steps_done + total_steps
         self._history = False  # training begins trials of its own: predict's next call begins a history anew
         train(play, callbacks, agent=self, steps=total_steps)
         if progress:

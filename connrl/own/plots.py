@@ -10,13 +10,12 @@ its latest value until its next), so their mean and spread are over the runs tha
 from __future__ import annotations
 
 import io
-import json
 from pathlib import Path
 
 import numpy as np
 
 from connrl.own.callbacks import read_progress
-from connrl.storage import atomic_write_bytes
+from connrl.storage import atomic_write_bytes, read_json
 
 SMOOTH = 10  # training trials averaged for a run without evaluations
 
@@ -39,13 +38,14 @@ def write_training_curve(out: Path, rows: list[dict], title: str) -> Path:
 
 def plot_training(folder: Path) -> Path:
     """Redraw a trained agent's curve.png from its progress.csv (``connrl plot FOLDER``); settings.json, where it
-    is whole, names the plot (only as text: --resume checks the file)."""
+    is whole (read by ``connrl.storage.read_json``: a regular file, size-capped), names the plot (only as text:
+    --resume checks the file)."""
     rows = read_progress(folder / "progress.csv")
     title = str(folder)
     try:
-        s = json.loads((folder / "settings.json").read_text())
+        s = read_json(folder / "settings.json", "connrl train settings file")
         title = f"{str(s['env_id'])[:80]}, {str(s['agent'])[:20]}, seed {int(s['seed'])}"
-    except (OSError, ValueError, KeyError, TypeError):  # no settings (an agent saved by the API): the folder names it
+    except (ValueError, KeyError, TypeError):  # no settings (an agent saved by the API): the folder names it
         pass
     return write_training_curve(folder, rows, title)
 

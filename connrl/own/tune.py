@@ -7,7 +7,7 @@ mean over its seeds. The tuning seeds (default 1000, 1001) are apart from the se
 (built in, seeded: trial k's settings are the same in every run, and no setting is tried twice: where the space is
 a few choices, its grid in a shuffled order; ``planned``) and ``tpe`` (Optuna's, the ``tune`` extra). ``workers``
 trials run at once in processes (random sampler); the median pruner stops a trial whose running mean after a seed is
-below the median of the finished trials' after that seed (``median_thresholds``).
+below the median of the whole (not pruned) trials' after that seed (``median_thresholds``).
 
 Files in ``out``: ``trials.csv`` (one row per finished trial, rewritten atomically after each: an interrupted search
 resumes where it stopped), ``study.json`` (what was searched: a resumed search must search the same) and
@@ -202,7 +202,7 @@ def run_search(env_fn, study: dict, space: list[Dimension], out: Path, sampler: 
     after every whole one). ``workers`` > 1 runs that many trials at once in processes (``env_fn`` must then be
     picklable, e.g. a ``functools.partial``); with the median pruner their bars depend on which trials finished
     first, so such a search is not repeatable to the trial."""
-    done = _resume(study, space, out, sampler)
+    done = _resume(study, space, out)
     optuna_study = _optuna_study(space, done, study["seed"]) if sampler == "tpe" else None  # Optuna missing:
     atomic_write_text(out / "study.json", json.dumps(study, indent=1) + "\n")  # refused before it is written
     plan = planned(space, study["trials"], study["seed"]) if optuna_study is None else None
@@ -250,8 +250,9 @@ def _serial(submit, finish, k) -> None:
 
 def _parallel(submit, finish, todo: list[int], workers: int) -> None:
     """Trials ``todo`` in a pool of ``workers`` fresh (spawned) processes, at most that many at a time; every trial
-    that finished is recorded before an error or Ctrl-C ends the search, and the workers are then ended, not waited
-    for (the pruner's bars follow the trials as they finish)."""
+    that finished is handed to ``finish`` before an error or Ctrl-C ends the search (trials.csv keeps those up to the
+    first one unfinished), and the workers are then ended, not waited for (the pruner's bars follow the trials as
+    they finish)."""
     import multiprocessing
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
@@ -287,7 +288,7 @@ def _whole_prefix(done: list[dict]) -> list[dict]:
     return out
 
 
-def _resume(study: dict, space: list[Dimension], out: Path, sampler: str) -> list[dict]:
+def _resume(study: dict, space: list[Dimension], out: Path) -> list[dict]:
     """The trials a previous run of this search finished; ValueError where the folder holds another search."""
     out.mkdir(parents=True, exist_ok=True)
     meta, trials_file = out / "study.json", out / "trials.csv"
