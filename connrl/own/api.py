@@ -35,10 +35,10 @@ Files are ``agent.json`` and ``agent.npz`` (no pickle; connrl.own.files).
 from __future__ import annotations
 
 import warnings
+from contextlib import nullcontext
 from dataclasses import asdict
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
@@ -52,6 +52,7 @@ from connrl.core.rollout import MAX_EPISODE_STEPS, episode_cap, run_trial  # noq
 from connrl.core.training import as_callback, train
 from connrl.nets import NetConfig
 from connrl.nets.recurrent import RecurrentNetConfig
+from connrl.own.averaging import WeightAverage
 from connrl.own.files import (
     check_arrays,
     check_evaluation,
@@ -61,16 +62,8 @@ from connrl.own.files import (
     write_agent,
 )
 from connrl.own.options import MAX_NET_WEIGHTS, MAX_VALUE_RANGE, AgentOptions, options_from, temperatures
-from connrl.own.spaces import (
-    affine_scales,
-    check_observation_space,
-    check_single,
-    flat_scales,
-    flatten,
-    space_from,
-    space_json,
-    split_batch,
-)
+from connrl.own.scaling import InputScaler, ScaledEnv, warmup
+from connrl.own.spaces import check_observation_space, check_single, space_from, space_json, split_batch
 from connrl.own.value_scale import PROVISIONAL, range_for, rescale, reward_sizes
 from connrl.storage import FileError
 
@@ -89,99 +82,6 @@ def check_spaces(env) -> None:
     if int(env.action_space.start) != 0:  # the nets number their actions 0..n-1
         raise ValueError(f"connrl agents need a Discrete action space that starts at 0, got {env.action_space}")
     check_observation_space(env.observation_space)
-
-
-class InputScaler:
-    """Observations into the nets' input code (module docstring): ``encode(obs) -> float64 vector``."""
-
-    def __init__(self, kind: str, n: int, offset: np.ndarray | None = None, scale: np.ndarray | None = None,
-                 space=None):
-        self.kind, self.n, self.space = kind, int(n), space  # "flat" (composite spaces) flattens obs by the space
-        self.offset = np.zeros(self.n) if offset is None else np.asarray(offset, float)
-        self.scale = np.ones(self.n) if scale is None else np.asarray(scale, float)
-
-    @classmethod
-    def fit(cls, space, samples: np.ndarray) -> InputScaler:
-        if isinstance(space, spaces.Discrete):
-            return cls("onehot", space.n, offset=np.full(space.n, float(space.start)))
-        if isinstance(space, spaces.Box):
-            offset, scale = affine_scales(space.low, space.high, samples)
-            return cls("affine", offset.size, offset, scale)
-        offset, scale = flat_scales(space, samples)  # Dict, Tuple, MultiDiscrete, MultiBinary (connrl.own.spaces)
-        return cls("flat", offset.size, offset, scale, space)
-
-    @property
-    def n_inputs(self) -> int:
-        return self.n
-
-    def encode(self, obs) -> np.ndarray:
-        if self.kind == "onehot":
-            out = np.full(self.n, -0.5)
-            out[int(obs) - int(self.offset[0])] = 0.5  # the offset holds the space's start
-            return out
-        x = flatten(self.space, obs) if self.kind == "flat" else np.asarray(obs, float).ravel()
-        return (x - self.offset) / self.scale
-
-    def encode_row(self, row) -> np.ndarray:
-        """A lesson file's input row (``observation_row``: a composite observation already flattened) encoded."""
-        if self.kind == "onehot":  # a Discrete observation's row holds the one number
-            return self.encode(np.asarray(row).ravel()[0])
-        return (np.asarray(row, float) - self.offset) / self.scale if self.kind == "flat" else self.encode(row)
-
-    def to_json(self) -> dict:
-        return {"kind": self.kind, "n": self.n, "offset": self.offset.tolist(), "scale": self.scale.tolist()}
-
-    @classmethod
-    def from_json(cls, d: dict, space=None) -> InputScaler:
-        return cls(d["kind"], d["n"], d["offset"], d["scale"], space)
-
-
-class _Scaled(gym.ObservationWrapper):
-    def __init__(self, env, scaler: InputScaler):
-        super().__init__(env)
-        self.scaler = scaler
-        self.observation_space = spaces.Box(-np.inf, np.inf, (scaler.n_inputs,), np.float64)
-        self.steps = 0  # of the current trial: what a trial cut by Ctrl-C took
-        self.sizes = (0.0, 0.0)  # connrl.own.value_scale.reward_sizes of the rewards it has passed on
-        self.on_sizes = None  # called with the new sizes when they grow
-
-    def observation(self, observation):
-        return self.scaler.encode(observation)
-
-    def reset(self, **kwargs):
-        self.steps = 0
-        return super().reset(**kwargs)
-
-    def step(self, action):
-        obs, r, terminated, truncated, info = super().step(action)
-        self.steps += 1
-        i = int(bool(terminated))
-        if abs(float(r)) > self.sizes[i]:
-            self.sizes = (abs(float(r)), self.sizes[1]) if i == 0 else (self.sizes[0], abs(float(r)))
-            if self.on_sizes is not None:
-                self.on_sizes(self.sizes)
-        return obs, r, terminated, truncated, info
-
-
-def _warmup(env, steps: int, rng: np.random.Generator) -> tuple[list, list, list]:
-    """Observations, every step's (reward, terminated) and the episodes (observations, actions, rewards, terminated)
-    of ``steps`` random-policy steps (at least one observation)."""
-    obs, _ = env.reset(seed=int(rng.integers(2**31)))
-    seen, rewards, episodes, ep = [obs], [], [], ([obs], [], [])
-    for _ in range(steps):
-        a = int(rng.integers(env.action_space.n))
-        obs, r, terminated, truncated, _ = env.step(a)
-        seen.append(obs)
-        ep[0].append(obs)
-        ep[1].append(a)
-        ep[2].append(float(r))
-        rewards.append((float(r), bool(terminated)))
-        if terminated or truncated:
-            episodes.append((*ep, bool(terminated)))
-            obs, _ = env.reset(seed=int(rng.integers(2**31)))
-            seen.append(obs)
-            ep = ([obs], [], [])
-    return seen, rewards, episodes  # raw: a Dict observation is no array
 
 
 class Agent:
@@ -209,6 +109,8 @@ class Agent:
             raise ValueError(f"{width} inputs x {o.hidden} hidden units x {n} actions is more than "
                              f"{MAX_NET_WEIGHTS:,} weights; use fewer hidden units or a smaller observation")
         self.learner = _learner(kind, o, scaler.n_inputs, n, self.value_range, self.temperature, self.rng)
+        # the greedy policy's weights: the live ones, or their moving average (connrl.own.averaging)
+        self.average = WeightAverage(self.nets, o.average_steps) if o.average_steps is not None else None
 
     @property
     def nets(self):
@@ -254,7 +156,7 @@ class Agent:
         cap = episode_cap(env, max_trial_steps)
         callbacks = as_callback(callback)
         self.check_env(env)
-        scaled = _Scaled(env, self.scaler)
+        scaled = ScaledEnv(env, self.scaler)
         scaled.on_sizes = self._check_range
         end = self.steps_done + total_steps
 
@@ -269,6 +171,8 @@ class Agent:
                 raise
             self.steps_done += stats.steps
             self.trials_done += 1
+            if self.average is not None:
+                self.average.update(stats.steps)
             if progress:
                 print(f"\rsteps {self.steps_done}/{end}  trial {self.trials_done}  return {stats.total_reward:.1f}",
                       end="", flush=True)
@@ -286,10 +190,15 @@ class Agent:
             raise ValueError(f"episodes must be a whole number >= 1, got {episodes!r}")
         cap = episode_cap(env, max_episode_steps)
         self.check_env(env)
-        scaled = _Scaled(env, self.scaler)  # the learner's own greedy trial (T = 0, no random draws, nothing learnt)
+        scaled = ScaledEnv(env, self.scaler)  # the learner's own greedy trial (T = 0, no random draws, nothing learnt)
         self._history = False
-        return [run_trial(scaled, self.learner, trial=self.trials_done, learning=False, seed=seed + k,
-                          max_steps=cap).total_reward for k in range(episodes)]
+        with self.greedy_weights():
+            return [run_trial(scaled, self.learner, trial=self.trials_done, learning=False, seed=seed + k,
+                              max_steps=cap).total_reward for k in range(episodes)]
+
+    def greedy_weights(self):
+        """A context in which the nets hold the greedy policy's weights (the average, with ``average_steps``)."""
+        return self.average.acting() if self.average is not None else nullcontext()
 
     def check_env(self, env) -> None:
         """Refuse, in one line, an environment whose spaces are not the ones this agent was made for."""
@@ -309,6 +218,8 @@ class Agent:
         if bound is None or self.range_set and bound <= self.value_range * (1 + 1e-9):
             return
         if self.options.value_range is None:
+            if self.average is not None and self.range_set:  # the average's Q-values kept as the live ones are
+                self.average.scale_outputs(self.value_range / bound)
             rescale(_all_nets(self), bound, keep_q=self.range_set)
             self.range_set, self.value_range = True, bound
             # the rest of this trial and its replay explore at the new scale, not the old one
@@ -338,9 +249,11 @@ class Agent:
                 raise ValueError(f"{self.kind} keeps one history in the agent: predict one environment's observation "
                                  "at a time, greedily (deterministic=True)")
             start = not self._history or (episode_start is not None and bool(np.asarray(episode_start).ravel()[0]))
-            actions = [self._history_action(observations[0], start)]
+            with self.greedy_weights():
+                actions = [self._history_action(observations[0], start)]
         else:
-            actions = [self._action(o, deterministic) for o in observations]
+            with self.greedy_weights():
+                actions = [self._action(o, deterministic) for o in observations]
         return (np.array(actions[0]) if batch is None else np.array(actions)), state
 
     def _action(self, obs, deterministic: bool) -> int:
@@ -391,7 +304,8 @@ class Agent:
             "seed": self.seed,
             "steps_done": self.steps_done, "trials_done": self.trials_done, "rng": self.rng.bit_generator.state,
             **({"evaluation": self.evaluation} if self.evaluation is not None else {})},
-            self.nets.state_dict(), memory.lessons if memory is not None else [], self.learner.book.taught)
+            {**self.nets.state_dict(), **(self.average.state() if self.average is not None else {})},
+            memory.lessons if memory is not None else [], self.learner.book.taught)
         return path
 
 
@@ -447,7 +361,7 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options
     o = options_from(options)
     rng = np.random.default_rng(seed)
     raw_taught = read_taught(lessons, env) if lessons is not None else []  # a file for another task: refused first
-    seen, rewards, episodes = _warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
+    seen, rewards, episodes = warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
     scaler = InputScaler.fit(env.observation_space, seen)
     taught = [Lesson(np.array([scaler.encode_row(x) for x in lesson.inputs]), lesson.actions, lesson.rewards,
                      terminated=lesson.terminated, truncated=lesson.truncated, taught=True) for lesson in raw_taught]
@@ -484,9 +398,14 @@ def load(path, env=None) -> Agent:
                   InputScaler.from_json(m["scaler"], obs_space), m["value_range"], m["seed"], m.get("env_id"))
     if m.get("range_set") is False:  # still provisional (files before it was saved: set)
         agent.range_set = False
-    state, memory, taught = check_arrays(path, arrays, agent.nets.state_dict(), m, _input_width(agent),
-                                         int(agent.action_space.n))
-    agent.nets.load_state_dict(state)
+    nets = agent.nets.state_dict()
+    average = agent.average.state() if agent.average is not None else {}  # absent from a file saved before it
+    state, memory, taught = check_arrays(path, arrays, nets, m, _input_width(agent), int(agent.action_space.n),
+                                         optional=average)
+    agent.nets.load_state_dict({k: state[k] for k in nets})
+    if agent.average is not None:
+        agent.average = WeightAverage(agent.nets, options.average_steps)  # from the loaded weights, unless saved
+        agent.average.load(state)
     for lesson in memory:
         agent.learner.book.memory.add(lesson)
     agent.learner.add_taught_lessons(taught)

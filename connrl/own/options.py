@@ -10,7 +10,8 @@ from connrl.storage import shown
 # the size-like options' ranges: far beyond any task of the thesis or of Gymnasium's classic control, small enough
 # that no typo asks for gigabytes or centuries before it is noticed
 _SIZES = {"hidden": (0, MAX_UNITS), "anneal_steps": (1, 10**10), "lessons_per_trial": (0, 10_000),
-          "capacity": (1, 100_000), "warmup_steps": (1, 10**7), "window": (1, 64), "context": (0, MAX_UNITS)}
+          "capacity": (1, 100_000), "warmup_steps": (1, 10**7), "window": (1, 64), "context": (0, MAX_UNITS),
+          "average_steps": (1, 10**10)}
 # the positive real options' upper ends: far beyond any sensible value (the thesis's rates are 0.01-0.4), small enough
 # that a typo (lr: 1e20) is refused here, not met as an overflow inside a compiled kernel mid-run
 _POSITIVE = {"lr": 100.0, "lr_end": 100.0, "init_range": 100.0, "t_start": 1e6, "t_end": 1e6}
@@ -57,10 +58,14 @@ class AgentOptions:
     warmup_steps: int = 1000  # random-policy steps that set the input and value scales
     window: int = 2  # window-Q: the N latest observations and actions beside the current one (7.3)
     context: int = 8  # recurrent-Q: context units, at most hidden (7.3-7.4)
+    average_steps: int | None = None  # the greedy policy acts with the weights averaged over about this many latest
+    # steps (connrl.own.averaging); None: with the live weights
 
     def __post_init__(self):
         for name, (low, high) in _SIZES.items():
             v = getattr(self, name)
+            if v is None and name == "average_steps":
+                continue
             if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
                 raise ValueError(f"option {name} must be a whole number from {low} to {high:,}, got {shown(v)}")
         for name, hi in _POSITIVE.items():
