@@ -80,7 +80,44 @@ def summarize(runs: list[Run], tasks: list[str], learners: list[str], task_info:
               "evaluation at the threshold, - if the median run never reached it; lost: evaluations below the "
               "threshold after each run's first at it, of all evaluations after it)"]
     lines += _verdicts(runs, tasks, learners, task_info, seeds)
+    lines += _solve_verdicts(runs, tasks, learners, seeds)
     return "\n".join(lines)
+
+
+HELD_GOAL = 4  # issue 47: a held solve on at least 4 of 5 seeds, sooner in wall-clock than SB3-zoo
+
+
+def held_seconds(run: Run) -> float:
+    """Training wall-clock seconds to the held solve, at the run's mean training rate (evaluations excluded; inf:
+    never held)."""
+    held = run.doc["held"]
+    return held * run.doc["wall"] / run.doc["steps"] if held is not None else math.inf
+
+
+def _solve_verdicts(runs: list[Run], tasks: list[str], learners: list[str], seeds: list[int]) -> list[str]:
+    if "SB3-zoo" not in learners:
+        return []
+    out = ["", f"issue 47's goal per task: a held solve on >= {HELD_GOAL} of 5 seeds, the median wall-clock to it "
+           "below SB3-zoo's (seconds of training at each run's mean rate; > budget: the median run never held)"]
+    for task in tasks:
+        theirs = _select(runs, task, "SB3-zoo")
+        b = float(np.median([held_seconds(r) for r in theirs])) if theirs else math.inf
+        for name in (n for n in learners if n.startswith("QCON")):
+            ours = _select(runs, task, name)
+            if not ours or not theirs:
+                continue
+            if not [r.seed for r in ours] == [r.seed for r in theirs] == sorted(seeds):
+                continue  # an interrupted or partial run: issue 30's lines say so
+            n = sum(r.doc["held"] is not None for r in ours)
+            a = float(np.median([held_seconds(r) for r in ours]))
+            met = n >= HELD_GOAL and math.isfinite(a) and a < b
+            out.append(f"{task:<15} {name}: {'met' if met else 'not met':<8} held {n}/{len(ours)}; median wall-clock "
+                       f"to it {_seconds(a)} vs SB3-zoo's {_seconds(b)}")
+    return out
+
+
+def _seconds(v: float) -> str:
+    return f"{v:,.1f} s" if math.isfinite(v) else "> budget"
 
 
 def _verdicts(runs: list[Run], tasks: list[str], learners: list[str], task_info: dict, seeds: list[int]) -> list[str]:

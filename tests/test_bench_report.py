@@ -55,3 +55,15 @@ def test_a_held_solve_is_the_fifth_evaluation_in_a_row_at_the_threshold_and_the_
         curve.add(5000 * (k + 1), lambda v=v: [v, v])
     assert curve.held == 5000 * 10  # evaluations 6-10; the longer streak after it does not move it
     assert [v for _, v in curve.points] == values
+
+
+def test_issue_47s_goal_counts_held_seeds_and_compares_wall_clock_to_the_held_solve():
+    # QCON-R: 100 steps in 2 s of training, held at 40 and 60 steps on 4 of 5 seeds -> 0.8 s and 1.2 s; median of
+    # [0.8, 0.8, 1.2, 1.2, inf] = 1.2 s. SB3-zoo: held at 50 steps in 10 s per 100 -> 5 s each.
+    ours = [_run(s, h, [9]) for s, h in enumerate([40, 40, 60, 60, None])]
+    theirs = [_run(s, 50, [9], "SB3-zoo")._replace(doc={**_run(s, 50, [9]).doc, "wall": 10.0}) for s in range(5)]
+    text = summarize(ours + theirs, ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, list(range(5)))
+    assert "T               QCON-R: met      held 4/5; median wall-clock to it 1.2 s vs SB3-zoo's 5.0 s" in text
+    three = [r._replace(doc={**r.doc, "held": None}) if r.seed == 0 else r for r in ours]  # 3 of 5 is short
+    assert "QCON-R: not met  held 3/5;" in summarize(three + theirs, ["T"], ["QCON-R", "SB3-zoo"],
+                                                     {"T": (5.0, 20_000)}, list(range(5)))
