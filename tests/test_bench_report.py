@@ -67,3 +67,12 @@ def test_issue_47s_goal_counts_held_seeds_and_compares_wall_clock_to_the_held_so
     three = [r._replace(doc={**r.doc, "held": None}) if r.seed == 0 else r for r in ours]  # 3 of 5 is short
     assert "QCON-R: not met  held 3/5;" in summarize(three + theirs, ["T"], ["QCON-R", "SB3-zoo"],
                                                      {"T": (5.0, 20_000)}, list(range(5)))
+
+
+def test_issue_47s_goal_is_not_met_by_a_held_solve_slower_than_sb3_zoo_nor_on_other_than_five_seeds():
+    ours = [_run(s, 40, [9])._replace(doc={**_run(s, 40, [9]).doc, "wall": 20.0}) for s in range(5)]  # 8 s each
+    theirs = [_run(s, 50, [9], "SB3-zoo") for s in range(5)]  # 1 s each
+    text = summarize(ours + theirs, ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, list(range(5)))
+    assert "QCON-R: not met  held 5/5; median wall-clock to it 8.0 s vs SB3-zoo's 1.0 s" in text
+    three = summarize(ours[:3] + theirs[:3], ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, [0, 1, 2])
+    assert "no verdict: the goal is stated over 5 seeds, this run has 3" in three

@@ -168,6 +168,8 @@ class Agent:
             except BaseException:  # Ctrl-C inside a trial: its steps were taken; a lesson still being recorded is
                 self.steps_done += scaled.steps  # dropped, so the next learn() starts a trial of its own (one cut
                 self.learner.book.recorder.discard()  # in the replay after it is kept, partly replayed)
+                if self.average is not None:  # its on-line updates were learnt: the average follows them
+                    self.average.update(scaled.steps)
                 raise
             self.steps_done += stats.steps
             self.trials_done += 1
@@ -241,7 +243,8 @@ class Agent:
         schedule gives at the agent's step (``temperature``), with a generator of its own (the learner's random
         stream never moves). Memoryless agents hand ``state`` back as given. Window-Q and recurrent-Q keep their
         history in the agent, for one environment: a true ``episode_start``, the first call, and the first call
-        after ``learn`` or ``evaluate`` begin a new one; they act greedily only."""
+        after ``learn`` or ``evaluate`` begin a new one; they act greedily only. With ``average_steps`` every
+        prediction reads the averaged weights (``greedy_weights``), as ``evaluate`` does."""
         batch = split_batch(self.observation_space, observation)
         observations = [observation] if batch is None else batch
         if self.kind in MEMORY_KINDS:
@@ -399,12 +402,11 @@ def load(path, env=None) -> Agent:
     if m.get("range_set") is False:  # still provisional (files before it was saved: set)
         agent.range_set = False
     nets = agent.nets.state_dict()
-    average = agent.average.state() if agent.average is not None else {}  # absent from a file saved before it
-    state, memory, taught = check_arrays(path, arrays, nets, m, _input_width(agent), int(agent.action_space.n),
-                                         optional=average)
+    average = agent.average.state() if agent.average is not None else {}  # saved whenever average_steps is set
+    state, memory, taught = check_arrays(path, arrays, {**nets, **average}, m, _input_width(agent),
+                                         int(agent.action_space.n))
     agent.nets.load_state_dict({k: state[k] for k in nets})
     if agent.average is not None:
-        agent.average = WeightAverage(agent.nets, options.average_steps)  # from the loaded weights, unless saved
         agent.average.load(state)
     for lesson in memory:
         agent.learner.book.memory.add(lesson)

@@ -50,8 +50,8 @@ class WeightAverage:
     def acting(self):
         """The nets hold the average inside the block and their own weights again after it (an error included)."""
         live = self.nets.state_dict()
-        self.nets.load_state_dict({**live, **self.arrays})
-        try:
+        try:  # the swap itself inside: a Ctrl-C that lands in it still gives the live weights back
+            self.nets.load_state_dict({**live, **self.arrays})
             yield
         finally:
             self.nets.load_state_dict(live)
@@ -61,8 +61,6 @@ class WeightAverage:
         return {PREFIX + k: a.copy() for k, a in self.arrays.items()}
 
     def load(self, state: dict[str, np.ndarray]) -> None:
-        """Set from ``state`` (``state()``'s keys, shapes checked by the file reader); an agent saved before the
-        average existed has none: it starts at the loaded weights."""
+        """Set from ``state`` (``state()``'s keys, each checked by the file reader)."""
         for k, a in self.arrays.items():
-            if PREFIX + k in state:
-                a[...] = state[PREFIX + k]
+            a[...] = state[PREFIX + k]

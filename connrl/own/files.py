@@ -163,20 +163,18 @@ def check_record(meta: Path, m: dict, kinds: tuple[str, ...]) -> None:
 
 
 def check_arrays(path: Path, arrays: dict[str, np.ndarray], expected: dict[str, np.ndarray], m: dict,
-                 n_inputs: int, n_actions: int, optional: dict | None = None
-                 ) -> tuple[dict, list[Lesson], list[Lesson]]:
+                 n_inputs: int, n_actions: int) -> tuple[dict, list[Lesson], list[Lesson]]:
     """The agent.npz's arrays against the agent built from its record: exactly the nets' arrays (``expected``, a
-    state dict) in their shapes and finite, those of ``optional`` likewise where present, and every lesson with
+    state dict) in their shapes and finite, and every lesson with
     ``n_inputs``-wide finite inputs, one more row than actions, actions in 0..n_actions-1 and finite rewards. Returns
     (net state, replay memory, taught lessons)."""
     npz = path / "agent.npz"
     lesson_keys = {f"{p}{k}_{f}" for p, key in (("lesson", "lesson_ends"), ("taught", "taught_ends"))
                    for k in range(len(m.get(key, []))) for f in _FIELDS}
-    optional = optional or {}
-    unknown = sorted(set(arrays) - set(expected) - set(optional) - lesson_keys)
+    unknown = sorted(set(arrays) - set(expected) - lesson_keys)
     if unknown:
         raise FileError(npz, f"holds arrays {', '.join(unknown[:3])} that this agent does not have")
-    state = {key: check_array(npz, key, arrays[key], want.shape) for key, want in optional.items() if key in arrays}
+    state = {}
     for key, want in expected.items():
         if key not in arrays:
             raise FileError(npz, f"has no array {key!r}; a {m['agent']} agent needs {', '.join(expected)}")

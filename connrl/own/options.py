@@ -67,7 +67,8 @@ class AgentOptions:
             if v is None and name == "average_steps":
                 continue
             if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
-                raise ValueError(f"option {name} must be a whole number from {low} to {high:,}, got {shown(v)}")
+                off = " or None (null in a settings file: off)" if name == "average_steps" else ""
+                raise ValueError(f"option {name} must be a whole number from {low} to {high:,}{off}, got {shown(v)}")
         for name, hi in _POSITIVE.items():
             v = getattr(self, name)
             if v is None and name in ("t_start", "t_end", "lr_end"):

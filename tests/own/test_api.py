@@ -164,17 +164,22 @@ def test_a_value_range_too_small_for_the_returns_is_warned_once():
 
 @pytest.mark.parametrize("kind", ["QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q",
                                   "recurrent-Q"])
-def test_a_loaded_agent_learns_on_exactly_as_the_saved_one_would(kind, tmp_path):
+@pytest.mark.parametrize("average", [None, 40])  # with average_steps, the averaged greedy weights too
+def test_a_loaded_agent_learns_on_exactly_as_the_saved_one_would(kind, average, tmp_path):
     taught = {"lessons": _toy_lessons(tmp_path)} if kind.endswith("-T") else {}
-    a = make_agent(Toy(), kind, seed=2, warmup_steps=30, hidden=4, context=2, **taught).learn(100)
+    a = make_agent(Toy(), kind, seed=2, warmup_steps=30, hidden=4, context=2, average_steps=average,
+                   **taught).learn(100)
     a.save(tmp_path / "a")
     b = connrl.load(tmp_path / "a", Toy())
     a.learn(100)
     b.learn(100)
     sa, sb = a.nets.state_dict(), b.nets.state_dict()
-    assert sorted(sa) == sorted(sb) and len(sa) >= 2
+    if average is not None:
+        sa, sb = {**sa, **a.average.state()}, {**sb, **b.average.state()}
+    assert sorted(sa) == sorted(sb) and len(sa) >= (2 if average is None else 4)
     for key in sa:
         np.testing.assert_array_equal(sa[key], sb[key])
+    assert connrl.evaluate(a, Toy(), 2, seed=1) == connrl.evaluate(b, Toy(), 2, seed=1)
 
 
 def test_a_damaged_agent_file_and_the_wrong_environment_are_one_line(tmp_path):
