@@ -26,9 +26,14 @@ MAX_SETTINGS_BYTES = 2**20
 MAX_STEPS = 10**10  # environment steps of one `connrl train` (and a settings file's n_timesteps): months of compute
 
 
+SHARED = {"QCON-T": "QCON-R"}  # QCON-T is QCON-R that also replays a teacher's lessons: its settings, as the
+# benchmark gives them (benchmarks/bench_gymnasium.py), unless it has a file of its own
+
+
 def shipped_file(kind: str) -> Path:
-    """The shipped settings file of an agent kind (it may not exist)."""
-    return SETTINGS_DIR / f"{kind.lower()}.yml"
+    """The shipped settings file of an agent kind (it may not exist): its own, else the one it shares."""
+    own = SETTINGS_DIR / f"{kind.lower()}.yml"
+    return own if own.exists() or kind not in SHARED else SETTINGS_DIR / f"{SHARED[kind].lower()}.yml"
 
 
 def load_plain_yaml(text: str, path):

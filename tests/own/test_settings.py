@@ -146,3 +146,10 @@ def test_a_boolean_or_a_float_where_a_count_belongs_is_refused_by_name(name, val
         check_entry("own.yml", "CartPole-v1", {name: value})
     assert str(info.value).startswith("own.yml: entry 'CartPole-v1': ")
     assert len(_count_fields()) >= 8  # the fields are found: this test cannot pass on an empty list
+
+
+def test_qcon_t_uses_qcon_rs_shipped_settings_as_the_benchmark_does():
+    entry, source = task_settings("CartPole-v1", "QCON-T")
+    assert source == "connrl/data/hyperparams/qcon-r.yml [CartPole-v1]"
+    assert entry == read_settings(SETTINGS_DIR / "qcon-r.yml")["CartPole-v1"]
+    assert task_settings("CartPole-v1", "AHCON-T") == (None, None)  # no file shipped for AHC's learners
