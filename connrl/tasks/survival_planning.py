@@ -9,9 +9,7 @@ training after each step. Same arithmetic and draws as the Python path, bit for 
   once per promising action (``PerfectSurvivalModel.steps_from``);
 * the learned model's prediction and training (``_predict``, ``_train_row``) and its replay draws from the agent's
   generator, whose ``integers`` Numba computes as NumPy does (checked by the tests);
-* AHCON's ``mu`` as ``np.dot(p, e) / p.sum()``: for four numbers or fewer the plain loop of products and sums, which
-  is what NumPy's dot computes with the BLAS it was built with here (``dot_checked``, once per process; ``plan_fits``
-  asks for at most four actions);
+* AHCON's ``mu``, sum p E / sum p, as the same plain loops of products and sums (``relaxation_ahc``);
 * the learned model's squared error ``reward_abs ** 2``: Python's ``**`` is libm's ``pow``, which for about one number
   in a thousand is not ``x * x`` (what Numba makes of it), so the kernel keeps each step's ``reward_abs`` and
   ``leave_planning`` squares and sums them in Python, in the same order.
@@ -20,8 +18,6 @@ Not cached: it compiles in kernels of other files (tests/nets/test_kernel_cache.
 """
 
 from __future__ import annotations
-
-import functools
 
 import numba
 import numpy as np
@@ -46,27 +42,13 @@ def plan_fits(agent, env) -> bool:
     planner = agent.planner
     if planner is None:
         return True
-    if type(planner) is not RelaxationPlanner or agent.n_actions > 4 or not dot_checked():
+    if type(planner) is not RelaxationPlanner or agent.n_actions > 4:
         return False
     model = planner.model
     if type(model) is PerfectSurvivalModel:
         return model.env is env
     return (type(model) is LearnedSurvivalModel and type(model.sim) is PerfectSurvivalModel and model.sim.env is env
             and model.rng is agent.rng)
-
-
-@functools.cache
-def dot_checked() -> bool:
-    """Whether ``np.dot`` of one to four numbers is the plain loop of products and sums here (it is the BLAS's)."""
-    rng = np.random.default_rng(45)
-    for i in range(4000):
-        p, e = rng.uniform(0.0, 1.0, 1 + i % 4), rng.uniform(-1.0, 1.0, 1 + i % 4)
-        plain = 0.0
-        for a, b in zip(p.tolist(), e.tolist(), strict=True):
-            plain += a * b
-        if float(np.dot(p, e)) != plain:
-            return False
-    return True
 
 
 def planning_of(agent, env, trial: int, cap: int) -> tuple:
@@ -187,7 +169,7 @@ def _plan(net, v, ahcon, x, q, t, gamma, clip, has_clip, world, planning, bufs):
             _update(net, x, actions[i], targets[i], False)
         return True
     dot, mass = 0.0, 0.0
-    for i in range(n):  # np.dot(p[S], E) / p[S].sum(): the plain loops for four numbers or fewer
+    for i in range(n):  # sum p E / sum p over S: relaxation_ahc's plain loops
         dot += p[actions[i]] * targets[i]
     for i in range(n):
         mass += p[actions[i]]
