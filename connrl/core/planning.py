@@ -59,11 +59,9 @@ def relaxation_ahc(v_net, policy_net, x: np.ndarray, probabilities: np.ndarray, 
         u = 0.0 if terminal else float(v_net.value(y, 0))
         e[i] = _clip(r + gamma * u, clip)
     p = np.asarray(probabilities, dtype=np.float64)[np.asarray(actions, dtype=np.int64)]
-    dot = mass = 0.0  # sum p E / sum p as plain loops: a BLAS dot adds in another order on some CPUs (AVX-512)
+    dot = mass = 0.0  # sum p E / sum p as plain sums: a BLAS dot adds in another order on some CPUs (AVX-512)
     for p_a, e_a in zip(p.tolist(), e.tolist(), strict=True):
-        dot += p_a * e_a
-    for p_a in p.tolist():
-        mass += p_a
+        dot, mass = dot + p_a * e_a, mass + p_a
     mu = dot / mass
     v_net.update(x, 0, float(e.max()))  # step 6
     for a, e_a in zip(actions, e, strict=True):  # step 7

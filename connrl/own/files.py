@@ -165,9 +165,8 @@ def check_record(meta: Path, m: dict, kinds: tuple[str, ...]) -> None:
 def check_arrays(path: Path, arrays: dict[str, np.ndarray], expected: dict[str, np.ndarray], m: dict,
                  n_inputs: int, n_actions: int) -> tuple[dict, list[Lesson], list[Lesson]]:
     """The agent.npz's arrays against the agent built from its record: exactly the nets' arrays (``expected``, a
-    state dict) in their shapes and finite, and every lesson with
-    ``n_inputs``-wide finite inputs, one more row than actions, actions in 0..n_actions-1 and finite rewards. Returns
-    (net state, replay memory, taught lessons)."""
+    state dict) in their shapes and finite, and every lesson with ``n_inputs``-wide finite inputs, one more row than
+    actions, actions in 0..n_actions-1 and finite rewards. Returns (net state, replay memory, taught lessons)."""
     npz = path / "agent.npz"
     lesson_keys = {f"{p}{k}_{f}" for p, key in (("lesson", "lesson_ends"), ("taught", "taught_ends"))
                    for k in range(len(m.get(key, []))) for f in _FIELDS}

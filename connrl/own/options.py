@@ -15,6 +15,7 @@ _SIZES = {"hidden": (0, MAX_UNITS), "anneal_steps": (1, 10**10), "lessons_per_tr
 # the positive real options' upper ends: far beyond any sensible value (the thesis's rates are 0.01-0.4), small enough
 # that a typo (lr: 1e20) is refused here, not met as an overflow inside a compiled kernel mid-run
 _POSITIVE = {"lr": 100.0, "lr_end": 100.0, "init_range": 100.0, "t_start": 1e6, "t_end": 1e6}
+_MAY_BE_NONE = ("t_start", "t_end", "lr_end", "average_steps", "p_threshold")  # None: the framework's, or off
 MAX_NET_WEIGHTS = 50_000_000  # inputs x hidden units x actions: 400 MB of float64 per array
 
 
@@ -64,20 +65,20 @@ class AgentOptions:
     def __post_init__(self):
         for name, (low, high) in _SIZES.items():
             v = getattr(self, name)
-            if v is None and name == "average_steps":
+            if v is None and name in _MAY_BE_NONE:
                 continue
             if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
                 off = " or None (null in a settings file: off)" if name == "average_steps" else ""
                 raise ValueError(f"option {name} must be a whole number from {low} to {high:,}{off}, got {shown(v)}")
         for name, hi in _POSITIVE.items():
             v = getattr(self, name)
-            if v is None and name in ("t_start", "t_end", "lr_end"):
+            if v is None and name in _MAY_BE_NONE:
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= hi:
                 raise ValueError(f"option {name} must be a number > 0 and <= {hi:g}, got {shown(v)}")
         for name in ("momentum", "p_threshold"):
             v = getattr(self, name)
-            if v is None and name == "p_threshold":
+            if v is None and name in _MAY_BE_NONE:
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 1:
                 raise ValueError(f"option {name} must be in [0, 1), got {v!r}")

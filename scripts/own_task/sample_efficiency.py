@@ -26,6 +26,7 @@ from connrl.own.api import KINDS, options_from
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from bench_gymnasium import TASKS, connrl_options, run_connrl  # noqa: E402
+from gymnasium_report import Run, relapses  # noqa: E402
 
 
 def _value(text: str):
@@ -55,10 +56,8 @@ def _job(args):
 def lost_share(curve: list, threshold: float) -> float | None:
     """Relapse: the share of the evaluations after a run's first one at the threshold that fall below it (None for
     a run that never reached it, or reached it only at its last evaluation)."""
-    values = [v for _, v in curve]
-    first = next((i for i, v in enumerate(values) if v >= threshold), None)
-    later = values[first + 1:] if first is not None else []
-    return sum(v < threshold for v in later) / len(later) if later else None
+    below, later = relapses([Run("", "", 0, {"curve": curve})], threshold)  # the benchmark table's count
+    return below / later if later else None
 
 
 def summary_line(name: str, rs: list[dict], threshold: float) -> str:
