@@ -4,10 +4,12 @@
                                          [--workers 1] [--out DIR] [--write docs/PERFORMANCE.md] [--no-run]
 
 Per task, learner and seed: the greedy policy's mean return over 10 episodes (evaluation seeds 10,000-10,009) every
-5,000 environment steps up to RL Zoo's DQN budget (CartPole-v1 50k, Acrobot-v1 100k, MountainCar-v0 120k,
-LunarLander-v3 100k); the steps to a *held solve* -- the greedy mean at or above the task's threshold (475, -100,
--110, 200) at five evaluations in a row, counted at the fifth; the training wall and CPU time (evaluations excluded)
-and so the environment steps per second. Training goes on to the budget after a held solve, so the learning curves
+5,000 environment steps up to the learner's budget -- RL Zoo's DQN budget for SB3 (CartPole-v1 50k, Acrobot-v1 100k,
+MountainCar-v0 120k, LunarLander-v3 100k), the settings file's ``n_timesteps`` for connrl (what ``connrl train``
+runs; larger than RL Zoo's only where its training wall-clock stays below SB3-zoo's for RL Zoo's budget); the steps
+to a *held solve* -- the greedy mean at or above the task's threshold (475, -100, -110, 200) at five evaluations in a
+row, counted at the fifth; the training wall and CPU time (evaluations excluded) and so the environment steps per
+second. Training goes on to the budget after a held solve, so the learning curves
 are whole. connrl's random warm-up (1,000 steps that set its scales) is counted in its steps and time, as SB3's
 ``learning_starts`` steps are in SB3's; connrl evaluates after the trial that crosses each 5,000 mark, SB3 on the mark.
 
@@ -117,17 +119,26 @@ class _Curve:
             self.held = steps
 
 
+def connrl_budget(task: str) -> int:
+    """connrl's budget for ``task``: its settings entry's ``n_timesteps``, else RL Zoo's."""
+    entry, _ = task_settings(task, "QCON-R")
+    return int(entry.get("n_timesteps") or TASKS[task][1]) if entry else TASKS[task][1]
+
+
 def connrl_options(task: str) -> dict:
     """QCON-R's options for ``task``: its entry in the shipped settings file (none: the defaults)."""
     entry, _ = task_settings(task, "QCON-R")
     return dict(entry["options"]) if entry else {}
 
 
-def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "QCON-R", setup=None) -> dict:
-    """One connrl run (``options``: AgentOptions fields, default the shipped settings). QCON-T first records
-    ``TAUGHT_EPISODES`` episodes of the task's teacher; their steps count in its budget and time. ``setup(agent,
-    env)``, when given, changes the agent before it learns (scripts/own_task/planning_grouping.py)."""
-    threshold, budget = TASKS[task]
+def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "QCON-R", setup=None,
+               budget: int | None = None) -> dict:
+    """One connrl run (``options``: AgentOptions fields, default the shipped settings) of ``budget`` steps (default
+    RL Zoo's). QCON-T first records ``TAUGHT_EPISODES`` episodes of the task's teacher; their steps count in its
+    budget and time. ``setup(agent, env)``, when given, changes the agent before it learns
+    (scripts/own_task/planning_grouping.py)."""
+    threshold, zoo_budget = TASKS[task]
+    budget = budget or zoo_budget
     options = connrl_options(task) if options is None else options
     env, eval_env = gym.make(task), gym.make(task)
     t0, c0 = time.perf_counter(), time.process_time()
@@ -151,7 +162,7 @@ def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "Q
         return True
 
     agent.learn(budget - before, callback=evaluate)
-    return _record(curve, time.perf_counter() - t0, time.process_time() - c0, before + agent.steps_done,
+    return _record(curve, time.perf_counter() - t0, time.process_time() - c0, before + agent.steps_done, budget,
                    diverged=agent.divergence())
 
 
@@ -189,16 +200,16 @@ def run_sb3(task: str, seed: int, zoo: bool) -> dict:
     model = DQN(env=gym.make(task), seed=seed, device="cpu", verbose=0, **settings)
     t0, c0 = time.perf_counter(), time.process_time()
     model.learn(budget, callback=Evaluate())
-    return _record(curve, time.perf_counter() - t0, time.process_time() - c0, int(model.num_timesteps))
+    return _record(curve, time.perf_counter() - t0, time.process_time() - c0, int(model.num_timesteps), budget)
 
 
 def sb3_settings(task: str, zoo: bool) -> dict:
     return {**_ZOO_COMMON, **RL_ZOO_DQN[task]} if zoo else {"policy": "MlpPolicy"}
 
 
-def _record(curve: _Curve, wall: float, cpu: float, steps: int, diverged: str | None = None) -> dict:
+def _record(curve: _Curve, wall: float, cpu: float, steps: int, budget: int, diverged: str | None = None) -> dict:
     return {"held": curve.held, "curve": curve.points, "wall": wall - curve.eval_s, "cpu": cpu - curve.eval_cpu,
-            "steps": steps, "diverged": diverged}
+            "steps": steps, "budget": budget, "diverged": diverged}
 
 
 @functools.cache  # run_key asks once per task and learner; the source does not change within a run
@@ -218,7 +229,8 @@ def run_key(learner: str, task: str) -> dict:
               "machine": platform.machine(), **_versions("numpy", "gymnasium", "box2d")}
     if learner.startswith("QCON"):  # numba: the kernels are compiled with fastmath
         teacher = {"teacher": [TEACHERS[task][0], TAUGHT_EPISODES]} if learner == "QCON-T" else {}
-        return {**common, "options": connrl_options(task), **teacher, "connrl_source": _source_hash(),
+        return {**common, "options": connrl_options(task), "budget": connrl_budget(task), **teacher,
+                "connrl_source": _source_hash(),
                 **_versions("numba")}
     return {**common, "settings": sb3_settings(task, learner == "SB3-zoo"),
             **_versions("stable-baselines3", "torch")}
@@ -237,7 +249,7 @@ def _versions(*packages: str) -> dict:
 def _job(args: tuple) -> dict:
     learner, task, seed = args
     if learner.startswith("QCON"):
-        return run_connrl(task, seed, kind=learner)
+        return run_connrl(task, seed, kind=learner, budget=connrl_budget(task))
     return run_sb3(task, seed, zoo=learner == "SB3-zoo")
 
 

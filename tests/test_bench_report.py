@@ -76,3 +76,16 @@ def test_issue_47s_goal_is_not_met_by_a_held_solve_slower_than_sb3_zoo_nor_on_ot
     assert "QCON-R: not met  held 5/5; median wall-clock to it 8.0 s vs SB3-zoo's 1.0 s" in text
     three = summarize(ours[:3] + theirs[:3], ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, [0, 1, 2])
     assert "no verdict: the goal is stated over 5 seeds, this run has 3" in three
+
+
+def test_a_longer_connrl_budget_is_shown_and_a_solve_held_after_sb3s_budget_is_not_fewer_steps():
+    # connrl ran 60,000 steps and held at 40,000 on every seed; SB3-zoo ran 20,000 and never held
+    ours = [_run(s, 40_000, [9] * 12) for s in range(3)]
+    ours = [r._replace(doc={**r.doc, "budget": 60_000}) for r in ours]
+    theirs = [_run(s, None, [1] * 4, "SB3-zoo") for s in range(3)]
+    theirs = [r._replace(doc={**r.doc, "cpu": 100.0}) for r in theirs]
+    text = summarize(ours + theirs, ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, [0, 1, 2])
+    assert "not met  median steps > 20,000 vs > 20,000" in text  # within SB3-zoo's budget neither held
+    rows = [line for line in text.splitlines() if line.startswith("T  ")]
+    assert "40,000" in rows[0] and "> 20,000" in rows[1]  # each learner's own budget
+    assert median_held(ours, within=40_000) == 40_000 and median_held(ours, within=39_999) == math.inf

@@ -49,8 +49,8 @@ def _pairs(items: list[str], what: str) -> dict:
 
 
 def _job(args):
-    task, seed, options, kind = args
-    return run_connrl(task, seed, options, kind)
+    task, seed, options, kind, budget = args
+    return run_connrl(task, seed, options, kind, budget=budget)
 
 
 def lost_share(curve: list, threshold: float) -> float | None:
@@ -81,11 +81,15 @@ def main() -> None:
     ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101, 102, 103, 104])
     ap.add_argument("--base", nargs="*", default=[], help="option=value on top of the shipped settings")
     ap.add_argument("--vary", nargs="*", default=[], help="option=v1,v2,...: one row per value")
-    ap.add_argument("--kind", default="QCON-R", choices=[k for k in KINDS if not k.endswith("-T")])
+    # QCON-T: three episodes of bench_gymnasium.py's teacher for the task
+    ap.add_argument("--kind", default="QCON-R", choices=[k for k in KINDS if k != "AHCON-T"])
+    ap.add_argument("--budget", type=int, help="environment steps per run (default: RL Zoo's, as the benchmark)")
     ap.add_argument("--workers", type=int, default=1)
     args = ap.parse_args()
     if args.workers < 1:
         ap.error(f"--workers must be 1 or more, got {args.workers}")
+    if args.budget is not None and not 10_000 <= args.budget <= 10_000_000:
+        ap.error(f"--budget must be from 10,000 to 10,000,000 steps, got {args.budget:,}")
     if len(args.vary) > len({item.split("=", 1)[0] for item in args.vary}):
         ap.error("--vary names an option twice: give its values in one list (lr=0.02,0.1)")
     base = {**connrl_options(args.task), **{k: _value(v) for k, v in _pairs(args.base, "--base").items()}}
@@ -97,10 +101,10 @@ def main() -> None:
             options_from(options)
         except (ValueError, TypeError) as exc:
             ap.error(f"{name}: {exc}")
-    jobs = [(args.task, seed, options, args.kind) for _, options in rows for seed in args.seeds]
+    budget = args.budget or TASKS[args.task][1]
+    jobs = [(args.task, seed, options, args.kind, budget) for _, options in rows for seed in args.seeds]
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(_job, jobs))
-    budget = TASKS[args.task][1]
     print(f"{args.task}, {args.kind}, {budget:,} steps, seeds {' '.join(map(str, args.seeds))}; base "
           f"{base or 'the defaults'}")
     print(f"{'setting':<28} {'held':>5} {'median held':>12} {'area':>8} {'at budget':>10} {'lost':>9}   per seed: "
