@@ -89,3 +89,13 @@ def test_a_longer_connrl_budget_is_shown_and_a_solve_held_after_sb3s_budget_is_n
     rows = [line for line in text.splitlines() if line.startswith("T  ")]
     assert "40,000" in rows[0] and "> 20,000" in rows[1]  # each learner's own budget
     assert median_held(ours, within=40_000) == 40_000 and median_held(ours, within=39_999) == math.inf
+
+
+def test_issue_47s_goal_against_an_sb3_zoo_that_never_held_needs_a_solve_sooner_than_its_whole_training():
+    # SB3-zoo never held in 100 steps of 10 s of training; connrl held at 40 steps of 100 on every seed
+    theirs = [_run(s, None, [1], "SB3-zoo")._replace(doc={**_run(s, None, [1]).doc, "wall": 10.0}) for s in range(5)]
+    for wall, verdict, seconds in ((20.0, "met    ", "8.0 s"), (30.0, "not met", "12.0 s")):
+        ours = [_run(s, 40, [9])._replace(doc={**_run(s, 40, [9]).doc, "wall": wall}) for s in range(5)]
+        text = summarize(ours + theirs, ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, list(range(5)))
+        assert (f"QCON-R: {verdict}  held 5/5; median wall-clock to it {seconds} vs SB3-zoo's > 10.0 s (never held "
+                "in its budget)") in text
