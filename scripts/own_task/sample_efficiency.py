@@ -85,15 +85,19 @@ def main() -> None:
     ap.add_argument("--kind", default="QCON-R", choices=[k for k in KINDS if k != "AHCON-T"])
     ap.add_argument("--budget", type=int, help="environment steps per run (default: RL Zoo's, as the benchmark)")
     ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--no-base", action="store_true", help="only the --vary rows (the base row was run before: a run is"
+                    " the same on every rerun)")
     args = ap.parse_args()
     if args.workers < 1:
         ap.error(f"--workers must be 1 or more, got {args.workers}")
     if args.budget is not None and not 10_000 <= args.budget <= 10_000_000:
         ap.error(f"--budget must be from 10,000 to 10,000,000 steps, got {args.budget:,}")
+    if args.no_base and not args.vary:
+        ap.error("--no-base leaves no row: give --vary")
     if len(args.vary) > len({item.split("=", 1)[0] for item in args.vary}):
         ap.error("--vary names an option twice: give its values in one list (lr=0.02,0.1)")
     base = {**connrl_options(args.task), **{k: _value(v) for k, v in _pairs(args.base, "--base").items()}}
-    rows = [("base", base)]
+    rows = [] if args.no_base else [("base", base)]
     for k, values in _pairs(args.vary, "--vary").items():
         rows += [(f"{k}={v}", {**base, k: _value(v)}) for v in values.split(",")]
     for name, options in rows:  # every setting checked before anything runs
