@@ -19,7 +19,7 @@ class Run(NamedTuple):
     task: str
     learner: str
     seed: int
-    doc: dict  # held, curve [[steps, greedy mean], ...], wall, cpu, steps, diverged
+    doc: dict  # held, curve [[steps, greedy mean], ...], wall, cpu, steps, budget (newer runs), diverged
 
 
 def median_held(runs: list[Run], within: float = math.inf) -> float:
@@ -67,7 +67,7 @@ def summarize(runs: list[Run], tasks: list[str], learners: list[str], task_info:
              "(every 5,000 steps); median over the seeds, a run that never held counting as more than the budget",
              "",
              f"{'task':<15} {'learner':<12} {'held':>5} {'median steps':>13}  {'held at, per seed':<44} "
-             f"{'greedy at budget, per seed':<30} {'reached':>8} {'lost':>7} {'cpu steps/s':>11} {'wall steps/s':>12}"]
+             f"{'greedy at budget, per seed':<30} {'reached':>8} {'lost':>9} {'cpu steps/s':>11} {'wall steps/s':>12}"]
     for task in tasks:
         threshold, zoo_budget = task_info[task]
         for learner in learners:
@@ -82,7 +82,7 @@ def summarize(runs: list[Run], tasks: list[str], learners: list[str], task_info:
             lost = f"{below}/{total}" if total else "-"
             lines.append(f"{task:<15} {learner:<12} {sum(r.doc['held'] is not None for r in rs):>2}/{len(rs):<2} "
                          f"{_steps(median_held(rs), budget):>13}  {held:<44} {last:<30} "
-                         f"{f'{reached / 1000:.0f}k' if math.isfinite(reached) else '-':>8} {lost:>7} "
+                         f"{f'{reached / 1000:.0f}k' if math.isfinite(reached) else '-':>8} {lost:>9} "
                          f"{_rate(rs, 'cpu'):>11,.0f} {_rate(rs, 'wall'):>12,.0f}")
     lines += ["", "(held at - : not held within the budget; ! : the run diverged; reached: median steps to the first "
               "evaluation at the threshold, - if the median run never reached it; lost: evaluations below the "
@@ -194,6 +194,8 @@ def plot(runs: list[Run], tasks: list[str], learners: list[str], task_info: dict
             ax.plot(x, y.mean(axis=0), color=color, label=f"{learner} ({len(rs)} seeds)")
             ax.fill_between(x, y.min(axis=0), y.max(axis=0), color=color, alpha=0.2)
         ax.axhline(threshold, color="grey", ls="--", lw=0.8)
+        if budget > task_info[task][1]:  # a learner ran past RL Zoo's budget: mark where SB3's runs end
+            ax.axvline(task_info[task][1], color="grey", ls=":", lw=0.8)
         ax.set(title=task, xlabel="environment steps", ylabel="greedy return (10 episodes)", xlim=(0, budget))
         ax.legend(fontsize=8, loc="lower right")
     for ax in list(axes.flat)[len(tasks):]:

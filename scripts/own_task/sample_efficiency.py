@@ -1,7 +1,8 @@
 """Sample efficiency of connrl's learners under bench_gymnasium.py's protocol, one setting varied at a time.
 
     python scripts/own_task/sample_efficiency.py --task CartPole-v1 [--seeds 100 101 102 103 104]
-        [--base lr=0.05 ...] [--vary lr=0.02,0.1 lessons_per_trial=50] [--kind QCON-R] [--workers 1]
+        [--base lr=0.05 ...] [--vary lr=0.02,0.1 lessons_per_trial=50] [--kind QCON-R | QCON-T ...]
+        [--budget STEPS] [--no-base] [--workers 1]
 
 Each row: the base settings (the shipped settings file's entry for the task, then ``--base``) with one option changed.
 Per row and seed the held-solve steps and the greedy return at the budget, with the median steps to a held solve (a run
@@ -83,7 +84,7 @@ def main() -> None:
     ap.add_argument("--vary", nargs="*", default=[], help="option=v1,v2,...: one row per value")
     # QCON-T: three episodes of bench_gymnasium.py's teacher for the task
     ap.add_argument("--kind", default="QCON-R", choices=[k for k in KINDS if k != "AHCON-T"])
-    ap.add_argument("--budget", type=int, help="environment steps per run (default: RL Zoo's, as the benchmark)")
+    ap.add_argument("--budget", type=int, help="environment steps per run (default: RL Zoo's DQN budget for the task)")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--no-base", action="store_true", help="only the --vary rows (the base row was run before: a run is"
                     " the same on every rerun)")
