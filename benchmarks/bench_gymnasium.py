@@ -122,7 +122,7 @@ class _Curve:
 def connrl_budget(task: str) -> int:
     """connrl's budget for ``task``: its settings entry's ``n_timesteps``, else RL Zoo's."""
     entry, _ = task_settings(task, "QCON-R")
-    return int(entry.get("n_timesteps") or TASKS[task][1]) if entry else TASKS[task][1]
+    return int((entry or {}).get("n_timesteps") or TASKS[task][1])
 
 
 def connrl_options(task: str) -> dict:
@@ -184,16 +184,7 @@ def run_sb3(task: str, seed: int, zoo: bool) -> dict:
             return True
 
         def greedy_returns(self) -> list[float]:
-            returns = []
-            for k in range(EVAL_EPISODES):
-                obs, _ = eval_env.reset(seed=EVAL_SEED + k)
-                done, total = False, 0.0
-                while not done:
-                    a, _ = self.model.predict(obs, deterministic=True)
-                    obs, r, terminated, truncated, _ = eval_env.step(int(a))
-                    total, done = total + float(r), terminated or truncated
-                returns.append(total)
-            return returns
+            return policy_returns(eval_env, lambda obs: int(self.model.predict(obs, deterministic=True)[0]))
 
     settings = sb3_settings(task, zoo)
     # device="cpu" is what "auto" picks on a machine without CUDA; verbose=0 only silences it
@@ -201,6 +192,20 @@ def run_sb3(task: str, seed: int, zoo: bool) -> dict:
     t0, c0 = time.perf_counter(), time.process_time()
     model.learn(budget, callback=Evaluate())
     return _record(curve, time.perf_counter() - t0, time.process_time() - c0, int(model.num_timesteps), budget)
+
+
+def policy_returns(env, act, episodes: int = EVAL_EPISODES) -> list[float]:
+    """The returns of ``act`` (observation -> action) on the evaluation episodes (environment seeds from
+    ``EVAL_SEED``)."""
+    returns = []
+    for k in range(episodes):
+        obs, _ = env.reset(seed=EVAL_SEED + k)
+        done, total = False, 0.0
+        while not done:
+            obs, r, terminated, truncated, _ = env.step(act(obs))
+            total, done = total + float(r), terminated or truncated
+        returns.append(total)
+    return returns
 
 
 def sb3_settings(task: str, zoo: bool) -> dict:

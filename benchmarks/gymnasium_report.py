@@ -111,14 +111,16 @@ def _solve_verdicts(runs: list[Run], tasks: list[str], learners: list[str], seed
         return out + [f"no verdict: the goal is stated over 5 seeds, this run has {len(seeds)}"]
     for task in tasks:
         theirs = _select(runs, task, "SB3-zoo")
-        b = float(np.median([held_seconds(r) for r in theirs])) if theirs else math.inf
+        if not theirs:
+            continue
+        b = float(np.median([held_seconds(r) for r in theirs]))
         # never held: SB3-zoo's time to a held solve is more than its whole training, so only a solve sooner than
         # that is known to be sooner (connrl's budget may be longer)
-        bound = b if math.isfinite(b) else float(np.median([r.doc["wall"] for r in theirs])) if theirs else math.inf
+        bound = b if math.isfinite(b) else float(np.median([r.doc["wall"] for r in theirs]))
         theirs_text = _seconds(b) if math.isfinite(b) else f"> {bound:,.1f} s (never held in its budget)"
         for name in (n for n in learners if n.startswith("QCON")):
             ours = _select(runs, task, name)
-            if not ours or not theirs:
+            if not ours:
                 continue
             if not [r.seed for r in ours] == [r.seed for r in theirs] == sorted(seeds):
                 continue  # an interrupted or partial run: issue 30's lines say so

@@ -15,20 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-from bench_gymnasium import EVAL_SEED, TASKS, TEACHERS  # noqa: E402
-
-
-def teacher_returns(task: str, episodes: int) -> list[float]:
-    env, teach = gym.make(task), TEACHERS[task][1]
-    out = []
-    for k in range(episodes):
-        obs, _ = env.reset(seed=EVAL_SEED + k)
-        done, total = False, 0.0
-        while not done:
-            obs, r, terminated, truncated, _ = env.step(teach(obs))
-            total, done = total + float(r), terminated or truncated
-        out.append(total)
-    return out
+from bench_gymnasium import EVAL_SEED, TASKS, TEACHERS, policy_returns  # noqa: E402
 
 
 def main() -> None:
@@ -42,7 +29,7 @@ def main() -> None:
           f"(evaluation seeds {EVAL_SEED:,}-{EVAL_SEED + args.episodes - 1:,})")
     for task in args.tasks:
         try:
-            returns = teacher_returns(task, args.episodes)
+            returns = policy_returns(gym.make(task), TEACHERS[task][1], args.episodes)
         except gym.error.DependencyNotInstalled:
             print(f"{task:<16} not run (Box2D is not installed: pip install -e \".[bench]\")")
             continue
