@@ -132,10 +132,10 @@ def connrl_options(task: str) -> dict:
 
 
 def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "QCON-R", setup=None,
-               budget: int | None = None) -> dict:
+               budget: int | None = None, taught: int = TAUGHT_EPISODES) -> dict:
     """One connrl run (``options``: AgentOptions fields, default the shipped settings) of ``budget`` steps (default
-    RL Zoo's). QCON-T first records ``TAUGHT_EPISODES`` episodes of the task's teacher; their steps count in its
-    budget and time. ``setup(agent, env)``, when given, changes the agent before it learns
+    RL Zoo's). QCON-T first records ``taught`` episodes of the task's teacher (env seeds 0 on); their steps count in
+    its budget and time. ``setup(agent, env)``, when given, changes the agent before it learns
     (scripts/own_task/planning_grouping.py)."""
     threshold, zoo_budget = TASKS[task]
     budget = budget or zoo_budget
@@ -145,7 +145,7 @@ def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "Q
     taught_steps = 0
     if kind == "QCON-T":
         with tempfile.TemporaryDirectory() as tmp:
-            lessons = connrl.record_lessons(env, TEACHERS[task][1], TAUGHT_EPISODES, Path(tmp) / "teacher.json")
+            lessons = connrl.record_lessons(env, TEACHERS[task][1], taught, Path(tmp) / "teacher.json")
             taught_steps = sum(len(x) for x in lessons)
             agent = connrl.make_agent(env, kind, seed=seed, lessons=Path(tmp) / "teacher.json", **options)
     else:
@@ -269,7 +269,8 @@ def _cached(path: Path, key: dict) -> dict | None:
     return doc if isinstance(doc, dict) and doc.get("key") == json.loads(strict_json(key)) else None
 
 
-def main() -> None:
+def _args() -> argparse.Namespace:
+    """The command line, checked before anything runs."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=list(TASKS))
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2, 3, 4])
@@ -291,22 +292,33 @@ def main() -> None:
         ap.error(f"--out {args.out}: is a file, not a folder of runs")
     if args.write is not None and not args.write.is_file():
         ap.error(f"--write {args.write}: no such Markdown file (give docs/PERFORMANCE.md or another existing file)")
-    learners = list(args.learners)
+    return args
+
+
+def _installed(tasks: list[str], learners: list[str]) -> tuple[list[str], list[str]]:
+    """The tasks and learners this machine can run, each one left out said so in one line."""
     if any(name.startswith("SB3") for name in learners):
         try:
             import stable_baselines3  # noqa: F401
         except ImportError:
             print("SB3-DQN: not run (stable_baselines3 is not installed: pip install -e \".[bench]\")", flush=True)
             learners = [name for name in learners if not name.startswith("SB3")]
-    for task in list(args.tasks):
+    kept = []
+    for task in tasks:
         try:
             gym.make(task).close()
+            kept.append(task)
         except gym.error.DependencyNotInstalled:
             print(f"{task}: not run (Box2D is not installed: pip install -e \".[bench]\")", flush=True)
-            args.tasks.remove(task)
+    return kept, learners
+
+
+def main() -> None:
+    args = _args()
+    tasks, learners = _installed(list(args.tasks), list(args.learners))
     args.out.mkdir(parents=True, exist_ok=True)
     runs, todo = [], []
-    for task in args.tasks:
+    for task in tasks:
         for learner in learners:
             if learner == "QCON-T" and task not in TEACHERS:
                 continue  # no teacher written for it
@@ -336,10 +348,10 @@ def main() -> None:
             last = doc["curve"][-1][1] if doc["curve"] else float("nan")
             print(f"{task:<16} {learner:<12} seed {seed:>4}: held at {doc['held'] or 'not held'}, last greedy "
                   f"{last:.1f}, cpu {doc['cpu']:.1f} s", flush=True)
-    text = summarize(runs, args.tasks, learners, TASKS, args.seeds)
+    text = summarize(runs, tasks, learners, TASKS, args.seeds)
     print(text)
     if args.write is not None:
-        write_block(args.write, text, runs, args.tasks, learners, TASKS, " ".join(sys.argv[1:]))
+        write_block(args.write, text, runs, tasks, learners, TASKS, " ".join(sys.argv[1:]))
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 
     python scripts/own_task/sample_efficiency.py --task CartPole-v1 [--seeds 100 101 102 103 104]
         [--base lr=0.05 ...] [--vary lr=0.02,0.1 lessons_per_trial=50] [--kind QCON-R | QCON-T ...]
-        [--budget STEPS] [--no-base] [--workers 1]
+        [--budget STEPS] [--taught EPISODES] [--no-base] [--workers 1]
 
 Each row: the base settings (the shipped settings file's entry for the task, then ``--base``) with one option changed.
 Per row and seed the held-solve steps and the greedy return at the budget, with the median steps to a held solve (a run
@@ -26,7 +26,7 @@ import numpy as np
 from connrl.own.api import KINDS, options_from
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-from bench_gymnasium import TASKS, connrl_options, run_connrl  # noqa: E402
+from bench_gymnasium import TASKS, TAUGHT_EPISODES, connrl_options, run_connrl  # noqa: E402
 from gymnasium_report import Run, relapses  # noqa: E402
 
 
@@ -50,8 +50,8 @@ def _pairs(items: list[str], what: str) -> dict:
 
 
 def _job(args):
-    task, seed, options, kind, budget = args
-    return run_connrl(task, seed, options, kind, budget=budget)
+    task, seed, options, kind, budget, taught = args
+    return run_connrl(task, seed, options, kind, budget=budget, taught=taught)
 
 
 def lost_share(curve: list, threshold: float) -> float | None:
@@ -82,8 +82,9 @@ def main() -> None:
     ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101, 102, 103, 104])
     ap.add_argument("--base", nargs="*", default=[], help="option=value on top of the shipped settings")
     ap.add_argument("--vary", nargs="*", default=[], help="option=v1,v2,...: one row per value")
-    # QCON-T: three episodes of bench_gymnasium.py's teacher for the task
     ap.add_argument("--kind", default="QCON-R", choices=[k for k in KINDS if k != "AHCON-T"])
+    ap.add_argument("--taught", type=int, default=TAUGHT_EPISODES,
+                    help=f"QCON-T: episodes of bench_gymnasium.py's teacher for the task (default {TAUGHT_EPISODES})")
     ap.add_argument("--budget", type=int, help="environment steps per run (default: RL Zoo's DQN budget for the task)")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--no-base", action="store_true", help="only the --vary rows (the base row was run before: a run is"
@@ -93,6 +94,10 @@ def main() -> None:
         ap.error(f"--workers must be 1 or more, got {args.workers}")
     if args.budget is not None and not 10_000 <= args.budget <= 10_000_000:
         ap.error(f"--budget must be from 10,000 to 10,000,000 steps, got {args.budget:,}")
+    if not 1 <= args.taught <= 100:
+        ap.error(f"--taught must be from 1 to 100 episodes, got {args.taught}")
+    if args.taught != TAUGHT_EPISODES and args.kind != "QCON-T":
+        ap.error("--taught is for --kind QCON-T (the only learner that is taught)")
     if args.no_base and not args.vary:
         ap.error("--no-base leaves no row: give --vary")
     if len(args.vary) > len({item.split("=", 1)[0] for item in args.vary}):
@@ -107,10 +112,11 @@ def main() -> None:
         except (ValueError, TypeError) as exc:
             ap.error(f"{name}: {exc}")
     budget = args.budget or TASKS[args.task][1]
-    jobs = [(args.task, seed, options, args.kind, budget) for _, options in rows for seed in args.seeds]
+    jobs = [(args.task, seed, options, args.kind, budget, args.taught) for _, options in rows for seed in args.seeds]
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(_job, jobs))
-    print(f"{args.task}, {args.kind}, {budget:,} steps, seeds {' '.join(map(str, args.seeds))}; base "
+    taught = f" taught {args.taught} episodes," if args.kind == "QCON-T" else ""
+    print(f"{args.task}, {args.kind},{taught} {budget:,} steps, seeds {' '.join(map(str, args.seeds))}; base "
           f"{base or 'the defaults'}")
     print(f"{'setting':<28} {'held':>5} {'median held':>12} {'area':>8} {'at budget':>10} {'lost':>9}   per seed: "
           "held at / greedy at budget")
