@@ -2,7 +2,7 @@
 
     python scripts/own_task/sample_efficiency.py --task CartPole-v1 [--seeds 100 101 102 103 104]
         [--base lr=0.05 ...] [--vary lr=0.02,0.1 lessons_per_trial=50] [--kind QCON-R | QCON-T ...]
-        [--budget STEPS] [--taught EPISODES] [--no-base] [--workers 1]
+        [--budget STEPS] [--taught EPISODES] [--no-base] [--save DIR] [--workers 1]
 
 Each row: the base settings (the shipped settings file's entry for the task, then ``--base``) with one option changed.
 Per row and seed the held-solve steps and the greedy return at the budget, with the median steps to a held solve (a run
@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from connrl.own.api import KINDS, options_from
+from connrl.storage import atomic_write_text, strict_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from bench_gymnasium import TASKS, TAUGHT_EPISODES, connrl_options, run_connrl  # noqa: E402
@@ -87,6 +88,7 @@ def main() -> None:
                     help=f"QCON-T: episodes of bench_gymnasium.py's teacher for the task (default {TAUGHT_EPISODES})")
     ap.add_argument("--budget", type=int, help="environment steps per run (default: RL Zoo's DQN budget for the task)")
     ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--save", type=Path, help="folder for each run's evaluations (JSON: curve, held, times, options)")
     ap.add_argument("--no-base", action="store_true", help="only the --vary rows (the base row was run before: a run is"
                     " the same on every rerun)")
     args = ap.parse_args()
@@ -113,8 +115,16 @@ def main() -> None:
             ap.error(f"{name}: {exc}")
     budget = args.budget or TASKS[args.task][1]
     jobs = [(args.task, seed, options, args.kind, budget, args.taught) for _, options in rows for seed in args.seeds]
+    if args.save is not None and args.save.exists() and not args.save.is_dir():
+        ap.error(f"--save {args.save}: is a file, not a folder")
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(_job, jobs))
+    if args.save is not None:
+        args.save.mkdir(parents=True, exist_ok=True)
+        for (task, seed, options, kind, budget, taught), result in zip(jobs, results, strict=True):
+            name = "_".join(f"{k}={v}" for k, v in sorted(options.items())) or "defaults"
+            doc = {"task": task, "seed": seed, "kind": kind, "taught": taught, "options": options, **result}
+            atomic_write_text(args.save / f"{task}_{kind}_t{taught}_{budget}_{name}_{seed}.json", strict_json(doc))
     taught = f" taught {args.taught} episodes," if args.kind == "QCON-T" else ""
     print(f"{args.task}, {args.kind},{taught} {budget:,} steps, seeds {' '.join(map(str, args.seeds))}; base "
           f"{base or 'the defaults'}")
