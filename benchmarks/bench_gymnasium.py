@@ -154,6 +154,9 @@ def run_connrl(task: str, seed: int, options: dict | None = None, kind: str = "Q
         setup(agent, env)
     # the warm-up's environment steps count like SB3's learning_starts, and so do the teacher's
     before = agent.options.warmup_steps + taught_steps
+    if before >= budget:
+        raise ValueError(f"the warm-up ({agent.options.warmup_steps:,} steps) and the teacher's {taught_steps:,} steps "
+                         f"leave nothing of the {budget:,}-step budget: teach fewer episodes or give a larger budget")
     curve = _Curve(threshold)
 
     def evaluate(a, _ret):

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from connrl.own.api import KINDS, options_from
-from connrl.storage import atomic_write_text, strict_json
+from connrl.storage import atomic_write_text, check_writable_dir, strict_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from bench_gymnasium import TASKS, TAUGHT_EPISODES, connrl_options, run_connrl  # noqa: E402
@@ -77,18 +77,28 @@ def summary_line(name: str, rs: list[dict], threshold: float) -> str:
             f"{f'{np.mean(lost):.2f} ({len(lost)})' if lost else '-':>9}   {per}")
 
 
-def main() -> None:
+def _save(args: argparse.Namespace, row: str, seed: int, options: dict, result: dict) -> None:
+    """One run's evaluations as JSON in ``args.save``, named by task, learner, budget, row and seed."""
+    taught = f"_t{args.taught}" if args.taught else ""
+    doc = {"task": args.task, "seed": seed, "kind": args.kind, "taught": args.taught, "row": row, "options": options,
+           "workers": args.workers, **result}
+    atomic_write_text(args.save / f"{args.task}_{args.kind}{taught}_{args.budget}_{row}_{seed}.json", strict_json(doc))
+
+
+def _args() -> argparse.Namespace:
+    """The command line, checked before anything runs."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--task", required=True, choices=list(TASKS))
     ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101, 102, 103, 104])
     ap.add_argument("--base", nargs="*", default=[], help="option=value on top of the shipped settings")
     ap.add_argument("--vary", nargs="*", default=[], help="option=v1,v2,...: one row per value")
     ap.add_argument("--kind", default="QCON-R", choices=[k for k in KINDS if k != "AHCON-T"])
-    ap.add_argument("--taught", type=int, default=TAUGHT_EPISODES,
-                    help=f"QCON-T: episodes of bench_gymnasium.py's teacher for the task (default {TAUGHT_EPISODES})")
+    ap.add_argument("--taught", type=int, help=f"QCON-T: episodes of bench_gymnasium.py's teacher for the task "
+                    f"(default {TAUGHT_EPISODES})")
     ap.add_argument("--budget", type=int, help="environment steps per run (default: RL Zoo's DQN budget for the task)")
     ap.add_argument("--workers", type=int, default=1)
-    ap.add_argument("--save", type=Path, help="folder for each run's evaluations (JSON: curve, held, times, options)")
+    ap.add_argument("--save", type=Path, help="folder for each run's evaluations, one JSON file per run as it ends "
+                    "(curve, held, times, options)")
     ap.add_argument("--no-base", action="store_true", help="only the --vary rows (the base row was run before: a run is"
                     " the same on every rerun)")
     args = ap.parse_args()
@@ -96,14 +106,26 @@ def main() -> None:
         ap.error(f"--workers must be 1 or more, got {args.workers}")
     if args.budget is not None and not 10_000 <= args.budget <= 10_000_000:
         ap.error(f"--budget must be from 10,000 to 10,000,000 steps, got {args.budget:,}")
-    if not 1 <= args.taught <= 100:
+    if args.taught is not None and args.kind != "QCON-T":
+        ap.error(f"--taught is for --kind QCON-T (the one taught learner this script runs), got --kind {args.kind}")
+    if args.taught is not None and not 1 <= args.taught <= 100:
         ap.error(f"--taught must be from 1 to 100 episodes, got {args.taught}")
-    if args.taught != TAUGHT_EPISODES and args.kind != "QCON-T":
-        ap.error("--taught is for --kind QCON-T (the only learner that is taught)")
     if args.no_base and not args.vary:
         ap.error("--no-base leaves no row: give --vary")
     if len(args.vary) > len({item.split("=", 1)[0] for item in args.vary}):
         ap.error("--vary names an option twice: give its values in one list (lr=0.02,0.1)")
+    if args.save is not None:
+        try:
+            check_writable_dir(args.save)
+        except OSError as exc:
+            ap.error(f"--save {args.save}: cannot write there ({exc})")
+    args.budget = args.budget or TASKS[args.task][1]
+    args.taught = args.taught or (TAUGHT_EPISODES if args.kind == "QCON-T" else None)
+    return args
+
+
+def main() -> None:
+    args = _args()
     base = {**connrl_options(args.task), **{k: _value(v) for k, v in _pairs(args.base, "--base").items()}}
     rows = [] if args.no_base else [("base", base)]
     for k, values in _pairs(args.vary, "--vary").items():
@@ -112,21 +134,21 @@ def main() -> None:
         try:
             options_from(options)
         except (ValueError, TypeError) as exc:
-            ap.error(f"{name}: {exc}")
-    budget = args.budget or TASKS[args.task][1]
-    jobs = [(args.task, seed, options, args.kind, budget, args.taught) for _, options in rows for seed in args.seeds]
-    if args.save is not None and args.save.exists() and not args.save.is_dir():
-        ap.error(f"--save {args.save}: is a file, not a folder")
-    with ProcessPoolExecutor(args.workers) as pool:
-        results = list(pool.map(_job, jobs))
-    if args.save is not None:
-        args.save.mkdir(parents=True, exist_ok=True)
-        for (task, seed, options, kind, budget, taught), result in zip(jobs, results, strict=True):
-            name = "_".join(f"{k}={v}" for k, v in sorted(options.items())) or "defaults"
-            doc = {"task": task, "seed": seed, "kind": kind, "taught": taught, "options": options, **result}
-            atomic_write_text(args.save / f"{task}_{kind}_t{taught}_{budget}_{name}_{seed}.json", strict_json(doc))
-    taught = f" taught {args.taught} episodes," if args.kind == "QCON-T" else ""
-    print(f"{args.task}, {args.kind},{taught} {budget:,} steps, seeds {' '.join(map(str, args.seeds))}; base "
+            raise SystemExit(f"sample_efficiency.py: error: {name}: {exc}") from None
+    jobs = [(row, seed, options) for row, options in rows for seed in args.seeds]
+    taught = args.taught or TAUGHT_EPISODES  # run_connrl's; QCON-R ignores it
+    work = [(args.task, seed, options, args.kind, args.budget, taught) for _, seed, options in jobs]
+    results = []
+    with ProcessPoolExecutor(args.workers) as pool:  # in order; each run saved as soon as it and those before end
+        try:
+            for (row, seed, options), result in zip(jobs, pool.map(_job, work), strict=True):
+                results.append(result)
+                if args.save is not None:
+                    _save(args, row, seed, options, result)
+        except ValueError as exc:  # a budget the teacher's episodes use up: one line, not a worker's traceback
+            raise SystemExit(f"sample_efficiency.py: error: {exc}") from None
+    taught = f" taught {args.taught} episodes," if args.taught not in (None, TAUGHT_EPISODES) else ""
+    print(f"{args.task}, {args.kind},{taught} {args.budget:,} steps, seeds {' '.join(map(str, args.seeds))}; base "
           f"{base or 'the defaults'}")
     print(f"{'setting':<28} {'held':>5} {'median held':>12} {'area':>8} {'at budget':>10} {'lost':>9}   per seed: "
           "held at / greedy at budget")
