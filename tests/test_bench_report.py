@@ -99,3 +99,18 @@ def test_issue_47s_goal_against_an_sb3_zoo_that_never_held_needs_a_solve_sooner_
         text = summarize(ours + theirs, ["T"], ["QCON-R", "SB3-zoo"], {"T": (5.0, 20_000)}, list(range(5)))
         assert (f"QCON-R: {verdict}  held 5/5; median wall-clock to it {seconds} vs SB3-zoo's > 10.0 s (never held "
                 "in its budget)") in text
+
+
+def test_curve_shape_reads_a_hand_made_curve():
+    """scripts/own_task/curve_shape.py: first reach, count at the threshold, quartiles from the first reach on,
+    block means, on CartPole-v1's threshold (475)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts" / "own_task"))
+    from curve_shape import shape_line
+    curve = [[10, 100.0], [20, 480.0], [30, 200.0], [40, 500.0], [50, 300.0]]
+    line = shape_line({"task": "CartPole-v1", "seed": 7, "wall": 3.0, "curve": curve}, block=20)
+    # from the first reach on: 480, 200, 500, 300 -> quartiles 275, 390, 485; blocks (0,20], (20,40], (40,60]
+    assert "first at        20    2 of 5 at it" in line
+    assert "median 390 (quartiles 275, 485)" in line
+    assert line.endswith("block means: 290 350 300")
+    never = shape_line({"task": "CartPole-v1", "seed": 7, "wall": 3.0, "curve": [[10, 1.0], [20, 3.0]]}, block=50)
+    assert "first at     never    0 of 2 at it" in never and "median 2 (quartiles 2, 2)" in never
