@@ -113,4 +113,4 @@ def test_curve_shape_reads_a_hand_made_curve():
     assert "median 390 (quartiles 275, 485)" in line
     assert line.endswith("block means: 290 350 300")
     never = shape_line({"task": "CartPole-v1", "seed": 7, "wall": 3.0, "curve": [[10, 1.0], [20, 3.0]]}, block=50)
-    assert "first at     never    0 of 2 at it" in never and "median 2 (quartiles 2, 2)" in never
+    assert "first at     never    0 of 2 at it" in never and "all: median 2 (quartiles 2, 2)" in never

@@ -4,7 +4,8 @@
 
 FOLDER holds the runs ``sample_efficiency.py --save`` wrote (one JSON file per run). Per run: the steps at its first
 evaluation at the task's threshold, how many of its evaluations reach it, the quartiles of the evaluations from that
-first one on, the mean greedy return per block of steps, and its training wall-clock (evaluations left out).
+first one on (all of them for a run that never reached it), the mean greedy return per block of steps, and its
+training wall-clock (evaluations left out).
 """
 
 from __future__ import annotations
@@ -31,8 +32,9 @@ def shape_line(doc: dict, block: int) -> str:
     means = [returns[(steps > a) & (steps <= a + block)] for a in range(0, int(steps.max()), block)]
     blocks = " ".join(f"{m.mean():.0f}" if m.size else "-" for m in means)
     reach = f"{int(steps[first]):>9,}" if first is not None else f"{'never':>9}"
+    span = "from first on" if first is not None else "all"
     return (f"seed {doc['seed']:>4}  first at {reach}  {int(at.sum()):>3} of {len(returns)} at it  "
-            f"from first on: median {q50:.0f} (quartiles {q25:.0f}, {q75:.0f})  wall {doc['wall']:.0f} s  "
+            f"{span}: median {q50:.0f} (quartiles {q25:.0f}, {q75:.0f})  wall {doc['wall']:.0f} s  "
             f"| block means: {blocks}")
 
 
