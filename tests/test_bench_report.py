@@ -110,7 +110,7 @@ def test_curve_shape_reads_a_hand_made_curve():
     line = shape_line({"task": "CartPole-v1", "seed": 7, "wall": 3.0, "curve": curve}, block=20)
     # from the first reach on: 480, 200, 500, 300 -> quartiles 275, 390, 485; blocks (0,20], (20,40], (40,60]
     assert "first at        20    2 of 5 at it" in line
-    assert "median 390 (quartiles 275, 485)" in line
+    assert "from first on: median 390 (quartiles 275, 485)" in line
     assert line.endswith("block means: 290 350 300")
-    never = shape_line({"task": "CartPole-v1", "seed": 7, "wall": 3.0, "curve": [[10, 1.0], [20, 3.0]]}, block=50)
-    assert "first at     never    0 of 2 at it" in never and "all: median 2 (quartiles 2, 2)" in never
+    never = shape_line({"task": "CartPole-v1", "seed": 7, "wall": 3.0, "curve": [[10, 1.0], [20, 5.0]]}, block=50)
+    assert "first at     never    0 of 2 at it" in never and "all: median 3 (quartiles 2, 4)" in never
