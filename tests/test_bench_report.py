@@ -1,9 +1,12 @@
 """benchmarks/gymnasium_report.py's numbers on small hand-made runs: the median steps to a held solve (a run that
-never held counts as infinitely many), the first evaluation at the threshold, and the evaluations lost after it."""
+never held counts as infinitely many), the first evaluation at the threshold, and the evaluations lost after it; and
+the readings of scripts/own_task/curve_shape.py and action_gaps.py on hand-made curves and values."""
 
 import math
 import sys
 from pathlib import Path
+
+import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from gymnasium_report import Run, first_reach, median_held, relapses, summarize  # noqa: E402
@@ -114,3 +117,28 @@ def test_curve_shape_reads_a_hand_made_curve():
     assert line.endswith("block means: 290 350 300")
     never = shape_line({"task": "CartPole-v1", "seed": 7, "wall": 3.0, "curve": [[10, 1.0], [20, 5.0]]}, block=50)
     assert "first at     never    0 of 2 at it" in never and "all: median 3 (quartiles 2, 4)" in never
+
+
+def test_action_gaps_are_best_minus_second_at_each_visited_state():
+    """scripts/own_task/action_gaps.py's gaps_of on a stub agent and a two-step world (values written by hand)."""
+    from contextlib import nullcontext
+    from types import SimpleNamespace
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts" / "own_task"))
+    from action_gaps import gaps_of
+    table = {0: [1.0, 4.0, 2.5], 1: [-3.0, -1.0, -1.5]}  # gaps 1.5 and 0.5
+
+    class World:
+        def reset(self, seed=None):
+            self.t = 0
+            return 0, {}
+
+        def step(self, action):
+            self.t += 1
+            return self.t, 10.0 * action, self.t == 2, False, {}
+
+    agent = SimpleNamespace(greedy_weights=nullcontext, scaler=SimpleNamespace(encode=lambda o: o),
+                            learner=SimpleNamespace(q=SimpleNamespace(values=lambda x: np.array(table[x]))),
+                            predict=lambda o: (int(np.argmax(table[o])), None))
+    gaps, returns = gaps_of(agent, World(), episodes=2, seed=0)
+    assert gaps.tolist() == [1.5, 0.5, 1.5, 0.5] and returns == [20.0, 20.0]  # greedy: action 1 then 1
