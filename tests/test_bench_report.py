@@ -138,7 +138,6 @@ def test_action_gaps_are_best_minus_second_at_each_visited_state():
             return self.t, 10.0 * action, self.t == 2, False, {}
 
     agent = SimpleNamespace(greedy_weights=nullcontext, scaler=SimpleNamespace(encode=lambda o: o),
-                            learner=SimpleNamespace(q=SimpleNamespace(values=lambda x: np.array(table[x]))),
-                            predict=lambda o: (int(np.argmax(table[o])), None))
-    gaps, returns = gaps_of(agent, World(), episodes=2, seed=0)
+                            learner=SimpleNamespace(q=SimpleNamespace(values=lambda x: np.array(table[x]))))
+    gaps, returns = gaps_of(agent, World(), episodes=2)
     assert gaps.tolist() == [1.5, 0.5, 1.5, 0.5] and returns == [20.0, 20.0]  # greedy: action 1 then 1

@@ -24,22 +24,30 @@ import numpy as np
 from connrl.own.api import options_from
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-from bench_gymnasium import EVAL_EPISODES, EVAL_SEED, TASKS, TAUGHT_EPISODES, connrl_options, run_connrl  # noqa: E402
+from bench_gymnasium import (  # noqa: E402
+    EVAL_EPISODES,
+    TASKS,
+    TAUGHT_EPISODES,
+    connrl_options,
+    policy_returns,
+    run_connrl,
+)
+from sample_efficiency import _pairs, _value  # noqa: E402
 
 
-def gaps_of(agent, env, episodes: int, seed: int) -> tuple[np.ndarray, list[float]]:
-    """The best-minus-second action-value gap at each state of ``episodes`` greedy episodes, and their returns."""
-    gaps, returns = [], []
+def gaps_of(agent, env, episodes: int) -> tuple[np.ndarray, list[float]]:
+    """The best-minus-second action-value gap at each state of ``episodes`` greedy episodes (the benchmark's evaluation
+    episodes), and their returns. The greedy action is the best value's, as ``agent.predict`` picks it for QCON."""
+    gaps = []
+
+    def act(obs) -> int:
+        q = agent.learner.q.values(agent.scaler.encode(obs))
+        top2 = np.sort(q)[-2:]
+        gaps.append(top2[1] - top2[0])
+        return int(np.argmax(q))
+
     with agent.greedy_weights():
-        for k in range(episodes):
-            obs, _ = env.reset(seed=seed + k)
-            total, done = 0.0, False
-            while not done:
-                q = np.sort(agent.learner.q.values(agent.scaler.encode(obs)))
-                gaps.append(q[-1] - q[-2])
-                obs, r, terminated, truncated, _ = env.step(int(agent.predict(obs)[0]))
-                total, done = total + float(r), terminated or truncated
-            returns.append(total)
+        returns = policy_returns(env, act, episodes)
     return np.array(gaps), returns
 
 
@@ -49,7 +57,7 @@ def _job(args) -> str:
     run_connrl(task, seed, options, kind, setup=lambda agent, env: kept.update(agent=agent), budget=budget,
                taught=taught)
     agent = kept["agent"]
-    gaps, returns = gaps_of(agent, gym.make(task), EVAL_EPISODES, EVAL_SEED)
+    gaps, returns = gaps_of(agent, gym.make(task), EVAL_EPISODES)
     t = agent.temperature(agent.trials_done)
     q25, q50, q75 = np.percentile(gaps, [25, 50, 75])
     return (f"seed {seed:>4}  gap median {q50:.2f} (quartiles {q25:.2f}, {q75:.2f}) over {gaps.size:,} states  "
@@ -66,14 +74,13 @@ def main() -> None:
     ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101])
     ap.add_argument("--workers", type=int, default=1)
     args = ap.parse_args()
-    if args.workers < 1 or not 10_000 <= args.budget <= 10_000_000 or not 1 <= args.taught <= 100:
-        ap.error("--workers must be >= 1, --budget from 10,000 to 10,000,000 steps, --taught from 1 to 100 episodes")
-    options = dict(connrl_options(args.task))
-    for item in args.base:
-        k, sep, v = item.partition("=")
-        if not sep:
-            ap.error(f"--base {item!r}: give option=value (for example t_end=0.001)")
-        options[k] = int(v) if v.lstrip("-").isdigit() else float(v)
+    if args.workers < 1:
+        ap.error(f"--workers must be 1 or more, got {args.workers}")
+    if not 10_000 <= args.budget <= 10_000_000:
+        ap.error(f"--budget must be from 10,000 to 10,000,000 steps, got {args.budget:,}")
+    if not 1 <= args.taught <= 100:
+        ap.error(f"--taught must be from 1 to 100 episodes, got {args.taught}")
+    options = {**connrl_options(args.task), **{k: _value(v) for k, v in _pairs(args.base, "--base").items()}}
     try:
         options_from(options)
     except (ValueError, TypeError) as exc:
@@ -81,8 +88,11 @@ def main() -> None:
     jobs = [(args.task, seed, options, args.kind, args.budget, args.taught) for seed in args.seeds]
     print(f"{args.task}, {args.kind} (taught {args.taught}), {args.budget:,} steps; options {options}")
     with ProcessPoolExecutor(args.workers) as pool:
-        for line in pool.map(_job, jobs):
-            print(line, flush=True)
+        try:
+            for line in pool.map(_job, jobs):
+                print(line, flush=True)
+        except ValueError as exc:  # a budget the teacher's episodes use up: one line, not a worker's traceback
+            raise SystemExit(f"action_gaps.py: error: {exc}") from None
 
 
 if __name__ == "__main__":
