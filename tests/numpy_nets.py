@@ -3,7 +3,8 @@
 Written from the net's definition, not from its kernels: symmetric sigmoid units ``f(s) = 1/(1+e^-s) - 0.5``
 (hidden and output), the output scaled by ``scale = 2 * value_range``, the error divided by ``scale`` before
 back-propagation, plain backprop (the hidden deltas use the output weights before the step) and momentum
-``d <- lr * (-grad) + momentum * d; w <- w + d``.
+``d <- lr * (-grad) + momentum * d; w <- w + d``. A net whose one hidden layer every action reads (``shared_hidden``)
+keeps one ``w1`` row, which every action's step moves.
 """
 
 from __future__ import annotations
@@ -22,10 +23,14 @@ class NumpyOAON:
         assert net.config.n_hidden > 0
         self.w1, self.w2, self.d1, self.d2 = (net.w1.copy(), net.w2.copy(), net.d1.copy(), net.d2.copy())
         self.scale, self.lr, self.momentum = net.scale, net.lr, net.config.momentum
+        self.n_actions = self.w2.shape[0]
+
+    def _row(self, a):
+        return 0 if self.w1.shape[0] == 1 else a
 
     def _forward(self, x, a):
         xb = np.append(np.asarray(x, dtype=np.float64), 1.0)
-        h = f(self.w1[a] @ xb)
+        h = f(self.w1[self._row(a)] @ xb)
         hb = np.append(h, 1.0)
         return xb, h, hb, f(self.w2[a] @ hb)
 
@@ -33,7 +38,7 @@ class NumpyOAON:
         return self.scale * self._forward(x, a)[3]
 
     def values(self, x):
-        return np.array([self.value(x, a) for a in range(self.w1.shape[0])])
+        return np.array([self.value(x, a) for a in range(self.n_actions)])
 
     def update(self, x, a, target):
         return self._step(x, a, target - self.value(x, a))
@@ -46,9 +51,10 @@ class NumpyOAON:
         delta = err / self.scale * (0.25 - y * y)
         dh = delta * self.w2[a, :-1] * (0.25 - h * h)
         self.d2[a] = self.lr * delta * hb + self.momentum * self.d2[a]
-        self.d1[a] = self.lr * np.outer(dh, xb) + self.momentum * self.d1[a]
+        r = self._row(a)
+        self.d1[r] = self.lr * np.outer(dh, xb) + self.momentum * self.d1[r]
         self.w2[a] += self.d2[a]
-        self.w1[a] += self.d1[a]
+        self.w1[r] += self.d1[r]
         return self.scale * y
 
     def assert_same(self, net, tol=1e-12):

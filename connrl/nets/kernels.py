@@ -13,7 +13,9 @@ a cached kernel calls, and reads constants, only from its own file.
 
 Each kernel works on one action net (index a) or loops over all of them; arrays are float64, C-contiguous.
 Weights of all action nets are stacked: ``w1[a]`` (H, I+1), ``w2[a]`` (H+1,) (a perceptron: ``w2[a]`` (I+1,),
-``w1`` empty); the last column/entry is the bias (see ``connrl.nets.mlp``).
+``w1`` empty); the last column/entry is the bias (see ``connrl.nets.mlp``). A net with one hidden layer shared by
+every action (3.4's multi-output alternative to OAON) has a single ``w1[0]`` beside A output rows: ``w1.shape[0] <
+w2.shape[0]``, and net a's hidden row is ``_hidden_row(w1, a)``.
 """
 
 from __future__ import annotations
@@ -126,6 +128,12 @@ _dot_in_fours = _dot_kernel(4)
 
 # ------------------------------------------------------------------------------- one net: forward and update
 
+@numba.njit(cache=True, inline="always")
+def _hidden_row(w1, a):
+    """The hidden layer net a reads: its own (OAON), or the one shared by every action (``w1`` with one row)."""
+    return a if w1.shape[0] > 1 else 0
+
+
 @numba.njit(cache=True)
 def _forward_at(w1, w2, a, x, xo, h):
     """Forward pass of net a on the input at flat offset ``xo`` of x; fills h (H,) with hidden activations and
@@ -135,9 +143,10 @@ def _forward_at(w1, w2, a, x, xo, h):
     order wherever it is inlined."""
     n_h, n_in1 = w1.shape[1], w1.shape[2]
     n_in = n_in1 - 1
-    row = a * n_h * n_in1
+    r = _hidden_row(w1, a)
+    row = r * n_h * n_in1
     for j in range(n_h):  # the sums, then the sigmoids (no slower than one loop in the replay)
-        h[j] = _dot_in_fours(w1, row + j * n_in1, x, xo, n_in, w1[a, j, n_in])
+        h[j] = _dot_in_fours(w1, row + j * n_in1, x, xo, n_in, w1[r, j, n_in])
     for j in range(n_h):
         h[j] = 1.0 / (1.0 + math.exp(-h[j])) - 0.5
     out = w2[a, n_h]
@@ -154,7 +163,26 @@ def _mlp_forward(w1, w2, a, x, h):
 
 
 @numba.njit(cache=True, fastmath=True)
+def _outputs_at(w2, h, y):
+    """Every action's raw output from the hidden activations h of a shared hidden layer: a chain of fused
+    multiply-adds from its bias, as ``_forward_at``'s (compiled with fastmath like the kernels that call it, so its
+    bits do not depend on which of them a process compiled first)."""
+    n_h = h.size
+    for a in range(w2.shape[0]):
+        out = w2[a, n_h]
+        for j in range(n_h):
+            out = _fma(h[j], w2[a, j], out)
+        y[a] = 1.0 / (1.0 + math.exp(-out)) - 0.5
+
+
+@numba.njit(cache=True, fastmath=True)
 def _mlp_values(w1, w2, x, h, scale, q):
+    if w1.shape[0] < w2.shape[0]:  # one hidden layer for all: its sums once
+        _forward_at(w1, w2, 0, x, 0, h)
+        _outputs_at(w2, h, q)
+        for a in range(q.size):
+            q[a] *= scale
+        return
     for a in range(w1.shape[0]):
         q[a] = scale * _forward_at(w1, w2, a, x, 0, h)
 
@@ -165,6 +193,7 @@ def _backward_at(w1, w2, d1, d2, a, x, xo, h, y, target, is_error, scale, lr, mo
     flat offset ``xo`` of x): a replay that has just run that pass for the policy test need not run it again."""
     n_h, n_in1 = w1.shape[1], w1.shape[2]
     n_in = n_in1 - 1
+    r = _hidden_row(w1, a)
     err = target if is_error else target - scale * y
     # error in the net's own output units (see module docstring), times f'(net) = 0.25 - f^2
     delta = err / scale * (0.25 - y * y)
@@ -176,12 +205,12 @@ def _backward_at(w1, w2, d1, d2, a, x, xo, h, y, target, is_error, scale, lr, mo
         w2[a, j] += step
         if dh != 0.0 or momentum != 0.0:
             for i in range(n_in):
-                s = lr * dh * x[xo + i] + momentum * d1[a, j, i]
-                d1[a, j, i] = s
-                w1[a, j, i] += s
-            s = lr * dh + momentum * d1[a, j, n_in]
-            d1[a, j, n_in] = s
-            w1[a, j, n_in] += s
+                s = lr * dh * x[xo + i] + momentum * d1[r, j, i]
+                d1[r, j, i] = s
+                w1[r, j, i] += s
+            s = lr * dh + momentum * d1[r, j, n_in]
+            d1[r, j, n_in] = s
+            w1[r, j, n_in] += s
     step = lr * delta + momentum * d2[a, n_h]
     d2[a, n_h] = step
     w2[a, n_h] += step
@@ -329,6 +358,16 @@ def _update_any(w1, w2, d1, d2, a, x, h, target, scale, lr, momentum, linear):
 
 
 @numba.njit(cache=True, fastmath=True)
+def _shared_values_at(w1, w2, x, xo, h, ys, scale, q):
+    """A shared hidden layer's values of the input at flat offset ``xo`` of x: the hidden sums once (into h), every
+    raw output into ys and its value into q."""
+    _forward_at(w1, w2, 0, x, xo, h)
+    _outputs_at(w2, h, ys)
+    for k in range(q.size):
+        q[k] = scale * ys[k]
+
+
+@numba.njit(cache=True, fastmath=True)
 def _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, discounts, lam, temperature,
                 p_threshold, clip, has_clip, scale, lr, momentum, weights, allowed):
     """``_replay_q_kernel`` for nets with a hidden layer and no repairs, the same arithmetic with less work: the
@@ -337,22 +376,26 @@ def _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, disc
     nets, benchmarks/bench_speedups.py)."""
     n, n_in = actions.shape[0], inputs.shape[1]
     x = inputs.reshape(inputs.size)
+    shared = w1.shape[0] < w2.shape[0]  # one hidden layer for every action: an update moves every value
     used = 0
     e_next = 0.0
     next_policy = False
     cached = np.empty(q.size)  # the policy test's values of inputs[t], step t-1's next-state values but one
     h_a = np.empty(h.size)  # the replayed action's hidden activations and output in that test
+    ys = np.empty(q.size)  # a shared layer's raw outputs
     y_a = 0.0
     changed = -1
     for t in range(n - 1, -1, -1):
         if t == n - 1 and terminated:
             u = 0.0
         else:
-            if p_threshold > 0.0 and t < n - 1:
+            if p_threshold > 0.0 and t < n - 1 and not (shared and changed >= 0):
                 for k in range(q.size):
                     q[k] = cached[k]
                 if changed >= 0:
                     q[changed] = scale * _forward_at(w1, w2, changed, x, (t + 1) * n_in, h)
+            elif shared:
+                _shared_values_at(w1, w2, x, (t + 1) * n_in, h, ys, scale, q)
             else:
                 for k in range(q.size):
                     q[k] = scale * _forward_at(w1, w2, k, x, (t + 1) * n_in, h)
@@ -361,7 +404,15 @@ def _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, disc
                                  clip, has_clip)
         a = actions[t]
         changed = -1
-        if p_threshold > 0.0:
+        if p_threshold > 0.0 and shared:
+            _shared_values_at(w1, w2, x, t * n_in, h_a, ys, scale, q)
+            y_a = ys[a]
+            for k in range(q.size):
+                cached[k] = q[k]
+            next_policy = _policy_probability(q, weights, t, a, temperature) >= p_threshold
+            if next_policy:
+                _backward_at(w1, w2, d1, d2, a, x, t * n_in, h_a, y_a, e, False, scale, lr, momentum)
+        elif p_threshold > 0.0:
             for k in range(q.size):
                 y = _forward_at(w1, w2, k, x, t * n_in, h)
                 q[k] = scale * y
@@ -451,7 +502,7 @@ def _replay_q_steps(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, 
         if next_policy:
             _update_any(w1, w2, d1, d2, a, inputs[t], h, e, scale, lr, momentum, linear)
             used += 1
-            changed = a
+            changed = a if w1.shape[0] == w2.shape[0] else -2  # a shared hidden layer moves every value
         if repair != 0:
             changed = -2
             _values_any(w1, w2, inputs[t], h, scale, q, linear)

@@ -56,6 +56,8 @@ class NetConfig:
     lr: float = 0.1  # back-propagation learning rate (Table 4.1, 5.3.3, Table B.1)
     momentum: float = 0.9  # momentum factor (4.2.7, 5.3.3, App. B)
     linear_output: bool = False  # perceptrons only: a linear output unit, Q = value_range * net (7.4, App. B)
+    shared_hidden: bool = False  # one hidden layer for every action's output (3.4's multi-output net) instead of
+    # one net per action: an update for one action moves the others' values too, the interference 3.4 names
 
     def __post_init__(self):
         if self.n_inputs < 1:
@@ -71,6 +73,8 @@ class NetConfig:
             raise ValueError(f"learning rate lr must be a finite number > 0, got {self.lr}")
         if not 0 <= self.momentum < 1:
             raise ValueError(f"momentum must be in [0, 1), got {self.momentum}")
+        if self.shared_hidden and self.n_hidden == 0:
+            raise ValueError("shared_hidden needs a hidden layer (n_hidden >= 1)")
         if self.linear_output and self.n_hidden > 0:
             raise ValueError("linear_output applies to single-layer perceptrons only (n_hidden=0), "
                              f"got n_hidden={self.n_hidden}")
@@ -79,7 +83,8 @@ class NetConfig:
 # ------------------------------------------------------------------------------------------------ OAON
 
 class OAON:
-    """One network per action (thesis 3.4, 7.4), all evaluated in one call.
+    """One network per action (thesis 3.4, 7.4), all evaluated in one call; with ``shared_hidden``, one network
+    whose hidden layer every action's output reads (``w1`` then has one row: ``w1[0]``).
 
     ``values(x)`` returns the (n_nets,) outputs; ``update(x, a, target)`` back-propagates
     ``target - output_a`` through net a only (Fig. 3.4 step 5) with momentum, and returns the output
@@ -96,7 +101,7 @@ class OAON:
         self.scale = 2.0 * c.value_range
         lo, hi = -c.init_range, c.init_range
         if c.n_hidden > 0:
-            self.w1 = rng.uniform(lo, hi, (n_nets, c.n_hidden, c.n_inputs + 1))
+            self.w1 = rng.uniform(lo, hi, (1 if c.shared_hidden else n_nets, c.n_hidden, c.n_inputs + 1))
             out = c.init_range if c.output_init is None else c.output_init
             self.w2 = rng.uniform(-out, out, (n_nets, c.n_hidden + 1))
         else:
@@ -158,8 +163,8 @@ class OAON:
                                   c.linear_output)
 
     def loss_gradients(self, x: np.ndarray, a: int, target: float) -> tuple[np.ndarray, np.ndarray]:
-        """Gradients of ``0.5 * ((target - y_a) / scale)^2`` w.r.t. (w1[a], w2[a]) (NumPy; for tests); for a linear
-        perceptron, of ``0.5 * ((target - y_a) / value_range)^2`` (the delta rule)."""
+        """Gradients of ``0.5 * ((target - y_a) / scale)^2`` w.r.t. (net a's hidden layer, w2[a]) (NumPy; for
+        tests); for a linear perceptron, of ``0.5 * ((target - y_a) / value_range)^2`` (the delta rule)."""
         x = np.asarray(x, dtype=np.float64)
         if self.config.n_hidden == 0:
             xb = np.append(x, 1.0)
@@ -170,7 +175,7 @@ class OAON:
             delta = (target - self.scale * y) / self.scale * (0.25 - y * y)
             return np.zeros((0, xb.size)), -delta * xb
         xb = np.append(x, 1.0)
-        h = symmetric_sigmoid(self.w1[a] @ xb)
+        h = symmetric_sigmoid(self.w1[0 if self.config.shared_hidden else a] @ xb)
         hb = np.append(h, 1.0)
         y = symmetric_sigmoid(self.w2[a] @ hb)
         delta = (target - self.scale * y) / self.scale * (0.25 - y * y)

@@ -339,12 +339,17 @@ def _learner(kind: str, o: AgentOptions, n_inputs: int, n_actions: int, value_ra
         capacity=o.capacity, lessons_per_trial=LinearSchedule(o.lessons_per_trial, o.lessons_per_trial),
         p_threshold=p_threshold, batch=kind == "recurrent-Q")
     if kind == "recurrent-Q":
+        if o.shared_hidden:
+            raise ValueError("option shared_hidden is for the feed-forward nets; recurrent-Q's nets are one per action")
         net = RecurrentNetConfig(n_inputs, max(o.hidden, 1), min(o.context, max(o.hidden, 1)), value_range=value_range,
                                  init_range=o.init_range, lr=o.lr, momentum=o.momentum)
         return RecurrentQ(RecurrentQConfig(net=net, temperature=temperature, gamma=o.gamma, lam=o.lam, replay=replay),
                           n_actions, rng)
     size = window_input_size(n_inputs, n_actions, o.window) if kind == "window-Q" else n_inputs
-    net = NetConfig(size, o.hidden, value_range=value_range, init_range=o.init_range, lr=o.lr, momentum=o.momentum)
+    if o.shared_hidden and o.hidden == 0:
+        raise ValueError("option shared_hidden needs hidden units (hidden >= 1)")
+    net = NetConfig(size, o.hidden, value_range=value_range, init_range=o.init_range, lr=o.lr, momentum=o.momentum,
+                    shared_hidden=o.shared_hidden)
     if kind == "window-Q":
         cfg = QCONConfig(net=net, temperature=temperature, gamma=o.gamma, lam=o.lam, replay=replay)
         return WindowQ(cfg, n_actions, rng, n_sensation=n_inputs, window=o.window)

@@ -38,7 +38,9 @@ def temperatures(options: AgentOptions, kind: str) -> tuple[float, float]:
 class AgentOptions:
     """The learner's settings; every one has a default (docs: README, "Your own task")."""
 
-    hidden: int = 16  # hidden units of each action's net
+    hidden: int = 16  # hidden units of each action's net (of the one shared net with shared_hidden)
+    shared_hidden: bool = False  # one hidden layer read by every action's output (the multi-output net 3.4 weighs
+    # against OAON) instead of one net per action; not for recurrent-Q
     lr: float = 0.05  # back-propagation learning rate, ...
     lr_end: float | None = None  # ... going linearly to this over the first anneal_steps steps; None: lr throughout
     momentum: float = 0.9
@@ -82,6 +84,8 @@ class AgentOptions:
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 1:
                 raise ValueError(f"option {name} must be in [0, 1), got {v!r}")
+        if not isinstance(self.shared_hidden, bool):
+            raise ValueError(f"option shared_hidden must be true or false, got {shown(self.shared_hidden)}")
         for name in ("gamma", "lam"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:

@@ -49,6 +49,9 @@ def test_value_range_follows_the_reward_scale_and_gamma():
     (lambda: make_agent(Toy(), gamma=2), "option gamma must be in [0, 1], got 2"),
     (lambda: make_agent(gym.make("Pendulum-v1")), "connrl agents need a Discrete action space"),
     (lambda: make_agent(Toy()).learn(0), "total_steps must be a whole number >= 1"),
+    (lambda: make_agent(Toy(), shared_hidden="yes"), "option shared_hidden must be true or false, got 'yes'"),
+    (lambda: make_agent(Toy(), shared_hidden=True, hidden=0), "option shared_hidden needs hidden units"),
+    (lambda: make_agent(Toy(), "recurrent-Q", shared_hidden=True), "option shared_hidden is for the feed-forward"),
 ])
 def test_bad_input_is_one_clear_line(call, message):
     with pytest.raises(ValueError) as exc:
@@ -167,8 +170,11 @@ def test_a_value_range_too_small_for_the_returns_is_warned_once():
 @pytest.mark.parametrize("average", [None, 40])  # with average_steps, the averaged greedy weights too
 def test_a_loaded_agent_learns_on_exactly_as_the_saved_one_would(kind, average, tmp_path):
     taught = {"lessons": _toy_lessons(tmp_path)} if kind.endswith("-T") else {}
+    shared = {"shared_hidden": True} if average is not None and kind != "recurrent-Q" else {}  # one hidden layer too
     a = make_agent(Toy(), kind, seed=2, warmup_steps=30, hidden=4, context=2, average_steps=average,
-                   **taught).learn(100)
+                   **taught, **shared).learn(100)
+    if shared:
+        assert a.nets.state_dict()["w1" if not kind.startswith("AHCON") else "policy.w1"].shape[0] == 1
     a.save(tmp_path / "a")
     b = connrl.load(tmp_path / "a", Toy())
     a.learn(100)

@@ -1,0 +1,105 @@
+"""A net whose one hidden layer every action's output reads (``NetConfig.shared_hidden``, 3.4's multi-output
+alternative to OAON): its values against a forward pass written out in NumPy, its gradients against finite
+differences, its update against the independent NumPy copy (tests/numpy_nets.py), and the compiled whole-lesson
+replay against Fig. 5.1's plain loop run on that copy."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from connrl.core.replay import REPAIRS, ReplayParams, replay_q_reference
+from connrl.nets import OAON, NetConfig, kernels
+from connrl.nets.mlp import symmetric_sigmoid
+from tests.numpy_nets import NumpyOAON
+
+
+def _net(seed=1, lr=0.05, momentum=0.9, value_range=3.0):
+    cfg = NetConfig(6, 5, value_range=value_range, init_range=0.8, lr=lr, momentum=momentum, shared_hidden=True)
+    return OAON(cfg, 4, np.random.default_rng(seed))
+
+
+def test_one_hidden_layer_for_every_action():
+    net = _net()
+    assert net.w1.shape == (1, 5, 7) and net.w2.shape == (4, 6)
+    x = np.random.default_rng(0).normal(size=6)
+    h = symmetric_sigmoid(net.w1[0] @ np.append(x, 1.0))
+    want = 6.0 * symmetric_sigmoid(net.w2 @ np.append(h, 1.0))  # scale 2 * value_range
+    np.testing.assert_allclose(net.values(x), want, rtol=1e-12)
+    for a in range(4):
+        assert net.value(x, a) == pytest.approx(want[a], rel=1e-12)
+
+
+def test_gradients_match_finite_differences():
+    net = _net(seed=2)
+    x, a, target = np.random.default_rng(5).normal(size=6), 2, 1.1
+
+    def loss():
+        h = symmetric_sigmoid(net.w1[0] @ np.append(x, 1.0))
+        return 0.5 * ((target - 6.0 * symmetric_sigmoid(net.w2[a] @ np.append(h, 1.0))) / 6.0) ** 2
+
+    g1, g2 = net.loss_gradients(x, a, target)
+    eps = 1e-6
+    for w, g in ((net.w1[0], g1), (net.w2[a], g2)):
+        for idx in np.ndindex(w.shape):
+            old = w[idx]
+            w[idx] = old + eps
+            up = loss()
+            w[idx] = old - eps
+            down = loss()
+            w[idx] = old
+            assert g[idx] == pytest.approx((up - down) / (2 * eps), rel=1e-5, abs=1e-10)
+
+
+def test_an_update_moves_the_shared_layer_and_only_its_own_output_row():
+    net = _net(seed=3)
+    ref = NumpyOAON(net)
+    rng = np.random.default_rng(6)
+    x_other = rng.normal(size=6)
+    before = net.values(x_other)
+    w1, w2 = net.w1.copy(), net.w2.copy()
+    for a, target in ((1, 2.0), (3, -1.5), (1, 0.5)):
+        x = rng.normal(size=6)
+        assert net.update(x, a, target) == pytest.approx(ref.update(x, a, target), rel=1e-12)
+    ref.assert_same(net)
+    assert not np.array_equal(net.w1, w1)
+    np.testing.assert_array_equal(np.flatnonzero(np.any(net.w2 != w2, axis=1)), [1, 3])
+    # the interference 3.4 names: actions never updated change value through the shared layer
+    assert np.all(net.values(x_other)[[0, 2]] != before[[0, 2]])
+
+
+def test_shared_hidden_needs_a_hidden_layer():
+    with pytest.raises(ValueError, match="shared_hidden needs a hidden layer"):
+        NetConfig(4, 0, shared_hidden=True)
+
+
+def _lessons(rng, n_lessons, d):
+    from connrl.core.lessons import Lesson
+
+    for k in range(n_lessons):
+        n = int(rng.integers(1, 15))
+        yield Lesson(rng.uniform(-0.5, 1.0, (n + 1, d)), rng.integers(0, 4, n),
+                     rng.choice([0.0, -1.0, 0.4, 100.0], n), terminated=bool(k % 2))
+
+
+@pytest.mark.parametrize("repair", REPAIRS)
+@pytest.mark.parametrize("params", [ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=0.2),
+                                    ReplayParams(gamma=0.9, lam=0.0, clip=50.0),
+                                    ReplayParams(gamma=0.95, lam=0.9, temperature=0.5, p_threshold=0.05, clip=60.0)])
+def test_the_compiled_replay_is_the_plain_loop_on_the_numpy_copy(repair, params):
+    fast = _net(seed=4, value_range=100.0)
+    ref = NumpyOAON(fast)
+    rng = np.random.default_rng(0)
+    none_f, none_b = np.zeros((0, 4)), np.zeros((0, 4), dtype=bool)
+    for lesson in _lessons(rng, 6, 6):
+        n = len(lesson)
+        weights = rng.choice([0.0, 1.0, 5.0], (n, 4)) if repair == "none" else None
+        if weights is not None:
+            weights[np.arange(n), lesson.actions] = 1.0
+        allowed = rng.random((n + 1, 4)) < 0.6 if repair == "none" else None
+        used = kernels._replay_q_kernel(fast.kernel_arrays, fast.kernel_settings, np.empty(4), lesson.inputs,
+                                        lesson.actions, lesson.rewards, lesson.terminated, np.full(n, params.gamma),
+                                        params.kernel_settings, REPAIRS.index(repair),
+                                        none_f if weights is None else weights, none_b if allowed is None else allowed)
+        assert used == replay_q_reference(ref, lesson, params, repair, weights, allowed)
+        ref.assert_same(fast, tol=1e-10)
