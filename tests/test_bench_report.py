@@ -119,6 +119,20 @@ def test_curve_shape_reads_a_hand_made_curve():
     assert "first at     never    0 of 2 at it" in never and "all: median 3 (quartiles 2, 4)" in never
 
 
+def test_curve_shape_reads_a_run_over_its_first_steps():
+    """curve_shape.py --until: the held solve (five evaluations in a row at 475), the area and the wall-clock at the
+    run's mean rate, counted over the evaluations up to the given step only."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts" / "own_task"))
+    from curve_shape import until_line
+    curve = [[k * 10, v] for k, v in enumerate([480, 100, 480, 490, 500, 475, 476, 0, 0], start=1)]
+    doc = {"task": "CartPole-v1", "seed": 7, "wall": 90.0, "steps": 90, "curve": curve}
+    line, held, area = until_line(doc, 70)  # 480 100 480 490 500 475 476: in a row from 30, the fifth at 70
+    assert held == 70 and area == (480 + 100 + 480 + 490 + 500 + 475 + 476) / 7
+    assert line == f"seed    7  held at        70  area {area:.1f}  wall 70 s"
+    line, held, _ = until_line(doc, 60)  # four in a row only
+    assert held is None and "held at     never" in line
+
+
 def test_action_gaps_are_best_minus_second_at_each_visited_state():
     """scripts/own_task/action_gaps.py's gaps_of on a stub agent and a two-step world (values written by hand)."""
     from contextlib import nullcontext

@@ -1,11 +1,13 @@
 """The shape of saved learning curves: does a run that reaches the threshold keep it, plateau below it, or fall away?
 
-    python scripts/own_task/curve_shape.py FOLDER [--blocks 500000]
+    python scripts/own_task/curve_shape.py FOLDER [--blocks 500000] [--until STEPS]
 
 FOLDER holds the runs ``sample_efficiency.py --save`` wrote (one JSON file per run). Per run: the steps at its first
 evaluation at the task's threshold, how many of its evaluations reach it, the quartiles of the evaluations from that
 first one on (all of them for a run that never reached it), the mean greedy return per block of steps, and its
-training wall-clock (evaluations left out).
+training wall-clock (evaluations left out). With ``--until``, each run read over its first STEPS steps instead, as a
+run with that budget would have gone (no schedule reads the budget): its held solve by the benchmark's rule, its
+area (the mean of its evaluations) and its wall-clock to there at its mean rate, then the runs' totals.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import numpy as np
 from connrl.storage import read_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-from bench_gymnasium import TASKS  # noqa: E402
+from bench_gymnasium import TASKS, _Curve  # noqa: E402
 
 
 def shape_line(doc: dict, block: int) -> str:
@@ -38,13 +40,26 @@ def shape_line(doc: dict, block: int) -> str:
             f"| block means: {blocks}")
 
 
+def until_line(doc: dict, until: int) -> tuple[str, int | None, float]:
+    """One run read over its first ``until`` steps: its line, its held solve (steps, or None) and its area."""
+    curve = _Curve(TASKS[doc["task"]][0])
+    for steps, mean in doc["curve"]:
+        if steps <= until:
+            curve.add(steps, lambda m=mean: [m])
+    area = float(np.mean([m for _, m in curve.points]))
+    held = f"{curve.held:>9,}" if curve.held is not None else f"{'never':>9}"
+    wall = doc["wall"] * min(until, doc["steps"]) / doc["steps"]
+    return f"seed {doc['seed']:>4}  held at {held}  area {area:.1f}  wall {wall:.0f} s", curve.held, area
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folder", type=Path)
     ap.add_argument("--blocks", type=int, default=500_000, help="steps per block of the mean greedy return")
+    ap.add_argument("--until", type=int, help="read each run over its first STEPS steps: held solve and area")
     args = ap.parse_args()
-    if args.blocks < 1:
-        ap.error(f"--blocks must be 1 step or more, got {args.blocks}")
+    if args.blocks < 1 or (args.until is not None and args.until < 1):
+        ap.error(f"--blocks and --until must be 1 step or more, got {args.blocks} and {args.until}")
     files = sorted(args.folder.glob("*.json")) if args.folder.is_dir() else []
     if not files:
         ap.error(f"{args.folder}: no saved runs (JSON files written by sample_efficiency.py --save)")
@@ -58,8 +73,17 @@ def main() -> None:
             docs.append(doc)
         except (OSError, ValueError) as exc:
             ap.error(f"{f}: cannot read it ({exc})")
-    for doc in sorted(docs, key=lambda d: (d["task"], d.get("row", ""), d["seed"])):
-        print(f"{doc['task']} {doc['kind']} {doc.get('row', '')}".rstrip() + f"  {shape_line(doc, args.blocks)}")
+    docs.sort(key=lambda d: (d["task"], d.get("row", ""), d["seed"]))
+    if args.until is None:
+        for doc in docs:
+            print(f"{doc['task']} {doc['kind']} {doc.get('row', '')}".rstrip() + f"  {shape_line(doc, args.blocks)}")
+        return
+    read = [until_line(doc, args.until) for doc in docs]
+    for doc, (line, _, _) in zip(docs, read, strict=True):
+        print(f"{doc['task']} {doc['kind']} over {args.until:,} steps  {line}")
+    held = [h for _, h, _ in read if h is not None]
+    print(f"held on {len(held)} of {len(read)}" + (f" (median {int(np.median(held)):,} steps)" if held else "")
+          + f", mean area {np.mean([a for _, _, a in read]):.1f}")
 
 
 if __name__ == "__main__":

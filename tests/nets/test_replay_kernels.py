@@ -15,6 +15,7 @@ from connrl.core.replay import REPAIRS, ReplayParams, replay_ahc_reference, repl
 from connrl.envs.survival import ACTION_ROTATION, ROTATION_PERMUTATIONS
 from connrl.nets import OAON, NetConfig, RecurrentNetConfig, RecurrentOAON, kernels
 from connrl.nets.rotated import RotatedNet
+from tests.numpy_nets import NumpyOAON
 
 NONE_F, NONE_B = np.zeros((0, 4)), np.zeros((0, 4), dtype=bool)
 
@@ -32,14 +33,19 @@ def _same(a, b, names=("w1", "w2", "d1", "d2"), exact=True):
         check(getattr(a, name), getattr(b, name))
 
 
-@pytest.mark.parametrize("hidden", [5, 0])
+@pytest.mark.parametrize("hidden, shared", [(5, False), (0, False), (5, True)])
 @pytest.mark.parametrize("repair", REPAIRS)
 @pytest.mark.parametrize("params", [ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=0.2),
                                     ReplayParams(gamma=0.9, lam=0.0, clip=50.0),
                                     ReplayParams(gamma=0.95, lam=0.9, temperature=0.5, p_threshold=0.05, clip=60.0)])
-def test_the_oaon_replay_is_the_plain_loop(hidden, repair, params):
-    cfg = NetConfig(7, hidden, value_range=100.0, init_range=0.5, lr=0.05, momentum=0.9 if hidden else 0.0)
-    fast, ref = (OAON(cfg, 4, np.random.default_rng(3)) for _ in range(2))
+def test_the_oaon_replay_is_the_plain_loop(hidden, shared, repair, params):
+    """A net whose hidden layer every action shares (``shared_hidden``) against the plain loop on the independent
+    NumPy net of tests/numpy_nets.py: after each update every action's value is new, which the kernel's reuse of the
+    policy test's values must not miss."""
+    cfg = NetConfig(7, hidden, value_range=100.0, init_range=0.5, lr=0.05, momentum=0.9 if hidden else 0.0,
+                    shared_hidden=shared)
+    fast = OAON(cfg, 4, np.random.default_rng(3))
+    ref = NumpyOAON(fast) if shared else OAON(cfg, 4, np.random.default_rng(3))
     rng = np.random.default_rng(0)
     for lesson in _lessons(rng, 6, 7):
         n = len(lesson)
@@ -52,7 +58,10 @@ def test_the_oaon_replay_is_the_plain_loop(hidden, repair, params):
                                         params.kernel_settings, REPAIRS.index(repair),
                                         NONE_F if weights is None else weights, NONE_B if allowed is None else allowed)
         assert used == replay_q_reference(ref, lesson, params, repair, weights, allowed)
-        _same(fast, ref, exact=False)  # fastmath: the nets agree to 1e-12
+        if shared:
+            ref.assert_same(fast, tol=1e-10)
+        else:
+            _same(fast, ref, exact=False)  # fastmath: the nets agree to 1e-12
 
 
 def test_the_oaon_replay_of_many_lessons_is_one_lesson_after_another():

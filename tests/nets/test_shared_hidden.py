@@ -1,15 +1,14 @@
 """A net whose one hidden layer every action's output reads (``NetConfig.shared_hidden``, 3.4's multi-output
 alternative to OAON): its values against a forward pass written out in NumPy, its gradients against finite
-differences, its update against the independent NumPy copy (tests/numpy_nets.py), and the compiled whole-lesson
-replay against Fig. 5.1's plain loop run on that copy."""
+differences and its update against the independent NumPy copy (tests/numpy_nets.py); its compiled whole-lesson replay
+is tested with the others' in test_replay_kernels.py."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from connrl.core.replay import REPAIRS, ReplayParams, replay_q_reference
-from connrl.nets import OAON, NetConfig, kernels
+from connrl.nets import OAON, NetConfig
 from connrl.nets.mlp import symmetric_sigmoid
 from tests.numpy_nets import NumpyOAON
 
@@ -71,35 +70,3 @@ def test_an_update_moves_the_shared_layer_and_only_its_own_output_row():
 def test_shared_hidden_needs_a_hidden_layer():
     with pytest.raises(ValueError, match="shared_hidden needs a hidden layer"):
         NetConfig(4, 0, shared_hidden=True)
-
-
-def _lessons(rng, n_lessons, d):
-    from connrl.core.lessons import Lesson
-
-    for k in range(n_lessons):
-        n = int(rng.integers(1, 15))
-        yield Lesson(rng.uniform(-0.5, 1.0, (n + 1, d)), rng.integers(0, 4, n),
-                     rng.choice([0.0, -1.0, 0.4, 100.0], n), terminated=bool(k % 2))
-
-
-@pytest.mark.parametrize("repair", REPAIRS)
-@pytest.mark.parametrize("params", [ReplayParams(gamma=0.9, lam=0.7, temperature=10.0, p_threshold=0.2),
-                                    ReplayParams(gamma=0.9, lam=0.0, clip=50.0),
-                                    ReplayParams(gamma=0.95, lam=0.9, temperature=0.5, p_threshold=0.05, clip=60.0)])
-def test_the_compiled_replay_is_the_plain_loop_on_the_numpy_copy(repair, params):
-    fast = _net(seed=4, value_range=100.0)
-    ref = NumpyOAON(fast)
-    rng = np.random.default_rng(0)
-    none_f, none_b = np.zeros((0, 4)), np.zeros((0, 4), dtype=bool)
-    for lesson in _lessons(rng, 6, 6):
-        n = len(lesson)
-        weights = rng.choice([0.0, 1.0, 5.0], (n, 4)) if repair == "none" else None
-        if weights is not None:
-            weights[np.arange(n), lesson.actions] = 1.0
-        allowed = rng.random((n + 1, 4)) < 0.6 if repair == "none" else None
-        used = kernels._replay_q_kernel(fast.kernel_arrays, fast.kernel_settings, np.empty(4), lesson.inputs,
-                                        lesson.actions, lesson.rewards, lesson.terminated, np.full(n, params.gamma),
-                                        params.kernel_settings, REPAIRS.index(repair),
-                                        none_f if weights is None else weights, none_b if allowed is None else allowed)
-        assert used == replay_q_reference(ref, lesson, params, repair, weights, allowed)
-        ref.assert_same(fast, tol=1e-10)
