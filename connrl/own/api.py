@@ -12,9 +12,10 @@ hand-tuning the scales the thesis's tasks set by hand (``Graph``, ``Text`` and `
 
 - **Inputs** (``InputScaler``): a bounded ``Box`` dimension is mapped affinely onto [-1, 1]; an unbounded one by the
   mean and spread of the observations a random policy sees in the first ``warmup_steps`` steps (frozen then, so learning
-  sees one fixed input code); a ``Discrete`` observation is one-hot (+-0.5, the thesis's binary code, 5.3.2), a
-  ``MultiDiscrete`` one its one-hots side by side, a ``MultiBinary`` bit +-0.5; a ``Dict`` / ``Tuple`` is its parts'
-  codes in ``gymnasium.spaces.flatten`` order (connrl.own.spaces).
+  sees one fixed input code), and so is a bounded one with ``input_scale="spread"``; a ``Discrete`` observation is
+  one-hot (+-0.5, the thesis's binary code, 5.3.2), a ``MultiDiscrete`` one its one-hots side by side, a
+  ``MultiBinary`` bit +-0.5; a ``Dict`` / ``Tuple`` is its parts' codes in ``gymnasium.spaces.flatten`` order
+  (connrl.own.spaces).
 - **Values**: the nets' outputs span +-``value_range``, by default the largest |discounted return| the warm-up's rewards
   allow: max |reward| / (1 - gamma) for rewards that can recur every step, but only |reward| for one that ends the
   episode (a goal's +1 gives 1, not 100); until a non-zero reward is seen the range is provisional and the first ones
@@ -370,7 +371,7 @@ def make_agent(env, kind: str = "QCON-R", seed: int = 0, lessons=None, **options
     rng = np.random.default_rng(seed)
     raw_taught = read_taught(lessons, env) if lessons is not None else []  # a file for another task: refused first
     seen, rewards, episodes = warmup(env, o.warmup_steps, np.random.default_rng(rng.integers(2**63)))
-    scaler = InputScaler.fit(env.observation_space, seen)
+    scaler = InputScaler.fit(env.observation_space, seen, o.input_scale)
     taught = [Lesson(np.array([scaler.encode_row(x) for x in lesson.inputs]), lesson.actions, lesson.rewards,
                      terminated=lesson.terminated, truncated=lesson.truncated, taught=True) for lesson in raw_taught]
     rewards += [(r, x.terminated and k == x.rewards.size - 1) for x in taught for k, r in enumerate(x.rewards)]

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 from connrl.nets.mlp import MAX_UNITS
+from connrl.own.spaces import INPUT_SCALES
 from connrl.storage import shown
 
 # the size-like options' ranges: far beyond any task of the thesis or of Gymnasium's classic control, small enough
@@ -59,6 +60,8 @@ class AgentOptions:
     # (max |r| / (1 - gamma), but |r| for a reward that ends the episode; set by the first non-zero reward, grown by
     # larger ones)
     warmup_steps: int = 1000  # random-policy steps that set the input and value scales
+    input_scale: str = "bounds"  # a bounded Box unit onto [-1, 1] by its bounds, or "spread": by the warm-up's mean
+    # and spread, as an unbounded one is (for bounds far wider than the task visits)
     window: int = 2  # window-Q: the N latest observations and actions beside the current one (7.3)
     context: int = 8  # recurrent-Q: context units, at most hidden (7.3-7.4)
     average_steps: int | None = None  # the greedy policy acts with the weights averaged over about this many latest
@@ -84,6 +87,9 @@ class AgentOptions:
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v < 1:
                 raise ValueError(f"option {name} must be in [0, 1), got {v!r}")
+        if self.input_scale not in INPUT_SCALES:
+            raise ValueError(f"option input_scale must be one of {', '.join(INPUT_SCALES)}, "
+                             f"got {shown(self.input_scale)}")
         if not isinstance(self.shared_hidden, bool):
             raise ValueError(f"option shared_hidden must be true or false, got {shown(self.shared_hidden)}")
         for name in ("gamma", "lam"):

@@ -20,13 +20,15 @@ class InputScaler:
         self.scale = np.ones(self.n) if scale is None else np.asarray(scale, float)
 
     @classmethod
-    def fit(cls, space, samples: np.ndarray) -> InputScaler:
+    def fit(cls, space, samples: np.ndarray, by: str = "bounds") -> InputScaler:
+        """Scales for ``space`` from a random policy's observations ``samples``; ``by``: how bounded Box units are
+        scaled, by their bounds or by the samples' spread (``connrl.own.spaces.affine_scales``)."""
         if isinstance(space, spaces.Discrete):
             return cls("onehot", space.n, offset=np.full(space.n, float(space.start)))
         if isinstance(space, spaces.Box):
-            offset, scale = affine_scales(space.low, space.high, samples)
+            offset, scale = affine_scales(space.low, space.high, samples, by)
             return cls("affine", offset.size, offset, scale)
-        offset, scale = flat_scales(space, samples)  # Dict, Tuple, MultiDiscrete, MultiBinary (connrl.own.spaces)
+        offset, scale = flat_scales(space, samples, by)  # Dict, Tuple, MultiDiscrete, MultiBinary (connrl.own.spaces)
         return cls("flat", offset.size, offset, scale, space)
 
     @property

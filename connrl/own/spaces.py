@@ -58,22 +58,27 @@ def binary_units(space) -> np.ndarray:
     return np.ones(spaces.flatdim(space), bool)
 
 
-def affine_scales(low, high, samples) -> tuple[np.ndarray, np.ndarray]:
+INPUT_SCALES = ("bounds", "spread")  # AgentOptions.input_scale
+
+
+def affine_scales(low, high, samples, by: str = "bounds") -> tuple[np.ndarray, np.ndarray]:
     """(offset, scale) per unit: a bounded one onto [-1, 1]; an unbounded one so that 2 standard deviations of the
-    samples (a random policy's observations) reach +-1; a unit the samples never moved is left as it is."""
+    samples (a random policy's observations) reach +-1; a unit the samples never moved is left as it is. ``by="spread"``
+    scales the bounded units by the samples too: bounds far wider than what the task visits (LunarLander-v3's
+    velocities: +-10 for a spread under 1) would squeeze the inputs into a small part of the code."""
     low, high = np.asarray(low, float).ravel(), np.asarray(high, float).ravel()
     x = np.asarray(samples, float).reshape(len(samples), -1)
-    bounded = np.isfinite(low) & np.isfinite(high) & (high - low < 1e6)
+    bounded = np.isfinite(low) & np.isfinite(high) & (high - low < 1e6) & (by == "bounds")
     lo, hi = np.where(bounded, low, 0.0), np.where(bounded, high, 0.0)
     offset = np.where(bounded, (lo + hi) / 2, x.mean(axis=0))
     scale = np.where(bounded, (hi - lo) / 2, 2 * x.std(axis=0))
     return offset, np.where(scale > 1e-6, scale, 1.0)
 
 
-def flat_scales(space, samples: list) -> tuple[np.ndarray, np.ndarray]:
+def flat_scales(space, samples: list, by: str = "bounds") -> tuple[np.ndarray, np.ndarray]:
     """(offset, scale) of a composite space's flattened units: bits to +-0.5, Box entries as ``affine_scales``."""
     flat = spaces.flatten_space(space)
-    offset, scale = affine_scales(flat.low, flat.high, [spaces.flatten(space, o) for o in samples])
+    offset, scale = affine_scales(flat.low, flat.high, [spaces.flatten(space, o) for o in samples], by)
     bits = binary_units(space)
     return np.where(bits, 0.5, offset), np.where(bits, 1.0, scale)
 

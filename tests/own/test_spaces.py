@@ -106,6 +106,20 @@ def test_the_code_of_composite_observations_by_hand():
     np.testing.assert_allclose(image.encode(np.array([[[0], [255]], [[51], [255]]])), [-1, 1, -0.6, 1])
 
 
+def test_spread_scales_bounded_units_by_the_warm_ups_samples_too():
+    box = spaces.Box(np.array([-10.0, -np.inf, 0.0]), np.array([10.0, np.inf, 1.0]), dtype=np.float64)
+    samples = np.array([[0.5, 1.0, 0.0], [1.5, 3.0, 0.0]])  # mean 1, 2, 0; std 0.5, 1, 0
+    np.testing.assert_allclose(InputScaler.fit(box, samples).encode([2.0, 6.0, 1.0]), [0.2, 2.0, 1.0])
+    # by the spread: (2 - 1) / (2 * 0.5); (6 - 2) / 2; a unit the samples never moved is left as it is
+    np.testing.assert_allclose(InputScaler.fit(box, samples, "spread").encode([2.0, 6.0, 1.0]), [1.0, 2.0, 1.0])
+    both = spaces.Dict({"b": spaces.MultiBinary(1), "v": box})  # a composite space's Box entries likewise; bits not
+    s = InputScaler.fit(both, [{"b": np.array([k % 2], np.int8), "v": x} for k, x in enumerate(samples)], "spread")
+    np.testing.assert_allclose(s.encode({"b": np.array([1], np.int8), "v": np.array([2.0, 6.0, 1.0])}),
+                               [0.5, 1.0, 2.0, 1.0])
+    _one_line(lambda: connrl.make_agent(gym.make("CartPole-v1"), input_scale="warmup"),
+              "option input_scale must be one of bounds, spread, got 'warmup'")
+
+
 @pytest.mark.parametrize("multi", [False, True])
 def test_dict_and_multidiscrete_observations_learn_and_round_trip(trained, tmp_path, multi):
     if multi:
