@@ -82,7 +82,7 @@ def main() -> None:
     for doc, (line, _, _) in zip(docs, read, strict=True):
         print(f"{doc['task']} {doc['kind']} over {args.until:,} steps  {line}")
     held = [h for _, h, _ in read if h is not None]
-    print(f"held on {len(held)} of {len(read)}" + (f" (median {int(np.median(held)):,} steps)" if held else "")
+    print(f"{args.folder.name}: held on {len(held)} of {len(read)}" + (f" (median {int(np.median(held)):,} steps)" if held else "")
           + f", mean area {np.mean([a for _, _, a in read]):.1f}")
 
 
