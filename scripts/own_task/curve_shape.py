@@ -82,8 +82,9 @@ def main() -> None:
     for doc, (line, _, _) in zip(docs, read, strict=True):
         print(f"{doc['task']} {doc['kind']} over {args.until:,} steps  {line}")
     held = [h for _, h, _ in read if h is not None]
-    print(f"{args.folder.name}: held on {len(held)} of {len(read)}" + (f" (median {int(np.median(held)):,} steps)" if held else "")
-          + f", mean area {np.mean([a for _, _, a in read]):.1f}")
+    median = f" (median {int(np.median(held)):,} steps)" if held else ""
+    area = np.mean([a for _, _, a in read])
+    print(f"{args.folder.name}: held on {len(held)} of {len(read)}{median}, mean area {area:.1f}")
 
 
 if __name__ == "__main__":
