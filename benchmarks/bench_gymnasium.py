@@ -82,7 +82,8 @@ def _lander_heuristic(obs) -> int:
     return int(heuristic(SimpleNamespace(unwrapped=SimpleNamespace(continuous=False)), obs))
 
 
-TEACHERS = {  # QCON-T's teacher per task: (what it does, observation -> action); TAUGHT's episodes, env seeds 0 on
+# QCON-T's teacher per task: (what it does, observation -> action), for taught_episodes(task) episodes from env seed 0
+TEACHERS = {
     "CartPole-v1": ("push the way the pole falls (angle + 0.5 angular velocity)", lambda o: int(o[2] + 0.5 * o[3] > 0)),
     "Acrobot-v1": ("pump: torque the way the second joint turns", lambda o: 2 if o[5] > 0 else 0),
     "MountainCar-v0": ("swing: push the way the car moves", lambda o: 2 if o[1] >= 0 else 0),

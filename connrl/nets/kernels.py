@@ -167,7 +167,7 @@ def _outputs_at(w2, h, y):
     """Every action's raw output from the hidden activations h of a shared hidden layer: a chain of fused
     multiply-adds from its bias, as ``_forward_at``'s (compiled with fastmath like the kernels that call it, so its
     bits do not depend on which of them a process compiled first)."""
-    n_h = h.size
+    n_h = w2.shape[1] - 1  # not h.size: a caller's scratch may be longer than the layer
     for a in range(w2.shape[0]):
         out = w2[a, n_h]
         for j in range(n_h):
@@ -382,7 +382,7 @@ def _replay_mlp(w1, w2, d1, d2, h, q, inputs, actions, rewards, terminated, disc
     next_policy = False
     cached = np.empty(q.size)  # the policy test's values of inputs[t], step t-1's next-state values but one
     h_a = np.empty(h.size)  # the replayed action's hidden activations and output in that test
-    ys = np.empty(q.size)  # a shared layer's raw outputs
+    ys = np.empty(q.size if shared else 0)  # a shared layer's raw outputs
     y_a = 0.0
     changed = -1
     for t in range(n - 1, -1, -1):

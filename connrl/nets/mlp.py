@@ -15,7 +15,7 @@ benchmarks/bench_core.py and docs/PERFORMANCE.md).
 
 Weights of all action nets are stacked: ``w1[a]`` is net a's hidden layer (H, I+1) and ``w2[a]`` its output
 layer (H+1,); the last column/entry is the bias. For a perceptron ``w2[a]`` has shape (I+1,) and ``w1`` is
-empty.
+empty. With ``shared_hidden`` every action's output reads one hidden layer, ``w1[0]`` (``w1`` has one row).
 """
 
 from __future__ import annotations

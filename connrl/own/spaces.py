@@ -66,6 +66,8 @@ def affine_scales(low, high, samples, by: str = "bounds") -> tuple[np.ndarray, n
     samples (a random policy's observations) reach +-1; a unit the samples never moved is left as it is. ``by="spread"``
     scales the bounded units by the samples too: bounds far wider than what the task visits (LunarLander-v3's
     velocities: +-10 for a spread under 1) would squeeze the inputs into a small part of the code."""
+    if by not in INPUT_SCALES:
+        raise ValueError(f"input scale must be one of {', '.join(INPUT_SCALES)}, got {by!r}")
     low, high = np.asarray(low, float).ravel(), np.asarray(high, float).ravel()
     x = np.asarray(samples, float).reshape(len(samples), -1)
     bounded = np.isfinite(low) & np.isfinite(high) & (high - low < 1e6) & (by == "bounds")

@@ -68,7 +68,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--task", required=True, choices=list(TASKS))
     ap.add_argument("--kind", default="QCON-T", choices=["QCON-R", "QCON-T"])
-    ap.add_argument("--taught", type=int, default=TAUGHT_EPISODES)
+    ap.add_argument("--taught", type=int, default=TAUGHT_EPISODES,
+                    help="teacher episodes (default 3 on every task; the benchmark's: bench_gymnasium.taught_episodes)")
     ap.add_argument("--budget", type=int, default=1_000_000)
     ap.add_argument("--base", nargs="*", default=[], help="option=value on top of the shipped settings")
     ap.add_argument("--seeds", nargs="+", type=int, default=[100, 101])

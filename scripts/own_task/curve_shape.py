@@ -7,12 +7,14 @@ evaluation at the task's threshold, how many of its evaluations reach it, the qu
 first one on (all of them for a run that never reached it), the mean greedy return per block of steps, and its
 training wall-clock (evaluations left out). With ``--until``, each run read over its first STEPS steps instead, as a
 run with that budget would have gone (no schedule reads the budget): its held solve by the benchmark's rule, its
-area (the mean of its evaluations) and its wall-clock to there at its mean rate, then the runs' totals.
+area (the mean of its evaluations) and its wall-clock to there at its mean rate, then each row's totals (the median
+counting a run that never held as beyond the steps, as the benchmark does).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -78,13 +80,22 @@ def main() -> None:
         for doc in docs:
             print(f"{doc['task']} {doc['kind']} {doc.get('row', '')}".rstrip() + f"  {shape_line(doc, args.blocks)}")
         return
-    read = [until_line(doc, args.until) for doc in docs]
-    for doc, (line, _, _) in zip(docs, read, strict=True):
-        print(f"{doc['task']} {doc['kind']} over {args.until:,} steps  {line}")
-    held = [h for _, h, _ in read if h is not None]
-    median = f" (median {int(np.median(held)):,} steps)" if held else ""
-    area = np.mean([a for _, _, a in read])
-    print(f"{args.folder.name}: held on {len(held)} of {len(read)}{median}, mean area {area:.1f}")
+    first = min(doc["curve"][0][0] for doc in docs)
+    if args.until < first:
+        ap.error(f"--until {args.until:,} is before the runs' first evaluation ({first:,} steps)")
+    rows = {}  # the totals per row of the folder (a --vary folder holds several)
+    for doc in docs:
+        rows.setdefault((doc["task"], doc["kind"], doc.get("row", "")), []).append(doc)
+    for (task, kind, row), group in rows.items():
+        read = [until_line(doc, args.until) for doc in group]
+        for line, _, _ in read:
+            print(f"{task} {kind} {row}".rstrip() + f" over {args.until:,} steps  {line}")
+        held = [h for _, h, _ in read if h is not None]
+        median = np.median([math.inf if h is None else h for _, h, _ in read])  # never held: beyond any budget
+        shown = f"{int(median):,} steps" if math.isfinite(median) else f"> {args.until:,} steps"
+        area = np.mean([a for _, _, a in read])
+        print(f"{args.folder.name} {row}".rstrip() + f": held on {len(held)} of {len(read)} (median {shown}), "
+              f"mean area {area:.1f}")
 
 
 if __name__ == "__main__":

@@ -94,7 +94,8 @@ def _args() -> argparse.Namespace:
     ap.add_argument("--vary", nargs="*", default=[], help="option=v1,v2,...: one row per value")
     ap.add_argument("--kind", default="QCON-R", choices=[k for k in KINDS if k != "AHCON-T"])
     ap.add_argument("--taught", type=int, help=f"QCON-T: episodes of bench_gymnasium.py's teacher for the task "
-                    f"(default {TAUGHT_EPISODES})")
+                    f"(default {TAUGHT_EPISODES} on every task, so earlier rows rerun as printed; the benchmark's own "
+                    "count per task is bench_gymnasium.taught_episodes: give it here to match)")
     ap.add_argument("--budget", type=int, help="environment steps per run (default: RL Zoo's DQN budget for the task)")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--save", type=Path, help="folder for each run's evaluations, one JSON file per run as it ends "

@@ -165,14 +165,17 @@ def test_a_value_range_too_small_for_the_returns_is_warned_once():
         make_agent(Toy(), "QCON-R", seed=0, warmup_steps=20).learn(100)  # the default range: no warning
 
 
-@pytest.mark.parametrize("kind", ["QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q",
-                                  "recurrent-Q"])
+_FEED_FORWARD = ["QCON", "QCON-R", "QCON-T", "AHCON", "AHCON-R", "AHCON-T", "window-Q"]
+
+
+# with one hidden layer for every action too (recurrent-Q refuses it: tested with the other refusals)
+@pytest.mark.parametrize("kind, shared", [(k, False) for k in [*_FEED_FORWARD, "recurrent-Q"]]
+                         + [(k, True) for k in _FEED_FORWARD])
 @pytest.mark.parametrize("average", [None, 40])  # with average_steps, the averaged greedy weights too
-def test_a_loaded_agent_learns_on_exactly_as_the_saved_one_would(kind, average, tmp_path):
+def test_a_loaded_agent_learns_on_exactly_as_the_saved_one_would(kind, shared, average, tmp_path):
     taught = {"lessons": _toy_lessons(tmp_path)} if kind.endswith("-T") else {}
-    shared = {"shared_hidden": True} if average is not None and kind != "recurrent-Q" else {}  # one hidden layer too
     a = make_agent(Toy(), kind, seed=2, warmup_steps=30, hidden=4, context=2, average_steps=average,
-                   **taught, **shared).learn(100)
+                   shared_hidden=shared, **taught).learn(100)
     if shared:
         assert a.nets.state_dict()["w1" if not kind.startswith("AHCON") else "policy.w1"].shape[0] == 1
     a.save(tmp_path / "a")

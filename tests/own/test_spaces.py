@@ -120,6 +120,31 @@ def test_spread_scales_bounded_units_by_the_warm_ups_samples_too():
               "option input_scale must be one of bounds, spread, got 'warmup'")
 
 
+class Blink(gym.Env):
+    """Observation 0 at reset and 2 after the one step of an episode, inside bounds of +-100."""
+
+    observation_space = spaces.Box(-100.0, 100.0, (1,), np.float64)
+    action_space = spaces.Discrete(2)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(1), {}
+
+    def step(self, a):
+        return np.full(1, 2.0), 1.0, True, False, {}
+
+
+def test_make_agent_scales_by_the_spread_when_asked_and_the_saved_agent_keeps_it(tmp_path):
+    # a warm-up of 50 steps sees 0, then 2 and 0 again for each one-step episode: 101 observations
+    seen = np.array([0.0] + [2.0, 0.0] * 50)
+    want = (2.0 - seen.mean()) / (2 * seen.std())
+    agent = connrl.make_agent(Blink(), "QCON-R", seed=0, warmup_steps=50, input_scale="spread")
+    assert agent.scaler.encode(np.full(1, 2.0))[0] == pytest.approx(want, rel=1e-12)
+    assert connrl.make_agent(Blink(), "QCON-R", seed=0, warmup_steps=50).scaler.encode(np.full(1, 2.0))[0] == 0.02
+    agent.save(tmp_path / "a")
+    assert connrl.load(tmp_path / "a", Blink()).scaler.to_json() == agent.scaler.to_json()
+
+
 @pytest.mark.parametrize("multi", [False, True])
 def test_dict_and_multidiscrete_observations_learn_and_round_trip(trained, tmp_path, multi):
     if multi:
