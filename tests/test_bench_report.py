@@ -155,3 +155,16 @@ def test_action_gaps_are_best_minus_second_at_each_visited_state():
                             learner=SimpleNamespace(q=SimpleNamespace(values=lambda x: np.array(table[x]))))
     gaps, returns = gaps_of(agent, World(), episodes=2)
     assert gaps.tolist() == [1.5, 0.5, 1.5, 0.5] and returns == [20.0, 20.0]  # greedy: action 1 then 1
+
+
+def test_input_spread_reads_each_unit_under_both_codes():
+    """scripts/own_task/input_spread.py on CartPole-v1: by the spread every moving unit's code has standard deviation
+    0.5 (two standard deviations reach 1); by the bounds, a bounded unit's is its raw spread over the half-range (cart
+    position +-4.8, pole angle +-0.418) and an unbounded one's is 0.5 again."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts" / "own_task"))
+    from input_spread import spreads
+    raw, coded = spreads("CartPole-v1", 3)
+    np.testing.assert_allclose(coded["spread"], 0.5, rtol=1e-9)
+    half = np.array([4.8, np.nan, 0.41887903, np.nan])
+    np.testing.assert_allclose(coded["bounds"][[0, 2]], raw[[0, 2]] / half[[0, 2]], rtol=1e-6)
+    np.testing.assert_allclose(coded["bounds"][[1, 3]], 0.5, rtol=1e-9)
