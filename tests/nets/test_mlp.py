@@ -12,8 +12,13 @@ def numpy_forward(net: OAON, x, a):
     xb = np.append(x, 1.0)
     if net.config.n_hidden == 0:
         return net.scale * symmetric_sigmoid(net.w2[a] @ xb)
-    h = symmetric_sigmoid(net.w1[a] @ xb)
+    h = symmetric_sigmoid(net.w1[_hidden_row(net, a)] @ xb)
     return net.scale * symmetric_sigmoid(net.w2[a] @ np.append(h, 1.0))
+
+
+def _hidden_row(net: OAON, a):
+    """The hidden layer net a reads: its own, or with ``shared_hidden`` the one every action shares."""
+    return 0 if net.config.shared_hidden else a
 
 
 def test_symmetric_sigmoid_values():
@@ -31,10 +36,11 @@ def test_values_match_numpy(hidden):
     assert net.value(x, 2) == pytest.approx(numpy_forward(net, x, 2), rel=1e-12)
 
 
-@pytest.mark.parametrize("hidden", [0, 6])
-def test_gradients_match_finite_differences(hidden):
+@pytest.mark.parametrize("hidden, shared", [(0, False), (6, False), (6, True)])
+def test_gradients_match_finite_differences(hidden, shared):
+    """With ``shared_hidden`` the hidden-layer gradient is that of the one layer every action reads."""
     rng = np.random.default_rng(2)
-    net = OAON(NetConfig(5, hidden, value_range=2.0, init_range=1.0), 3, rng)
+    net = OAON(NetConfig(5, hidden, value_range=2.0, init_range=1.0, shared_hidden=shared), 3, rng)
     x, a, target = rng.normal(size=5), 1, 0.7
 
     def loss():
@@ -42,9 +48,9 @@ def test_gradients_match_finite_differences(hidden):
 
     g1, g2 = net.loss_gradients(x, a, target)
     eps = 1e-6
-    for w, g in ((net.w1, g1), (net.w2, g2)):
-        for idx in np.ndindex(w[a].shape):
-            full = (a, *idx)
+    for w, g, row in ((net.w1, g1, _hidden_row(net, a)), (net.w2, g2, a)):
+        for idx in np.ndindex(w[row].shape):
+            full = (row, *idx)
             old = w[full]
             w[full] = old + eps
             up = loss()

@@ -1,7 +1,7 @@
 """A net whose one hidden layer every action's output reads (``NetConfig.shared_hidden``, 3.4's multi-output
-alternative to OAON): its values against a forward pass written out in NumPy, its gradients against finite
-differences and its update against the independent NumPy copy (tests/numpy_nets.py); its compiled whole-lesson replay
-is tested with the others' in test_replay_kernels.py."""
+alternative to OAON): its values against a forward pass written out in NumPy and its update against the independent
+NumPy copy (tests/numpy_nets.py); its gradients against finite differences (test_mlp.py) and its compiled
+whole-lesson replay (test_replay_kernels.py) are tested with OAON's."""
 
 from __future__ import annotations
 
@@ -27,27 +27,6 @@ def test_one_hidden_layer_for_every_action():
     np.testing.assert_allclose(net.values(x), want, rtol=1e-12)
     for a in range(4):
         assert net.value(x, a) == pytest.approx(want[a], rel=1e-12)
-
-
-def test_gradients_match_finite_differences():
-    net = _net(seed=2)
-    x, a, target = np.random.default_rng(5).normal(size=6), 2, 1.1
-
-    def loss():
-        h = symmetric_sigmoid(net.w1[0] @ np.append(x, 1.0))
-        return 0.5 * ((target - 6.0 * symmetric_sigmoid(net.w2[a] @ np.append(h, 1.0))) / 6.0) ** 2
-
-    g1, g2 = net.loss_gradients(x, a, target)
-    eps = 1e-6
-    for w, g in ((net.w1[0], g1), (net.w2[a], g2)):
-        for idx in np.ndindex(w.shape):
-            old = w[idx]
-            w[idx] = old + eps
-            up = loss()
-            w[idx] = old - eps
-            down = loss()
-            w[idx] = old
-            assert g[idx] == pytest.approx((up - down) / (2 * eps), rel=1e-5, abs=1e-10)
 
 
 def test_an_update_moves_the_shared_layer_and_only_its_own_output_row():
